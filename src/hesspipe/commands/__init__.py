@@ -1,0 +1,12 @@
+"""Sub-commands of the ``hesspipe`` CLI, one module each.
+
+A module here defines ``register(subparsers)``; add it to :data:`COMMANDS`.
+"""
+
+from importlib import import_module
+
+_NAMES = [
+    # one line per command module, in the order of `hesspipe --help`
+]
+
+COMMANDS = [import_module(f"{__name__}.{name}") for name in _NAMES]

@@ -1,0 +1,27 @@
+"""The one exception type for user mistakes and unmet conditions.
+
+Anything raised as :class:`HesspipeError` is shown by the CLI as a single
+line (``hesspipe: error: <message>``) with a non-zero exit status, never as
+a traceback. Messages name the file, the field and what was expected.
+"""
+
+
+class HesspipeError(Exception):
+    """A user-facing error: bad input, an impossible condition, a failed trim.
+
+    Parameters
+    ----------
+    message : str
+        One line: what was wrong, where (file, field), and what was expected.
+    """
+
+    def __init__(self, message: str):
+        super().__init__(" ".join(str(message).split()))
+
+
+def where(path, field=None) -> str:
+    """Return ``"path: field 'x'"`` for error messages."""
+    out = str(path)
+    if field:
+        out += f": field '{field}'"
+    return out

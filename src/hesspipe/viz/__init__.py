@@ -1,0 +1,33 @@
+"""Figures, one module per concept (flight, plants, pilots, diagnose).
+
+Plotting is kept out of the numerical modules; every figure is saved
+atomically with :func:`save_figure` on the non-interactive Agg backend.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from ..io import atomic_path  # noqa: E402
+
+SYNTHETIC_LABEL = "SYNTHETIC DATA"
+
+
+def save_figure(fig, path: str | Path, *, synthetic: bool = False, dpi: int = 110) -> Path:
+    """Save `fig` to `path` atomically and close it.
+
+    If `synthetic`, the figure is stamped "SYNTHETIC DATA" so it can never be
+    mistaken for measured data.
+    """
+    if synthetic:
+        fig.text(0.995, 0.005, SYNTHETIC_LABEL, ha="right", va="bottom", color="crimson",
+                 fontsize=9, fontweight="bold")
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=Path(path).suffix.lstrip(".") or "png")
+    plt.close(fig)
+    return Path(path)
