@@ -1,0 +1,75 @@
+"""Atomic output and config field checking."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from hesspipe.config import Fields, load_toml, merge
+from hesspipe.errors import HesspipeError
+from hesspipe.io import atomic_path, staged_output, to_json, write_json
+
+
+def test_atomic_path_leaves_nothing_on_failure(tmp_path):
+    target = tmp_path / "x.csv"
+    with pytest.raises(RuntimeError):
+        with atomic_path(target) as tmp:
+            tmp.write_text("half")
+            raise RuntimeError
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_staged_output_publishes_all_or_nothing(tmp_path):
+    out = tmp_path / "out"
+    with pytest.raises(RuntimeError):
+        with staged_output(out) as stage:
+            (stage / "a.txt").write_text("a")
+            raise RuntimeError
+    assert not out.exists()  # created by the call, so removed again
+    with staged_output(out) as stage:
+        (stage / "sub").mkdir()
+        (stage / "sub" / "b.txt").write_text("b")
+        (stage / "manifest.json").write_text("{}")
+    assert sorted(p.name for p in out.rglob("*") if p.is_file()) == ["b.txt", "manifest.json"]
+    assert not [p for p in out.iterdir() if p.name.startswith(".staging")]
+
+
+def test_json_handles_numpy_and_nonfinite(tmp_path):
+    obj = {"a": np.float64(1.5), "b": np.arange(3), "c": math.nan, "d": [np.inf]}
+    assert json.loads(to_json(obj)) == {"a": 1.5, "b": [0, 1, 2], "c": None, "d": [None]}
+    write_json(tmp_path / "o.json", obj)
+    assert json.loads((tmp_path / "o.json").read_text())["b"] == [0, 1, 2]
+
+
+def test_fields_messages_name_file_and_field():
+    f = Fields({"vc_kts": "fast", "n": 2.5, "mode": "x"}, "a.toml", "approach")
+    with pytest.raises(HesspipeError, match=r"a.toml: field 'approach.vc_kts': expected a number > 0, got 'fast'"):
+        f.number("vc_kts", min=0, strict_min=True)
+    with pytest.raises(HesspipeError, match=r"field 'approach.n': expected an integer"):
+        f.integer("n")
+    with pytest.raises(HesspipeError, match=r"expected one of 'a', 'b', got 'x'"):
+        f.string("mode", choices=("a", "b"))
+    with pytest.raises(HesspipeError, match=r"field 'approach.missing': expected a number, missing"):
+        f.number("missing")
+    assert f.number("absent", 3.0) == 3.0
+
+
+def test_fields_reject_unknown():
+    f = Fields({"a": 1, "typo": 2}, "c.toml")
+    f.number("a")
+    with pytest.raises(HesspipeError, match="field 'typo': unknown field"):
+        f.reject_unknown()
+
+
+def test_load_toml_errors(tmp_path):
+    with pytest.raises(HesspipeError, match="file not found"):
+        load_toml(tmp_path / "none.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("a = [\n")
+    with pytest.raises(HesspipeError, match="bad.toml: not valid TOML"):
+        load_toml(bad)
+
+
+def test_merge_is_deep():
+    assert merge({"a": {"x": 1, "y": 2}, "b": 1}, {"a": {"y": 3}}) == {"a": {"x": 1, "y": 3}, "b": 1}
