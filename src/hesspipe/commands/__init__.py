@@ -7,6 +7,8 @@ from importlib import import_module
 
 _NAMES = [
     # one line per command module, in the order of `hesspipe --help`
+    "run",
+    "status",
 ]
 
 COMMANDS = [import_module(f"{__name__}.{name}") for name in _NAMES]

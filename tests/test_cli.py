@@ -1,0 +1,43 @@
+"""CLI shell: usage errors, one-line user errors, fast start."""
+
+import subprocess
+import sys
+
+import pytest
+
+from hesspipe.cli import main
+
+
+def test_help_lists_commands(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    for name in ("run", "status"):
+        assert name in out
+
+
+def test_unknown_command_is_one_line_exit_2(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["fly-me-to-the-moon"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "invalid choice" in err
+
+
+def test_bad_config_is_one_line_exit_1(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[wind]\nspeed = 3\n")
+    assert main(["status", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == f"hesspipe: error: {cfg}: field 'wind': unknown section; expected seed or one of " \
+                  "flight, plants, analytic, pilots, diagnose, report"
+
+
+def test_cli_import_stays_light():
+    # `hesspipe status` and an up-to-date `hesspipe run` must start fast:
+    # the heavy numerical stack is imported only by the stages that run.
+    code = ("import sys, hesspipe.cli; heavy = {'jsbsim', 'control', 'matplotlib', 'pandas', 'scipy'};"
+            "print(sorted(heavy & set(sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
