@@ -73,3 +73,12 @@ def test_load_toml_errors(tmp_path):
 
 def test_merge_is_deep():
     assert merge({"a": {"x": 1, "y": 2}, "b": 1}, {"a": {"y": 3}}) == {"a": {"x": 1, "y": 3}, "b": 1}
+
+
+def test_atomic_file_gets_ordinary_permissions(tmp_path):
+    import os
+
+    write_json(tmp_path / "p.json", {})
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "p.json").stat().st_mode & 0o777 == 0o666 & ~umask

@@ -1,0 +1,45 @@
+"""Figures of the flight records (stage one)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+
+from . import save_figure
+
+_INPUTS = {"wind": ("wind_lateral_fps", "lateral wind, ft/s (+ = towards right)"),
+           "aileron": ("aileron_cmd", "aileron command, normalised")}
+
+
+def plot_record(record, path: str | Path, *, kind: str, title: str = "") -> Path:
+    """Plot one flight record (columns of :data:`hesspipe.flight.COLUMNS`) to `path`.
+
+    Panels: the record's input (`kind` ``"wind"``: lateral wind, ft/s;
+    ``"aileron"``: aileron command), roll and yaw rate (rad/s), bank and
+    sideslip (deg), calibrated airspeed (kt) and height AGL (ft).
+    """
+    column, label = _INPUTS[kind]
+    t = record["time"]
+    fig, axes = plt.subplots(5, 1, figsize=(9, 10), sharex=True)
+    axes[0].plot(t, record[column], lw=0.8, color="tab:red" if kind == "aileron" else "tab:blue",
+                 label=label)
+    axes[0].set_ylabel("input")
+    axes[1].plot(t, record["roll_rate_rps"], lw=0.8, label="roll rate p")
+    axes[1].plot(t, record["yaw_rate_rps"], lw=0.8, label="yaw rate r")
+    axes[1].set_ylabel("rad/s")
+    axes[2].plot(t, record["bank_deg"], lw=0.8, label="bank")
+    axes[2].plot(t, record["sideslip_deg"], lw=0.8, label="sideslip")
+    axes[2].set_ylabel("deg")
+    axes[3].plot(t, record["vc_kts"], lw=0.8, label="calibrated airspeed")
+    axes[3].set_ylabel("kt")
+    axes[4].plot(t, record["h_agl_ft"], lw=0.8, label="height AGL")
+    axes[4].set_ylabel("ft")
+    axes[4].set_xlabel("time, s")
+    for a in axes:
+        a.legend(loc="upper left", fontsize=8)
+        a.grid(True, alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return save_figure(fig, path)
