@@ -137,3 +137,13 @@ def test_load_stages_errors_name_file_and_field(tmp_path):
     bad.write_text('[[stage]]\nname = "a"\nrun = "tests:x"\ncolour = 1\n')
     with pytest.raises(HesspipeError, match="field 'stage\\[0\\].colour': unknown field|run"):
         load_stages(bad)
+
+
+def test_stage_publishing_into_the_root(tmp_path):
+    st = stages() + [Stage("report", ("c",), _writer("report"), folder=".")]
+    Pipeline(st, {}, tmp_path).run()
+    assert (tmp_path / "out.txt").read_text().startswith("report:")
+    assert (tmp_path / "report" / "manifest.json").exists()
+    assert ran(Pipeline(st, {}, tmp_path).run()) == []
+    (tmp_path / "out.txt").unlink()
+    assert ran(Pipeline(st, {}, tmp_path).run()) == ["report"]

@@ -84,6 +84,10 @@ class Stage:
         ``external_inputs(section, config) -> list[Path]``: files outside the
         pipeline's folder that the stage reads (hashed into the fingerprint).
     description : str
+    folder : str
+        Where its outputs go, relative to the output root (default: the
+        stage's name; ``"."`` publishes into the root itself, as the report
+        does). The manifest is always ``<root>/<name>/manifest.json``.
     """
 
     name: str
@@ -91,6 +95,7 @@ class Stage:
     run: Callable[[StageContext], None]
     external_inputs: Callable[[dict, dict], list] = lambda section, config: []
     description: str = ""
+    folder: str = ""
 
 
 @dataclass(frozen=True)
@@ -127,12 +132,22 @@ def _canonical(obj) -> str:
 
 
 def _output_hashes(folder: Path) -> dict[str, str]:
+    """Hashes of every file a stage wrote into its staging `folder`."""
     out = {}
     for path in sorted(folder.rglob("*")):
         rel = path.relative_to(folder)
         if path.is_file() and rel.name != MANIFEST and not rel.parts[0].startswith(".staging-"):
             out[str(rel)] = file_hash(path)
     return out
+
+
+def _outputs_intact(folder: Path, recorded: Mapping[str, str]) -> bool:
+    """True if every recorded output is in `folder` with its recorded hash."""
+    for rel, digest in recorded.items():
+        path = folder / rel
+        if not path.is_file() or file_hash(path) != digest:
+            return False
+    return True
 
 
 def _external_hashes(paths: Sequence) -> dict[str, str]:
@@ -208,7 +223,12 @@ class Pipeline:
         raise HesspipeError(f"unknown stage '{name}'; expected one of {', '.join(self.names())}")
 
     def folder(self, name: str) -> Path:
+        """Folder of stage `name`'s manifest (and, by default, its outputs)."""
         return self.out_root / name
+
+    def output_folder(self, name: str) -> Path:
+        """Folder stage `name` publishes its outputs into."""
+        return (self.out_root / (self._stage(name).folder or name)).resolve()
 
     def downstream(self, name: str) -> list[str]:
         """`name` and every stage that depends on it, in run order."""
@@ -250,7 +270,7 @@ class Pipeline:
                     return f"outputs of stage '{changed[0]}' changed"
                 changed = sorted(n for n in set(a) | set(b) if a.get(n) != b.get(n))
                 return f"input {changed[0]} changed"
-        if _output_hashes(folder) != manifest.get("outputs"):
+        if not _outputs_intact(self.output_folder(stage.name), manifest.get("outputs", {})):
             return "outputs missing or modified"
         return None
 
@@ -305,38 +325,42 @@ class Pipeline:
 
     def _execute(self, stage: Stage, parts: dict) -> float:
         folder = self.folder(stage.name)
+        target = self.output_folder(stage.name)
+        previous = (_read_manifest(folder) or {}).get("outputs", {})
         # Invalidate first: from here until the new manifest lands the stage is not fresh.
         (folder / MANIFEST).unlink(missing_ok=True)
         start = time.perf_counter()
         section = self.config.get(stage.name, {})
-        with staged_output(folder) as staging:
+        with staged_output(target) as staging:
             ctx = StageContext(name=stage.name, section=dict(section), config=self.config,
                                seed=self.seed, out_dir=staging,
-                               upstream={n: self.folder(n) for n in stage.needs}, source=self.source)
+                               upstream={n: self.output_folder(n) for n in stage.needs},
+                               source=self.source)
             stage.run(ctx)
             inner = _read_manifest(staging)
             outputs = _output_hashes(staging)
-            # Files of an earlier run that this run did not produce would
+            # Outputs of an earlier run that this run did not produce would
             # otherwise linger beside the new ones and be mistaken for them.
-            for rel in _output_hashes(folder):
-                if rel not in outputs:
-                    os.remove(folder / rel)
-            wall = time.perf_counter() - start
-            write_json(staging / MANIFEST, {
-                "stage": stage.name,
-                "description": stage.description,
-                "fingerprint": hashlib.sha256(_canonical(parts).encode()).hexdigest(),
-                "fingerprint_parts": parts,
-                "config": section,
-                "seed": self.seed,
-                "config_file": self.source,
-                "versions": versions(),
-                "wall_time_s": round(wall, 3),
-                "outputs": outputs,
-                "stage_manifest": inner,
-            })
+            for rel in set(previous) - set(outputs):
+                (target / rel).unlink(missing_ok=True)
+        wall = time.perf_counter() - start
+        record = {
+            "stage": stage.name,
+            "description": stage.description,
+            "fingerprint": hashlib.sha256(_canonical(parts).encode()).hexdigest(),
+            "fingerprint_parts": parts,
+            "config": section,
+            "seed": self.seed,
+            "config_file": self.source,
+            "versions": versions(),
+            "wall_time_s": round(wall, 3),
+            "output_folder": str(target),
+            "outputs": outputs,
+            # A stage's own manifest.json, if it writes one, is folded in here.
+            "stage_manifest": inner,
+        }
+        write_json(folder / MANIFEST, record)
         return wall
-
 
 def _resolve(ref: str, source: str, field: str) -> Callable:
     from importlib import import_module
@@ -376,8 +400,8 @@ def load_stages(path) -> list[Stage]:
         inputs = _resolve(inputs_ref, str(path), f"stage[{i}].inputs") if inputs_ref else (
             lambda section, config: [])
         description = f.string("description", "")
-        table.get("outputs")
+        folder = f.string("folder", "")
         f.used.add("outputs")
         f.reject_unknown()
-        stages.append(Stage(name, tuple(needs), run, inputs, description))
+        stages.append(Stage(name, tuple(needs), run, inputs, description, folder))
     return stages

@@ -34,9 +34,10 @@ def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
         if unknown:
             raise HesspipeError(f"{path}: field '{unknown[0]}': unknown section; expected seed or one of "
                                 f"{', '.join(SECTIONS)}")
-        data = user.get("pilots", {}).get("data") if isinstance(user.get("pilots"), dict) else None
-        if isinstance(data, str) and data and not Path(data).is_absolute():
-            user["pilots"]["data"] = str((Path(path).parent / data).resolve())
+        for section, key in (("pilots", "data"), ("diagnose", "run")):
+            value = user.get(section, {}).get(key) if isinstance(user.get(section), dict) else None
+            if isinstance(value, str) and value and not Path(value).is_absolute():
+                user[section][key] = str((Path(path).parent / value).resolve())
         config = merge(config, user)
     if aircraft is not None:
         config = merge(config, {"flight": {"aircraft": aircraft}})
@@ -77,3 +78,91 @@ def flight(ctx) -> None:
 
     table, (aircraft,) = _split(ctx.section, "aircraft")
     fly(aircraft or "737", FlightConfig.from_table(table, ctx.source), ctx.out_dir, ctx.seed)
+
+
+# -- plants -------------------------------------------------------------------------------
+
+def plants(ctx) -> None:
+    from .plants import PlantsConfig, fit_plants
+
+    fit_plants(ctx.upstream["flight"], ctx.out_dir, PlantsConfig.from_table(ctx.section, ctx.source))
+
+
+def analytic_inputs(section: dict, config: dict) -> list:
+    from .analytic import analytic_path
+
+    path = analytic_path(section.get("model", "roskam"))
+    return [path] if path.exists() else []
+
+
+def analytic(ctx) -> None:
+    from .plants import AnalyticConfig, analytic_plants
+
+    config = AnalyticConfig.from_table(ctx.section, ctx.source)
+    analytic_plants(config.model, ctx.out_dir, config)
+
+
+# -- pilots -------------------------------------------------------------------------------
+
+def pilots_inputs(section: dict, config: dict) -> list:
+    data = section.get("data")
+    return [Path(data)] if isinstance(data, str) and data else []
+
+
+def pilots(ctx) -> None:
+    from .compare import PilotsConfig, run_study
+    from .formats import read_plants
+
+    config = PilotsConfig.from_table(ctx.section, ctx.source)
+    result = run_study(config, read_plants(ctx.upstream["plants"] / "plants.json"), ctx.out_dir,
+                       seed=ctx.seed, progress=False)
+    if not result.ok:
+        failed = ", ".join(f"{f.id} ({f.error})" for f in result.failures)
+        raise HesspipeError(f"pilots: {len(result.failures)} run(s) failed: {failed}")
+
+
+# -- diagnose -----------------------------------------------------------------------------
+
+def _diagnose_run(ctx) -> Path:
+    """The run to diagnose: ``[diagnose] run`` or the first run of the pilots stage."""
+    chosen = ctx.section.get("run", "")
+    if chosen:
+        return Path(chosen)
+    pilots_cfg = ctx.config.get("pilots", {})
+    folder = Path(pilots_cfg["data"]) if pilots_cfg.get("data") else ctx.upstream["pilots"] / "cohort"
+    runs = sorted(p for p in folder.glob("*.csv"))
+    if not runs:
+        raise HesspipeError(f"{folder}: no *.csv runs to diagnose; set [diagnose] run = \"FILE\"")
+    return runs[0]
+
+
+def diagnose(ctx) -> None:
+    from .discrepancy import SEGMENT, DiagnoseConfig, diagnose as run_diagnose, format_report
+    from .formats import read_plants, read_run
+    from .io import write_json, write_text
+    from .viz.diagnose import plot_diagnosis
+
+    table, (_, model) = _split(ctx.section, "run", "model")
+    config = DiagnoseConfig.from_table(table, ctx.source)
+    run = read_run(_diagnose_run(ctx), min_samples=SEGMENT)
+    result = run_diagnose(run, read_plants(ctx.upstream["plants"] / "plants.json"),
+                          model=model or "original", seed=ctx.seed, config=config)
+    write_json(ctx.out_dir / "diagnosis.json", result.to_dict())
+    write_text(ctx.out_dir / "diagnosis.md", format_report(result) + "\n")
+    plot_diagnosis(result, ctx.out_dir / "diagnosis.png")
+
+
+def diagnose_inputs(section: dict, config: dict) -> list:
+    run = section.get("run")
+    return [Path(run)] if isinstance(run, str) and run else []
+
+
+# -- report -------------------------------------------------------------------------------
+
+def report(ctx) -> None:
+    from .io import write_text
+    from .report import build_report
+
+    root = ctx.out_dir.parent
+    text = build_report(ctx.upstream, root, config_file=ctx.source, seed=ctx.seed)
+    write_text(ctx.out_dir / "report.md", text)
