@@ -1,0 +1,112 @@
+"""Crossover frequency and phase margin of the pilot-vehicle loop.
+
+The loop is broken at the displayed error (SPEC.md "Crossover metrics"):
+``L(s) = Y_pilot(s) Yc(s)`` where ``Y_pilot`` is the whole pilot from e to
+delta with its inner loops (proprioceptive and, for the expanded model, the
+motion path through the plant) closed::
+
+    L = NM visual Yc / (1 + NM PF + NM vestibular Yc)
+
+Crossover: the highest frequency where ``|L(j w)|`` falls through 1; phase
+margin ``180 deg + angle L(j wc)``, wrapped to (-180, 180]. The limits are
+this project's assumption (default 1-5 rad/s and 20-60 deg), and the
+output says so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Mapping
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .blocks import Block, from_tf
+
+LIMITS_NOTE = ("crossover-model limits are an assumption of hesspipe (configurable), "
+               "not values from the paper")
+
+
+@dataclass(frozen=True)
+class CrossoverLimits:
+    """Acceptable crossover frequency (rad/s) and phase margin (deg)."""
+
+    frequency_rad_s: tuple[float, float] = (1.0, 5.0)
+    phase_margin_deg: tuple[float, float] = (20.0, 60.0)
+
+
+@dataclass(frozen=True)
+class Crossover:
+    """Crossover metrics of one pilot-vehicle loop.
+
+    Attributes
+    ----------
+    frequency_rad_s : float
+        Crossover frequency wc (NaN if |L| never crosses 1 in 1e-3..1e3 rad/s).
+    phase_margin_deg : float
+        180 + angle L(j wc), deg (NaN without a crossover).
+    within_limits : bool
+        Both inside :class:`CrossoverLimits`.
+    limits : CrossoverLimits
+    """
+
+    frequency_rad_s: float
+    phase_margin_deg: float
+    within_limits: bool
+    limits: CrossoverLimits = CrossoverLimits()
+
+    def to_dict(self) -> dict:
+        return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
+                "within_limits": self.within_limits,
+                "limits": {k: list(v) for k, v in asdict(self.limits).items()},
+                "limits_note": LIMITS_NOTE}
+
+
+def _plant_block(plants) -> Block:
+    if isinstance(plants, Block):
+        return plants
+    yc = getattr(plants, "control_to_output", plants)
+    return from_tf(yc)
+
+
+def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits()) -> Crossover:
+    """Crossover of an already built :class:`~hesspipe.blocks.Loop` with control plant `yc`."""
+    def gain_db(w):
+        s = 1j * np.atleast_1d(np.asarray(w, dtype=float))
+        with np.errstate(divide="ignore"):  # a zero gain (Ke = 0) is log 0 = -inf: no crossover
+            return np.log(np.abs(loop.pilot_open_loop(s, yc.response(s))))
+
+    w = np.logspace(-3, 3, 3001)
+    g = gain_db(w)
+    down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
+    if down.size == 0:
+        return Crossover(float("nan"), float("nan"), False, limits)
+    i = down[-1]
+    wc = brentq(lambda x: float(gain_db(x)[0]), w[i], w[i + 1], xtol=1e-10, rtol=1e-12)
+    s = np.array([1j * wc])
+    phase = np.degrees(np.angle(loop.pilot_open_loop(s, yc.response(s))[0]))
+    pm = (180.0 + phase + 180.0) % 360.0 - 180.0
+    pm = 180.0 if pm == -180.0 else pm
+    within = (limits.frequency_rad_s[0] <= wc <= limits.frequency_rad_s[1]
+              and limits.phase_margin_deg[0] <= pm <= limits.phase_margin_deg[1])
+    return Crossover(float(wc), float(pm), bool(within), limits)
+
+
+def crossover(model, params: Mapping[str, float] | None, plants, *,
+              limits: CrossoverLimits = CrossoverLimits(), k: int | None = None) -> Crossover:
+    """Crossover frequency and phase margin of `model` with `params` around `plants`.
+
+    Parameters
+    ----------
+    model : PilotModel or str
+    params : mapping
+        Parameter values (missing: Table 1 defaults).
+    plants : Plants or control.TransferFunction
+        The control plant Yc (or Plants holding it).
+    limits : CrossoverLimits
+    """
+    from .hess import model_from_name
+
+    model = model_from_name(model)
+    p = model.complete(params, k)
+    return loop_crossover(model.loop(p), _plant_block(plants), limits)
