@@ -22,7 +22,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="hesspipe", description=__doc__.splitlines()[0] if __doc__ else None)
+    parser = _Parser(prog="hesspipe", description=(
+        "Does the pilot need motion cues? Fly a JSBSim transport on the approach, identify ARX "
+        "plants, fit the Hess structural pilot model (original and with motion feedback) to pilot "
+        "data, compare pilots and diagnose what a model misses. Start with 'hesspipe run'."))
     parser.add_argument("--version", action="version", version=f"hesspipe {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True

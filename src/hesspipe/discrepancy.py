@@ -1,0 +1,1103 @@
+"""The discrepancy workflow: locate where a pilot model and measured data disagree, name
+the missing effect, add it, re-identify and show the gap shrink (SPEC.md "The discrepancy
+workflow").
+
+Steps
+-----
+1. **Locate.** The control PSD of the identified baseline model is compared with the
+   measured control PSD band by band (where the model has too much or too little power,
+   by how many dB, and which bands carry most of the mismatch). The plant check drives
+   the plants with the measured control and disturbance and compares the result with
+   the measured output (fit percent, residual whiteness and residual/input
+   independence). The same residual tests are applied to the time-domain control error
+   of the model where they apply (deterministic models only: a model with a random
+   remnant cannot predict the control sample by sample).
+2. **Candidates.** Each candidate effect of :data:`hesspipe.effects.EFFECTS` not yet in
+   the model is added and the augmented model is re-identified (core free gains plus
+   all of the effect's parameters) by a grid over the new parameters followed by
+   bounded least squares.
+3. **Decide.** Each candidate is scored against the current model with a likelihood-
+   ratio test on log-spectral residuals (see *The criterion*). The best candidate is
+   named only if it is significant after a Bonferroni correction for the number of
+   candidates tried in that round and its BIC improves; it is added and the round
+   repeats until nothing significant is left.
+4. **Report.** Gap (SPEC.md Eq. 10 fitness) before and after, the bands that closed.
+
+The criterion
+-------------
+Fits and scores use the same residual: ``r_k = ln P_model(f_k) - ln P_measured(f_k)``
+over the paper-Welch bins of the band (DC excluded). ``P_model`` is the PSD of the
+model's deterministic response to the measured disturbance plus the *expected* PSD of
+its remnant through the closed loop (exact, not a random draw, so fits do not depend on
+a noise realization). Log residuals are used because the linear Eq. 10 fitness is
+dominated by the few bins around the PSD peak and is blind to the low-power bands where
+a remnant, an extra delay or a Dutch-roll pair show. Welch bins are not independent (the
+Hamming window correlates neighbours), so the residuals count as
+``n_eff = n_bins / ENBW`` observations (ENBW: equivalent noise bandwidth of the window,
+1.36 bins). With Gaussian residuals of unknown variance, the likelihood-ratio statistic
+between the current model and the model with one more effect is
+``Lambda = n_eff ln(V0 / V1)``, chi-square with ``dof`` = number of added parameters
+under the null. Robustness to chance and to over-fitting:
+
+* The best of ``m`` candidates of a round is named only if ``p < alpha / m``
+  (Bonferroni: the best of m tries is a multiple comparison) and
+  ``delta_BIC = Lambda - dof ln(n_eff) > 0``, which pays for every added parameter.
+  delta_BIC is the reported score.
+* ``V`` is floored at ``(resolution_db / 4.34)^2`` (0.1 dB RMS by default): a model
+  that matches the data to better than that leaves only optimizer round-off, and a
+  ratio of two round-off residuals must not count as evidence.
+* The augmented fit starts from the effect switched off, so it is never worse than the
+  model it extends (nested models, ``Lambda >= 0``), and from a grid over the effect's
+  parameters jointly with the pilot gains, so a real effect is not missed for a bad
+  local optimum.
+
+* Both PSDs are floored at ``dynamic_range_db`` (40 dB) below the band's measured peak
+  before the logs: a Hamming window's leakage (-43 dB sidelobes) bounds what a Welch
+  estimate resolves, and deeper bins would otherwise dominate the log residual.
+
+A likelihood-ratio test was preferred over cross-validation across record segments
+because a 70 s record holds only three to four 1024-sample Welch segments: halving it
+leaves spectra too coarse to fit. Recording noise on the control column is, to a PSD,
+broadband control noise, i.e. a remnant with Tn = 0: once it rises above the dynamic
+range floor (about 1 % of the control's RMS for the validation runs) the workflow names
+``remnant``, which is the physical reading a control PSD allows.
+
+Known limit: a PSD cannot tell the pilot's response to the disturbance from noise of
+the same spectrum, so a "low-gain pilot plus strong remnant" can mimic a mis-fitted
+baseline; the joint grid over effect parameters and pilot gains is what lets the right
+effect win in the benchmark, not a guarantee.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import scipy.optimize
+import scipy.signal
+import scipy.special
+import scipy.stats
+
+from .arx import ResidualTests, fit_percent, residual_tests
+from .config import Fields
+from .errors import HesspipeError
+from .formats import Plants, Run
+from .seeds import derive_seed
+
+#: Welch segment length and overlap of the paper's estimator (SPEC.md Eqs. 5-9).
+SEGMENT = 1024
+OVERLAP = 32
+
+#: Default band edges (Hz) for the band-wise disagreement.
+BAND_EDGES_HZ = (0.0, 0.25, 0.5, 1.0, 2.0, 3.5, 5.0)
+
+#: Core pilot parameters freed in every fit. K1 and K2 appear only as a product
+#: (SPEC.md), so K2 stays at its Table 1 value and K1 carries the product.
+CORE_FREE = ("Ke", "K1")
+
+_DB = 10.0 / math.log(10.0)
+_UNSTABLE_RESIDUAL = 25.0  # ln-units per bin for an unstable parameter set (e^25 mismatch)
+
+
+# -- configuration --------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class DiagnoseConfig:
+    """Settings of :func:`diagnose` (the ``[diagnose]`` table of a pipeline file).
+
+    Attributes
+    ----------
+    candidates : tuple of str or None
+        Effect ids to try; None tries every registered effect not already in the model.
+    band_hz : (float, float)
+        Frequency band of the fits, scores and Eq. 10 gap, Hz.
+    band_edges_hz : tuple of float
+        Edges of the bands reported by the locate step, Hz (increasing).
+    alpha : float
+        Family-wise significance level of one round (Bonferroni over its candidates).
+    max_effects : int
+        Most effects named in one diagnosis.
+    free : tuple of str
+        Core parameters freed in every fit (effect parameters are always free).
+    grid : int
+        Grid levels of a new effect's parameter (``grid // n``, at least 3, each for an
+        effect with n parameters; ``grid`` per core gain for the baseline fit).
+    gain_levels : tuple of float
+        Levels (fractions of their box) at which the core gains join a candidate's grid,
+        besides their current values.
+    starts : int
+        Best grid points from which least squares is run (besides the start value).
+    max_evaluations : int
+        Least-squares function-evaluation budget of one fit.
+    max_lag : int
+        Lags of the residual tests.
+    min_plant_fit : float
+        Plant-check fit percent below which the plants are taken not to describe the
+        data's columns at all (an input error, not a discrepancy).
+    resolution_db : float
+        Floor of the RMS log-spectral residual, dB: smaller mismatches are not evidence.
+    dynamic_range_db : float
+        PSD levels further below the band's measured peak are compared at that level
+        (the Hamming window's leakage, -43 dB sidelobes, limits what a Welch estimate
+        resolves); it also sets how weak a broadband noise floor may be and still be
+        named a remnant.
+    k : int
+        Controlled-element order of the Hess model (1 rate, 2 attitude).
+    """
+
+    candidates: tuple[str, ...] | None = None
+    band_hz: tuple[float, float] = (0.0, 5.0)
+    band_edges_hz: tuple[float, ...] = BAND_EDGES_HZ
+    alpha: float = 0.01
+    max_effects: int = 3
+    free: tuple[str, ...] = CORE_FREE
+    grid: int = 8
+    gain_levels: tuple[float, ...] = (0.25, 0.5, 0.75)
+    starts: int = 3
+    max_evaluations: int = 40
+    max_lag: int = 25
+    min_plant_fit: float = -100.0
+    resolution_db: float = 0.1
+    dynamic_range_db: float = 40.0
+    k: int = 1
+
+    @classmethod
+    def from_table(cls, table: Mapping | None, source: str = "<config>",
+                   prefix: str = "diagnose") -> "DiagnoseConfig":
+        """Build from a ``[diagnose]`` TOML table; unknown keys and bad values raise."""
+        f = Fields(table, source, prefix)
+        d = cls()
+        cands = f._get("candidates", None)
+        if cands is not None:
+            if (not isinstance(cands, list) or not all(isinstance(c, str) and c for c in cands)):
+                raise f.error("candidates", "a list of effect ids", cands)
+            cands = tuple(cands)
+        band = f.numbers("band_hz", list(d.band_hz), length=2)
+        if not 0.0 <= band[0] < band[1]:
+            raise f.error("band_hz", "[lo, hi] with 0 <= lo < hi", list(band))
+        edges = f.numbers("band_edges_hz", list(d.band_edges_hz))
+        if len(edges) < 2 or any(b <= a for a, b in zip(edges, edges[1:])) or edges[0] < 0:
+            raise f.error("band_edges_hz", "at least two increasing frequencies >= 0", list(edges))
+        cfg = cls(candidates=cands, band_hz=band, band_edges_hz=edges,
+                  alpha=f.number("alpha", d.alpha, min=0.0, max=0.5, strict_min=True),
+                  max_effects=f.integer("max_effects", d.max_effects, min=0),
+                  free=tuple(_strings(f, "free", d.free)),
+                  grid=f.integer("grid", d.grid, min=1, max=20),
+                  gain_levels=_fractions(f, "gain_levels", d.gain_levels),
+                  starts=f.integer("starts", d.starts, min=0, max=50),
+                  max_evaluations=f.integer("max_evaluations", d.max_evaluations, min=5),
+                  max_lag=f.integer("max_lag", d.max_lag, min=1),
+                  min_plant_fit=f.number("min_plant_fit", d.min_plant_fit),
+                  resolution_db=f.number("resolution_db", d.resolution_db, min=0.0, strict_min=True),
+                  dynamic_range_db=f.number("dynamic_range_db", d.dynamic_range_db, min=10.0, max=200.0),
+                  k=f.integer("k", d.k, min=1, max=2))
+        f.reject_unknown()
+        return cfg
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def _fractions(f: Fields, key: str, default) -> tuple[float, ...]:
+    values = f.numbers(key, list(default))
+    if not all(0.0 <= v <= 1.0 for v in values):
+        raise f.error(key, "a list of fractions between 0 and 1", list(values))
+    return values
+
+
+def _strings(f: Fields, key: str, default) -> list[str]:
+    value = f._get(key, list(default))
+    if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) and v for v in value):
+        raise f.error(key, "a list of parameter names", value)
+    return list(value)
+
+
+# -- residual tests (plant check and control error) ----------------------------------------
+
+@dataclass(frozen=True)
+class PlantCheck:
+    """Plants driven by the measured control and disturbance, against the measured output.
+
+    ``tests_control`` / ``tests_disturbance`` are :func:`hesspipe.arx.residual_tests`
+    (whiteness, correlations and bounds). ``independence_p`` holds p-values of
+    :func:`independence_test`, which accounts for the colour of the input; ``passes``
+    uses those (99 % level).
+    """
+
+    fit_percent: float
+    residual_rms: float
+    tests_control: ResidualTests
+    tests_disturbance: ResidualTests
+    independence_p: dict
+
+    @property
+    def passes(self) -> bool:
+        return all(p >= 0.01 for p in self.independence_p.values())
+
+    def to_dict(self) -> dict:
+        return {"fit_percent": self.fit_percent, "residual_rms": self.residual_rms,
+                "passes": self.passes, "independence_p": self.independence_p,
+                "tests_control": self.tests_control.to_dict(),
+                "tests_disturbance": self.tests_disturbance.to_dict()}
+
+
+def independence_test(e: np.ndarray, u: np.ndarray, max_lag: int = 25, *,
+                      ar_order: int = 10) -> tuple[float, float]:
+    """Residual/input cross-correlation test for a coloured input (prewhitened).
+
+    The input is whitened by a least-squares AR(`ar_order`) filter; for a white residual
+    independent of the input, ``S = N sum_k r(k)^2`` over the normalised cross-
+    correlations of the residual at t + k with the whitened input at t, k = 0..max_lag,
+    is then chi-square with max_lag + 1 degrees of freedom. (Without prewhitening the
+    lags of a smooth input such as a pilot's control are strongly correlated and the
+    same sum rejects far too often.)
+
+    Returns
+    -------
+    statistic, p_value : float
+    """
+    e = np.asarray(e, dtype=float) - np.mean(e)
+    u = np.asarray(u, dtype=float) - np.mean(u)
+    n = len(e)
+    p = int(min(ar_order, n // 20))
+    if p > 0:
+        lagged = np.column_stack([u[p - i - 1:n - i - 1] for i in range(p)])
+        a = np.linalg.lstsq(lagged, u[p:], rcond=None)[0]
+        u = u[p:] - lagged @ a
+        e = e[p:]
+        n = len(e)
+    m = int(min(max_lag, n // 4))
+    se, su = float(np.std(e)), float(np.std(u))
+    if se == 0 or su == 0:
+        return 0.0, 1.0
+    r = np.array([float(e[k:] @ u[:n - k]) for k in range(m + 1)]) / (n * se * su)
+    stat = n * float(r @ r)
+    return stat, float(scipy.stats.chi2.sf(stat, m + 1))
+
+
+def forced_response(sys, u: np.ndarray, dt: float, *, pad_factor: int = 4) -> np.ndarray:
+    """Zero-initial-state response of a continuous transfer function to samples `u`.
+
+    Same convention as :class:`hesspipe.hess.Simulator` (band-limited input, exact
+    frequency response on a zero-padded FFT grid), so a synthetic run generated by the
+    pilot model is reproduced to rounding. A plant with unstable poles, which an FFT
+    cannot simulate, falls back to python-control's time-domain solver.
+    """
+    import control as ct
+    import scipy.fft as sfft
+
+    from .blocks import from_tf, stable_poly
+
+    u = np.asarray(u, dtype=float)
+    block = from_tf(sys)
+    if not all(stable_poly(t.den, margin=-1e-12) for t in block.terms):
+        t = dt * np.arange(u.size)
+        return np.asarray(ct.forced_response(sys, T=t, U=u).outputs, dtype=float).reshape(-1)
+    nfft = sfft.next_fast_len(pad_factor * u.size, real=True)
+    omega = 2.0 * np.pi * np.fft.rfftfreq(nfft, dt)
+    omega[0] = omega[1] * 1e-6  # integrating plants: finite value just above DC, as the simulator
+    return sfft.irfft(block.response(1j * omega) * sfft.rfft(u, nfft), nfft)[: u.size]
+
+
+def plant_check(run: Run, plants: Plants, *, max_lag: int = 25, edge_s: float = 1.0) -> PlantCheck:
+    """Drive Yc with the measured control and Yd with the measured disturbance (zero
+    initial state) and compare the sum with the measured output.
+
+    The first and last `edge_s` seconds are left out of the fit and the tests: the
+    zero-initial-state start and the record's end (where a band-limited simulation
+    rings) are not the plants' fault.
+    """
+    y_sim = (forced_response(plants.control_to_output, run.control, run.dt)
+             + forced_response(plants.disturbance_to_output, run.disturbance, run.dt))
+    k = min(int(round(edge_s / run.dt)), len(run) // 10)
+    sl = slice(k, len(run) - k)
+    y, res = run.output[sl], (run.output - y_sim)[sl]
+    return PlantCheck(fit_percent=fit_percent(y, y_sim[sl]),
+                      residual_rms=float(np.sqrt(np.mean(res ** 2))),
+                      tests_control=residual_tests(res, run.control[sl], max_lag=max_lag),
+                      tests_disturbance=residual_tests(res, run.disturbance[sl], max_lag=max_lag),
+                      independence_p={"control": independence_test(res, run.control[sl], max_lag)[1],
+                                      "disturbance": independence_test(res, run.disturbance[sl], max_lag)[1]})
+
+
+# -- spectra, bins and bands ----------------------------------------------------------------
+
+def _psd(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    from .spectra import psd
+
+    f, p = psd(np.asarray(x, dtype=float), fs)
+    return np.asarray(f, dtype=float), np.asarray(p, dtype=float)
+
+
+def _eq10(measured: np.ndarray, model: np.ndarray, freq: np.ndarray, band) -> float:
+    from .spectra import fitness
+
+    return float(fitness(measured, model, freq, band=tuple(band)))
+
+
+def welch_statistics(n_samples: int) -> tuple[float, float, float]:
+    """Chance properties of the paper's Welch estimate of an `n_samples` record.
+
+    Returns
+    -------
+    nu : float
+        Equivalent chi-square degrees of freedom of one bin (2 per segment's worth of
+        data; padding adds no information).
+    var_floor : float
+        ``psi'(nu/2)``: variance of the natural log of such an estimate.
+    enbw_bins : float
+        Equivalent noise bandwidth of the Hamming window in bins (bins per
+        independent observation).
+    """
+    from .spectra import PaperWelch
+
+    est = PaperWelch()
+    nu = 2.0 * max(n_samples / est.nperseg, 1.0)
+    w = np.asarray(est.window)
+    enbw = est.nperseg * float(np.sum(w ** 2)) / float(np.sum(w)) ** 2
+    return nu, float(scipy.special.polygamma(1, nu / 2.0)), enbw
+
+
+@dataclass(frozen=True)
+class Band:
+    """Model-versus-measurement disagreement of the control PSD in one band.
+
+    ``level_db`` > 0: the model has too much power (mean of 10 log10(model/measured));
+    ``rms_db``: RMS of the same ratio; ``share``: fraction of the total squared log
+    residual of the band set found in this band (which bands matter most);
+    ``eq10_share``: the same for the squared linear PSD difference of Eq. 10;
+    ``p_value``: chance of a mismatch this large if the band's log residuals scattered
+    like the reference variance (chi-square over the band's independent bins);
+    ``disagrees``: ``p_value < alpha``.
+    """
+
+    lo_hz: float
+    hi_hz: float
+    n_bins: int
+    level_db: float
+    rms_db: float
+    share: float
+    eq10_share: float
+    p_value: float
+    disagrees: bool
+
+    @property
+    def direction(self) -> str:
+        if abs(self.level_db) < 0.5 * self.rms_db:
+            return "wrong shape"
+        return "too much power" if self.level_db > 0 else "too little power"
+
+    def to_dict(self) -> dict:
+        return {**asdict(self), "direction": self.direction}
+
+
+def band_disagreement(freq_hz: np.ndarray, measured_psd: np.ndarray, model_psd: np.ndarray,
+                      edges_hz: Sequence[float], *, var_floor: float, enbw_bins: float,
+                      alpha: float = 0.01, floor: float | None = None) -> tuple[Band, ...]:
+    """Where, by how much and how significantly a model's control PSD misses the data.
+
+    Parameters
+    ----------
+    freq_hz, measured_psd, model_psd : ndarray
+        Common frequency grid (Hz) and the two PSDs (control units^2 / Hz).
+    edges_hz : sequence of float
+        Band edges, Hz; a bin belongs to [lo, hi) (the last band includes hi). DC is
+        left out (its log is meaningless for a zero-mean control).
+    var_floor : float
+        Reference variance of one log-PSD bin: ``diagnose`` passes the residual
+        variance of the final model (at least the resolution), so a band disagrees when
+        its mismatch stands out from the rest of the record; the Welch scatter of
+        :func:`welch_statistics` is the stricter "a repeat run would not erase it".
+    enbw_bins : float
+        Bins per independent observation (:func:`welch_statistics`).
+    floor : float, optional
+        PSD level added to both spectra before the logs (the estimator's dynamic range).
+    """
+    f = np.asarray(freq_hz, dtype=float)
+    pm = np.asarray(measured_psd, dtype=float)
+    ps = np.asarray(model_psd, dtype=float)
+    r = _log_residual(pm, ps, floor)
+    lin = (ps - pm) ** 2
+    rows = []
+    edges = list(edges_hz)
+    for i, (lo, hi) in enumerate(zip(edges, edges[1:])):
+        m = (f > 0) & (f >= lo) & ((f <= hi) if i == len(edges) - 2 else (f < hi))
+        n = int(m.sum())
+        if n == 0:
+            continue
+        rb = r[m]
+        n_eff = max(n / enbw_bins, 1.0)
+        chi = n_eff * float(np.mean(rb ** 2)) / var_floor
+        rows.append(dict(lo_hz=float(lo), hi_hz=float(hi), n_bins=n, level_db=_DB * float(rb.mean()),
+                         rms_db=_DB * math.sqrt(float(np.mean(rb ** 2))), ss=float(np.sum(rb ** 2)),
+                         lin=float(np.sum(lin[m])), p_value=float(scipy.stats.chi2.sf(chi, n_eff))))
+    total = sum(row["ss"] for row in rows) or 1.0
+    total_lin = sum(row["lin"] for row in rows) or 1.0
+    return tuple(Band(lo_hz=row["lo_hz"], hi_hz=row["hi_hz"], n_bins=row["n_bins"],
+                      level_db=row["level_db"], rms_db=row["rms_db"], share=row["ss"] / total,
+                      eq10_share=row["lin"] / total_lin, p_value=row["p_value"],
+                      disagrees=row["p_value"] < alpha) for row in rows)
+
+
+def _log_residual(measured: np.ndarray, model: np.ndarray, floor: float | None = None) -> np.ndarray:
+    """``ln(model + floor) - ln(measured + floor)``; `floor` defaults to 1e-12 of the
+    measured peak."""
+    eps = 1e-12 * max(float(np.max(measured)), 1e-300) if floor is None else floor
+    return np.log(np.maximum(model, 0.0) + eps) - np.log(np.maximum(measured, 0.0) + eps)
+
+
+# -- fitting --------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Fit:
+    model: Any
+    parameters: dict
+    free: tuple[str, ...]
+    psd: np.ndarray          # model control PSD: deterministic part + expected remnant
+    residual: np.ndarray     # ln model PSD - ln measured PSD over the band's bins
+    evaluations: int
+    stable: bool
+
+    @property
+    def variance(self) -> float:
+        return float(np.mean(self.residual ** 2))
+
+
+def _window_gain(n_samples: int) -> float:
+    """Expected paper-Welch PSD of unit two-sided density (white noise of variance fs).
+
+    ``mean(window^2) / U`` per full segment; the padding of the last segment (Eq. 9)
+    carries no noise, so each segment counts by the window energy on its data samples.
+    """
+    from .spectra import PaperWelch
+
+    est = PaperWelch()
+    w2 = np.asarray(est.window) ** 2
+    k = est.segments(n_samples)
+    step = est.nperseg - est.noverlap
+    energy = sum(float(np.sum(w2[:max(0, min(est.nperseg, n_samples - i * step))])) for i in range(k))
+    return energy / (k * est.nperseg) / est.correction
+
+
+class _Problem:
+    """Measured spectra and the fitting machinery shared by every fit of one diagnosis.
+
+    The model's control PSD is the paper-Welch PSD of its deterministic response to the
+    measured disturbance (and reference), plus the expected PSD of its remnant through
+    the closed loop (zero without remnant), computed exactly rather than from a random
+    draw so that fits and scores do not depend on a noise realization.
+    """
+
+    def __init__(self, run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int):
+        from .blocks import from_tf
+        from .hess import Simulator
+        from .spectra import PaperWelch
+
+        self.run, self.plants, self.cfg = run, plants, cfg
+        self.freq, self.measured = _psd(run.control, run.fs)
+        lo, hi = cfg.band_hz
+        self.mask = (self.freq > 0) & (self.freq >= lo) & (self.freq <= hi)
+        if int(self.mask.sum()) < 3:
+            raise HesspipeError(f"{run.source or run.id}: fewer than 3 Welch bins in the band "
+                                f"{lo:g}-{hi:g} Hz; expected a longer record or a wider band")
+        est = PaperWelch()
+        self.nu, self.var_floor, self.enbw = welch_statistics(len(run))
+        self.n_eff = float(self.mask.sum()) / self.enbw
+        self.resolution = (cfg.resolution_db / _DB) ** 2
+        # A Hamming window's leakage (highest sidelobe -43 dB) bounds what a Welch
+        # estimate can resolve below its peak; deeper bins are compared at that level.
+        self.psd_floor = float(np.max(self.measured[self.mask])) * 10.0 ** (-cfg.dynamic_range_db / 10.0)
+        self.window_gain = _window_gain(len(run))
+        # The remnant is evaluated in expectation, so the simulator's noise is never used;
+        # its seed is derived all the same for reproducibility.
+        self.sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference,
+                             noise_seed=derive_seed(seed, "diagnose"))
+        f = self.freq.copy()
+        f[0] = f[1] * 1e-6
+        self.s = 2j * np.pi * f
+        self.yc = from_tf(plants.control_to_output).response(self.s)
+
+    # model pieces -----------------------------------------------------------------------
+    def loop(self, model, params):
+        return model.loop(model.complete(params))
+
+    def stochastic(self, model, params) -> bool:
+        """Whether the model's loop has a remnant."""
+        return not self.loop(model, params).noise.is_zero
+
+    def control(self, model, params, loop=None) -> np.ndarray | None:
+        """Deterministic control (remnant off) driven by the measured disturbance; None if
+        the loop is unstable (a remnant filter has no poles in the right half plane)."""
+        from .blocks import ZERO
+
+        loop = self.loop(model, params) if loop is None else loop
+        u = self.sim.control(loop.replace(noise=ZERO))
+        return None if u is None or not np.all(np.isfinite(u)) else u
+
+    def remnant_psd(self, loop) -> np.ndarray:
+        """Expected paper-Welch PSD of the remnant's share of the control.
+
+        The unit-variance white sequence of :class:`hesspipe.hess.Simulator` has a
+        two-sided density ``dt``; the closed loop passes it to the control through
+        ``noise / (1 + NM PF + NM (visual + vestibular) Yc plant)`` (the loop of
+        :class:`hesspipe.blocks.Loop`); the estimator's expectation multiplies the
+        density by :func:`_window_gain`.
+        """
+        if loop.noise.is_zero:
+            return np.zeros_like(self.freq)
+        s = self.s
+        nm = loop.neuromuscular.response(s)
+        den = 1.0 + nm * loop.proprioceptive.response(s) + nm * (
+            loop.visual.response(s) + loop.vestibular.response(s)) * self.yc * loop.plant.response(s)
+        return np.abs(loop.noise.response(s) / den) ** 2 * self.run.dt * self.window_gain
+
+    def residual(self, model, params) -> tuple[np.ndarray, np.ndarray] | None:
+        """(``ln P_model - ln P_measured`` over the band's bins, model PSD on the full
+        grid), None for an unstable loop."""
+        loop = self.loop(model, params)
+        u = self.control(model, params, loop)
+        if u is None:
+            return None
+        _, det = _psd(u, self.run.fs)
+        p = det + self.remnant_psd(loop)
+        return _log_residual(self.measured[self.mask], p[self.mask], self.psd_floor), p
+
+    # identification --------------------------------------------------------------------
+    def free_parameters(self, model) -> tuple[str, ...]:
+        names = model.parameter_names()
+        missing = [p for p in self.cfg.free if p not in names]
+        if missing:
+            raise HesspipeError(f"diagnose: free parameter '{missing[0]}' is not a parameter of model "
+                                f"{model.name} (its parameters: {', '.join(names)})")
+        return tuple(self.cfg.free) + tuple(
+            p for e in model.effects for p in _effect(e).parameters if p not in self.cfg.free)
+
+    def fit(self, model, start: Mapping[str, float], grid: Sequence[str] = ()) -> _Fit:
+        """Least-squares fit of the free parameters of `model` on the log-spectral residual.
+
+        Starts: `start`, the effect switched off (:data:`_NULL`) and a grid over the
+        `grid` parameters; then bounded least squares from the best start. A point is
+        kept only if it lowers the sum of squares, so an augmented model is never worse
+        than the model it extends.
+        """
+        names = model.parameter_names()
+        bounds = model.bounds()
+        params = {**model.defaults(k=self.cfg.k), **{k: v for k, v in start.items() if k in names}}
+        free = self.free_parameters(model)
+        scale = _UnitScale([bounds[p] for p in free], [p not in self.cfg.free for p in free])
+        bad = np.full(int(self.mask.sum()), _UNSTABLE_RESIDUAL)
+        count = [0]
+
+        def residual(values: Mapping[str, float]) -> np.ndarray:
+            count[0] += 1
+            out = self.residual(model, {**params, **values})
+            return bad if out is None else out[0]
+
+        best_vals = {p: float(np.clip(params[p], bounds[p][0], bounds[p][1])) for p in free}
+        best_r = residual(best_vals)
+
+        def consider(vals):
+            nonlocal best_vals, best_r
+            r = residual(vals)
+            if float(r @ r) < float(best_r @ best_r):
+                best_vals, best_r = dict(vals), r
+
+        consider({**best_vals, **{p: v for p, v in _NULL.items() if p in free and p not in self.cfg.free}})
+        starts = [best_vals]
+        if grid:
+            # Least squares alone stalls on the periodic stretches of a delay, the
+            # narrow valley of a resonance or the several valleys of Ke and K1. The
+            # `grid` parameters are gridded over their box jointly with the core gains
+            # (at their start values and at quarter points of their box: an added effect
+            # often moves the gains far, e.g. a delay against a gain stuck at its
+            # bound); least squares over all free parameters then runs from the best few.
+            base_u = scale.to_unit([best_vals[p] for p in free])
+            n_new = max(len([p for p in grid if p not in self.cfg.free]), 1)
+            levels = self.cfg.grid if n_new == 1 else max(3, self.cfg.grid // n_new)
+            axes = []
+            for i, p in enumerate(free):
+                if p in grid:
+                    axes.append((np.arange(levels) + 0.5) / levels)
+                elif p in self.cfg.free:
+                    axes.append(np.unique([base_u[i], *self.cfg.gain_levels]))
+                else:
+                    axes.append(np.array([base_u[i]]))
+            ranked = []
+            for point in np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, len(free)):
+                vals = dict(zip(free, scale.from_unit(point)))
+                r = residual(vals)
+                ranked.append((float(r @ r), vals))
+                if float(r @ r) < float(best_r @ best_r):
+                    best_vals, best_r = vals, r
+            ranked.sort(key=lambda sv: sv[0])
+            starts = [best_vals] + [v for _, v in ranked[:self.cfg.starts] if v is not best_vals]
+        for start_vals in (starts if free else []):
+            u0 = scale.to_unit([start_vals[p] for p in free])
+            sol = scipy.optimize.least_squares(lambda u: residual(dict(zip(free, scale.from_unit(u)))),
+                                               u0, bounds=(0.0, 1.0), diff_step=1e-2,
+                                               max_nfev=self.cfg.max_evaluations, method="trf")
+            consider(dict(zip(free, scale.from_unit(sol.x))))
+        final = {**params, **best_vals}
+        out = self.residual(model, final)
+        p = None if out is None else out[1]
+        if p is None:
+            return _Fit(model, final, free, np.full_like(self.measured, np.nan), bad, count[0] + 1, False)
+        return _Fit(model, final, free, p, best_r, count[0] + 1, True)
+
+    # scoring and reporting ---------------------------------------------------------------
+    def variance(self, fit: _Fit) -> float:
+        """Residual variance, floored at the resolution (see the module docstring)."""
+        return max(fit.variance, self.resolution)
+
+    def log_rms_db(self, psd: np.ndarray) -> float:
+        r = _log_residual(self.measured[self.mask], psd[self.mask], self.psd_floor)
+        return _DB * math.sqrt(float(np.mean(r ** 2)))
+
+    def bands(self, psd: np.ndarray, scatter: float) -> tuple[Band, ...]:
+        return band_disagreement(self.freq, self.measured, psd, self.cfg.band_edges_hz,
+                                 var_floor=scatter, enbw_bins=self.enbw, alpha=self.cfg.alpha,
+                                 floor=self.psd_floor)
+
+    def gap(self, psd: np.ndarray) -> float:
+        return _eq10(self.measured, psd, self.freq, self.cfg.band_hz)
+
+
+#: Parameter values that switch an effect off (the augmented model then equals the
+#: model it extends). Effects not listed start from their defaults only.
+_NULL = {"Km": 0.0, "Ko": 0.0, "tau_x": 0.0, "Kn": 0.0, "r_dr": 1.0}
+
+
+def _effect(effect_id: str):
+    from .effects import get_effect
+
+    return get_effect(effect_id)
+
+
+class _UnitScale:
+    """Map parameter boxes to the unit cube for the optimizer.
+
+    Parameters flagged `log` (effect parameters with a box starting at or above zero)
+    are mapped logarithmically over three decades below the upper bound (or from the
+    lower bound if higher): a delay, a remnant gain or a damping ratio matters in
+    ratios, and 0.01 must be as reachable as 1. Values below that range sit at the
+    cube's edge. The others (the pilot gains) are mapped linearly.
+    """
+
+    def __init__(self, boxes, log):
+        lo = np.array([b[0] for b in boxes], dtype=float)
+        hi = np.array([b[1] for b in boxes], dtype=float)
+        self.log = np.asarray(log, dtype=bool) & (lo >= 0) & (hi > 0)
+        lo_log = np.log(np.maximum(np.maximum(lo, hi * 1e-3), 1e-300))
+        self.lo = np.where(self.log, lo_log, lo)
+        self.hi = np.where(self.log, np.log(np.maximum(hi, 1e-300)), hi)
+        self.span = np.where(self.hi > self.lo, self.hi - self.lo, 1.0)
+
+    def to_unit(self, x) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        y = np.where(self.log, np.log(np.maximum(x, 1e-300)), x)
+        return np.clip((y - self.lo) / self.span, 0.0, 1.0)
+
+    def from_unit(self, u) -> list[float]:
+        y = self.lo + np.clip(np.asarray(u, dtype=float), 0.0, 1.0) * self.span
+        return [float(v) for v in np.where(self.log, np.exp(y), y)]
+
+
+# -- results --------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Step:
+    """One candidate tried in one round.
+
+    ``statistic`` is the likelihood-ratio statistic against the model of the round,
+    ``dof`` the parameters it adds, ``p_value`` its chance probability, ``delta_bic``
+    its BIC improvement (positive = better after paying for parameters) — the score.
+    ``status`` is "ok" or "failed" (then ``error`` says why and the scores are NaN).
+    """
+
+    round: int
+    candidate: str
+    model: str
+    status: str
+    accepted: bool = False
+    statistic: float = float("nan")
+    dof: int = 0
+    p_value: float = float("nan")
+    threshold: float = float("nan")
+    delta_bic: float = float("nan")
+    gap: float = float("nan")
+    log_rms_db: float = float("nan")
+    parameters: dict = field(default_factory=dict)
+    evaluations: int = 0
+    error: str = ""
+
+    @property
+    def score(self) -> float:
+        return self.delta_bic
+
+    def to_dict(self) -> dict:
+        return {**asdict(self), "score": self.score}
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Result of :func:`diagnose`; ``to_dict()`` is the JSON of ``hesspipe diagnose``."""
+
+    run_id: str
+    synthetic: bool
+    baseline_model: str
+    final_model: str
+    named_effects: tuple[str, ...]
+    gap_before: float
+    gap_after: float
+    log_rms_db_before: float
+    log_rms_db_after: float
+    parameters_before: dict
+    parameters_after: dict
+    steps: tuple[Step, ...]
+    bands_before: tuple[Band, ...]
+    bands_after: tuple[Band, ...]
+    plant_check: PlantCheck
+    control_error_before: dict | None
+    control_error_after: dict | None
+    criterion: dict
+    config: DiagnoseConfig
+    freq_hz: np.ndarray
+    measured_psd: np.ndarray
+    baseline_psd: np.ndarray
+    final_psd: np.ndarray
+    seed: int = 0
+    source: str = ""
+
+    @property
+    def gap_reduction(self) -> float:
+        """Fraction of the Eq. 10 gap removed (0 when nothing was named)."""
+        if not self.gap_before or not math.isfinite(self.gap_before):
+            return 0.0
+        return 1.0 - self.gap_after / self.gap_before
+
+    @property
+    def closed_bands(self) -> tuple[tuple[float, float], ...]:
+        return tuple((b.lo_hz, b.hi_hz) for b, a in zip(self.bands_before, self.bands_after)
+                     if b.disagrees and not a.disagrees)
+
+    def to_dict(self) -> dict:
+        band_mask = (self.freq_hz > 0) & (self.freq_hz <= self.config.band_hz[1])
+        return {
+            "synthetic": self.synthetic,
+            "data_note": ("SYNTHETIC DATA: generated by a model, not measured" if self.synthetic
+                          else "measured data"),
+            "run": self.run_id, "source": self.source, "seed": self.seed,
+            "baseline_model": self.baseline_model, "final_model": self.final_model,
+            "named_effects": list(self.named_effects),
+            "gap_before": self.gap_before, "gap_after": self.gap_after,
+            "gap_reduction": self.gap_reduction,
+            "log_rms_db_before": self.log_rms_db_before, "log_rms_db_after": self.log_rms_db_after,
+            "parameters_before": self.parameters_before, "parameters_after": self.parameters_after,
+            "steps": [s.to_dict() for s in self.steps],
+            "bands": [{"lo_hz": b.lo_hz, "hi_hz": b.hi_hz, "before": b.to_dict(), "after": a.to_dict(),
+                       "closed": bool(b.disagrees and not a.disagrees)}
+                      for b, a in zip(self.bands_before, self.bands_after)],
+            "plant_check": self.plant_check.to_dict(),
+            "control_error_tests": {"before": self.control_error_before,
+                                    "after": self.control_error_after},
+            "criterion": self.criterion,
+            "config": self.config.to_dict(),
+            "spectra": {"freq_hz": self.freq_hz[band_mask], "measured": self.measured_psd[band_mask],
+                        "baseline": self.baseline_psd[band_mask], "final": self.final_psd[band_mask]},
+        }
+
+
+# -- the workflow ---------------------------------------------------------------------------
+
+def _check_inputs(run: Run, plants: Plants, cfg: DiagnoseConfig) -> None:
+    where = run.source or run.id
+    if len(run) < SEGMENT:
+        raise HesspipeError(f"{where}: {len(run)} samples; expected at least {SEGMENT} (one Welch "
+                            f"segment, {SEGMENT * run.dt:g} s at dt {run.dt:g} s) for the control spectra")
+    for key, role in (("control", "control_to_output"), ("disturbance", "disturbance_to_output")):
+        declared = plants.meta.get("inputs", {}).get(role) if isinstance(plants.meta.get("inputs"), Mapping) \
+            else None
+        if declared is not None and declared != key:
+            raise HesspipeError(f"plants: field 'inputs.{role}': expected input column '{key}' of the "
+                                f"run, got {declared!r}")
+    lo, hi = cfg.band_hz
+    if hi > run.fs / 2:
+        raise HesspipeError(f"{where}: band up to {hi:g} Hz is above the Nyquist frequency "
+                            f"{run.fs / 2:g} Hz of the record")
+
+
+def _control_error_tests(problem: _Problem, fit: _Fit) -> dict | None:
+    """Residual tests on the time-domain control error ``measured - model`` (the model
+    driven by the measured disturbance), for deterministic models only: with a remnant
+    the error is coloured by design. Whiteness: Ljung-Box of
+    :func:`hesspipe.arx.residual_tests`; independence of the disturbance:
+    :func:`independence_test`. 99 % level."""
+    if not fit.stable or problem.stochastic(fit.model, fit.parameters):
+        return None
+    err = problem.run.control - problem.control(fit.model, fit.parameters)
+    tests = residual_tests(err, problem.run.disturbance, max_lag=problem.cfg.max_lag)
+    _, p_ind = independence_test(err, problem.run.disturbance, problem.cfg.max_lag)
+    return {"whiteness_p": tests.whiteness_p, "white": tests.white, "independence_p": p_ind,
+            "independent": p_ind >= 0.01, "rms": float(np.sqrt(np.mean(err ** 2)))}
+
+
+def _resolve_model(model):
+    from .hess import PilotModel, model_from_name
+
+    if isinstance(model, PilotModel):
+        return model
+    if isinstance(model, str):
+        return model_from_name(model)
+    raise HesspipeError(f"diagnose: model: expected 'original', 'expanded' or a PilotModel, got {model!r}")
+
+
+def _resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ...]:
+    from .effects import EFFECTS, get_effect
+
+    if isinstance(candidates, str):
+        candidates = [c.strip() for c in candidates.split(",") if c.strip()]
+    chosen = candidates if candidates is not None else cfg.candidates
+    if chosen is None:
+        chosen = tuple(EFFECTS)
+    for c in chosen:
+        get_effect(c)  # unknown id -> HesspipeError naming the known ids
+    return tuple(dict.fromkeys(c for c in chosen if c not in model.effects))
+
+
+def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence[str] | str | None = None,
+             seed: int = 0, config: DiagnoseConfig | None = None) -> Diagnosis:
+    """Locate the model/measurement disagreement, name missing effects, show the gap shrink.
+
+    Parameters
+    ----------
+    run : Run
+        Measured (or synthetic) run: disturbance (ft/s), output (rad/s), control.
+    plants : Plants
+        Yc (control → output) and Yd (disturbance → output).
+    model : str or PilotModel
+        Baseline pilot model ("original", "expanded" or a PilotModel).
+    candidates : sequence of str, comma-separated str or None
+        Effect ids to try (default: ``config.candidates`` or all registered effects).
+    seed : int
+        Base seed of any random part. The remnant is evaluated in expectation, so today
+        the result does not depend on it; same inputs + seed → identical outputs.
+    config : DiagnoseConfig, optional
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    HesspipeError
+        Unknown candidate id, data too short for the spectra, plants that do not match
+        the data's columns.
+    """
+    cfg = config or DiagnoseConfig()
+    base = _resolve_model(model)
+    cands = _resolve_candidates(base, candidates, cfg)
+    cfg = replace(cfg, candidates=cands)  # what was actually tried, for the record
+    _check_inputs(run, plants, cfg)
+    check = plant_check(run, plants, max_lag=cfg.max_lag)
+    if not math.isfinite(check.fit_percent) or check.fit_percent < cfg.min_plant_fit:
+        raise HesspipeError(f"{run.source or run.id}: the plants do not match the data's columns: driven by "
+                            f"'control' and 'disturbance' they reproduce 'output' with fit "
+                            f"{check.fit_percent:.0f} %; expected at least {cfg.min_plant_fit:g} % "
+                            "(wrong plants file, swapped or mis-scaled columns?)")
+    problem = _Problem(run, plants, cfg, seed)
+
+    # The baseline's own parameters get the same grid start as a candidate's (the
+    # output-error surface has several valleys in Ke and K1).
+    current = problem.fit(base, base.defaults(k=cfg.k), grid=problem.free_parameters(base))
+    if not current.stable:
+        raise HesspipeError(f"{run.source or run.id}: no stable {base.name} pilot found for these data "
+                            "and plants; cannot diagnose")
+    baseline = current
+    steps: list[Step] = []
+    named: list[str] = []
+    remaining = list(cands)
+    rnd = 0
+    while remaining and len(named) < cfg.max_effects:
+        rnd += 1
+        tried: list[tuple[Step, _Fit | None]] = []
+        for cand in remaining:
+            aug = current.model.with_effect(cand)
+            try:
+                new = tuple(p for p in _effect(cand).parameters)
+                fit = problem.fit(aug, current.parameters, grid=new)
+                if not fit.stable:
+                    raise HesspipeError("no stable parameter set found")
+            except Exception as exc:  # noqa: BLE001 — a failed candidate must not stop the others
+                tried.append((Step(round=rnd, candidate=cand, model=aug.name, status="failed",
+                                   error=f"{type(exc).__name__}: {exc}".splitlines()[0]), None))
+                continue
+            dof = len(fit.free) - len(current.free)
+            stat = problem.n_eff * math.log(problem.variance(current) / problem.variance(fit))
+            tried.append((Step(round=rnd, candidate=cand, model=aug.name, status="ok", statistic=stat,
+                               dof=dof, p_value=float(scipy.stats.chi2.sf(stat, max(dof, 1))),
+                               delta_bic=stat - dof * math.log(problem.n_eff), gap=problem.gap(fit.psd),
+                               log_rms_db=problem.log_rms_db(fit.psd), parameters=fit.parameters,
+                               evaluations=fit.evaluations), fit))
+        ok = [(s, f) for s, f in tried if s.status == "ok"]
+        threshold = cfg.alpha / max(len(ok), 1)
+        tried = [(replace(s, threshold=threshold) if s.status == "ok" else s, f) for s, f in tried]
+        ok = [(s, f) for s, f in tried if s.status == "ok"]
+        best = min(ok, key=lambda sf: (sf[0].p_value, -sf[0].delta_bic)) if ok else None
+        accept = best is not None and best[0].p_value < threshold and best[0].delta_bic > 0
+        for s, f in tried:
+            steps.append(replace(s, accepted=bool(accept and s is best[0])))
+        if not accept:
+            break
+        current = best[1]
+        named.append(best[0].candidate)
+        remaining.remove(best[0].candidate)
+
+    # Band verdicts are relative to the scatter the final model leaves (or the resolution):
+    # a band disagrees if its mismatch is beyond what the rest of the record shows.
+    scatter = problem.variance(current)
+    return Diagnosis(
+        run_id=run.id, synthetic=run.synthetic, baseline_model=base.name, final_model=current.model.name,
+        named_effects=tuple(named), gap_before=problem.gap(baseline.psd), gap_after=problem.gap(current.psd),
+        log_rms_db_before=problem.log_rms_db(baseline.psd), log_rms_db_after=problem.log_rms_db(current.psd),
+        parameters_before=baseline.parameters, parameters_after=current.parameters, steps=tuple(steps),
+        bands_before=problem.bands(baseline.psd, scatter), bands_after=problem.bands(current.psd, scatter),
+        plant_check=check, control_error_before=_control_error_tests(problem, baseline),
+        control_error_after=_control_error_tests(problem, current),
+        criterion={"name": "likelihood-ratio test on log-spectral residuals over Welch bins "
+                           "(Bonferroni per round), delta BIC as the score",
+                   "alpha": cfg.alpha, "n_bins": int(problem.mask.sum()), "n_eff": problem.n_eff,
+                   "enbw_bins": problem.enbw, "welch_dof": problem.nu, "resolution_db": cfg.resolution_db,
+                   "scatter_db": _DB * math.sqrt(scatter),
+                   "welch_scatter_db": _DB * math.sqrt(problem.var_floor)},
+        config=cfg, freq_hz=problem.freq, measured_psd=problem.measured, baseline_psd=baseline.psd,
+        final_psd=current.psd, seed=seed, source=run.source)
+
+
+# -- readable report ------------------------------------------------------------------------
+
+def format_report(d: Diagnosis) -> str:
+    """A plain-text report of a diagnosis (what disagreed, what was tried, what was named)."""
+    out = []
+    if d.synthetic:
+        out.append("*** SYNTHETIC DATA: generated by a model, not measured ***")
+    out.append(f"Diagnosis of run '{d.run_id}' with the {d.baseline_model} model")
+    pc = d.plant_check
+    out.append(f"Plant check: fit {pc.fit_percent:.1f} % of the output from the measured control and "
+               f"disturbance; residual {'white' if pc.tests_control.white else 'NOT white'} "
+               f"(p={pc.tests_control.whiteness_p:.2g}), independent of control: "
+               f"{'yes' if pc.independence_p['control'] >= 0.01 else 'NO'} "
+               f"(p={pc.independence_p['control']:.2g}), of disturbance: "
+               f"{'yes' if pc.independence_p['disturbance'] >= 0.01 else 'NO'} "
+               f"(p={pc.independence_p['disturbance']:.2g})")
+    if not pc.passes:
+        out.append("  -> the plants miss part of the aircraft's response: aircraft-side effects "
+                   "(e.g. dutch_roll) are plausible")
+    ce = d.control_error_before
+    if ce is not None:
+        out.append(f"Control error of the baseline model (time domain): "
+                   f"{'white' if ce['white'] else 'NOT white'} (p={ce['whiteness_p']:.2g}), "
+                   f"{'independent of' if ce['independent'] else 'DEPENDS on'} the disturbance "
+                   f"(p={ce['independence_p']:.2g})")
+    out.append(f"Where the baseline disagrees (control PSD, model vs measured; residual scatter of "
+               f"the final model {d.criterion['scatter_db']:.2f} dB RMS per bin):")
+    out.append(f"  {'band Hz':>11} {'level dB':>9} {'rms dB':>7} {'share':>6}  verdict")
+    for b in d.bands_before:
+        verdict = f"DISAGREES: {b.direction}" if b.disagrees else "agrees within chance"
+        out.append(f"  {b.lo_hz:5.2f}-{b.hi_hz:<5.2f} {b.level_db:9.1f} {b.rms_db:7.1f} {b.share:6.0%}  {verdict}")
+    out.append(f"Candidates (score = delta BIC; named if p < alpha/m and delta BIC > 0, alpha={d.config.alpha:g}):")
+    for s in d.steps:
+        if s.status != "ok":
+            out.append(f"  round {s.round}: {s.candidate:<16} FAILED ({s.error})")
+            continue
+        out.append(f"  round {s.round}: {s.candidate:<16} LR={s.statistic:8.1f} dof={s.dof} p={s.p_value:9.2e} "
+                   f"(needs < {s.threshold:.1e}) dBIC={s.delta_bic:8.1f} gap={s.gap:.3g}"
+                   f"{'  <- NAMED' if s.accepted else ''}")
+    if d.named_effects:
+        out.append("Named: " + ", ".join(d.named_effects) + " (in the order added)")
+        for eff in d.named_effects:
+            step = next(s for s in d.steps if s.accepted and s.candidate == eff)
+            out.append(f"  {eff}: {_describe(eff).rstrip('.')}; LR {step.statistic:.1f} on {step.dof} parameter(s), "
+                       f"p = {step.p_value:.1e}; fitted " + ", ".join(
+                           f"{k}={step.parameters[k]:.4g}" for k in _effect(eff).parameters))
+    elif not d.steps:
+        out.append("Named: nothing (no candidates to try)")
+    else:
+        out.append("Named: nothing (no candidate improved the fit beyond chance after paying for its "
+                   "parameters)")
+    red = 100.0 * d.gap_reduction
+    out.append(f"Gap (Eq. 10 fitness, 0-{d.config.band_hz[1]:g} Hz): before {d.gap_before:.4g}, after "
+               f"{d.gap_after:.4g} ({red:.0f} % smaller); log-spectral RMS {d.log_rms_db_before:.1f} dB -> "
+               f"{d.log_rms_db_after:.1f} dB")
+    closed = d.closed_bands
+    out.append("Bands closed: " + (", ".join(f"{lo:g}-{hi:g} Hz" for lo, hi in closed) if closed else "none"))
+    still = [b for b in d.bands_after if b.disagrees]
+    if still:
+        out.append("Still disagreeing: " + ", ".join(f"{b.lo_hz:g}-{b.hi_hz:g} Hz ({b.direction})"
+                                                      for b in still))
+    return "\n".join(out)
+
+
+def _describe(effect_id: str) -> str:
+    try:
+        return str(_effect(effect_id).description)
+    except HesspipeError:
+        return effect_id
+
+
+# -- hidden-effect validation data ------------------------------------------------------------
+
+#: Eq. 16 wind → roll-rate plant of the paper (SPEC.md), 1/s per ft/s.
+EQ16_NUM = (-0.2554, 14.4, -272.6, 25.72)
+EQ16_DEN = (1.0, 84.37, 452.2, 1510.0, 628.8)
+
+
+def validation_plants() -> Plants:
+    """Plants of the hidden-effect tests: Yc = 2.436/(s + 1.0496) (Table 4 rolling
+    approximation), Yd = the paper's Eq. 16."""
+    import control as ct
+
+    return Plants(ct.tf([2.436], [1.0, 1.0496]), ct.tf(list(EQ16_NUM), list(EQ16_DEN)),
+                  {"source": "validation plants: Table 4 rolling approximation and Eq. 16"})
+
+
+def validation_disturbance(n: int, dt: float, *, seed: int, rms: float = 5.0,
+                           corner_hz: float = 2.0) -> np.ndarray:
+    """Lateral wind for validation runs: white noise low-passed (4th-order Butterworth at
+    `corner_hz`) and scaled to `rms` ft/s."""
+    rng = np.random.default_rng(seed)
+    b, a = scipy.signal.butter(4, corner_hz, fs=1.0 / dt)
+    w = scipy.signal.lfilter(b, a, rng.standard_normal(n + 500))[500:]
+    return rms * w / np.std(w)
+
+
+def hidden_effect_run(plants: Plants, effect: str | None = None, *, seed: int,
+                      parameters: Mapping[str, float] | None = None, noise: float = 0.0,
+                      control_noise: float = 0.0, duration: float = 70.0, dt: float = 0.02) -> Run:
+    """A synthetic run from the original model plus one hidden `effect` (None: baseline).
+
+    `parameters` override the model defaults. `noise` and `control_noise` add white
+    recording noise to the output (roll-rate sensor) and to the control (stick sensor),
+    each as a fraction of the signal's RMS; it is outside the loop. White noise on the
+    recorded control is, to a control spectrum, broadband control noise, i.e. a remnant
+    with Tn = 0: large enough, it is rightly named ``remnant``.
+    The run is labelled synthetic and its comments name the hidden effect.
+    """
+    from .hess import PilotModel, synthetic_run
+
+    model = PilotModel() if effect is None else PilotModel().with_effect(effect)
+    params = {**model.defaults(k=1), **dict(parameters or {})}
+    n = int(round(duration / dt))
+    w = validation_disturbance(n, dt, seed=derive_seed(seed, "wind"))
+    run = synthetic_run(model, params, plants, w, dt, seed=derive_seed(seed, "remnant"),
+                        run_id=f"hidden-{effect or 'none'}-{seed}")
+    rng = np.random.default_rng(derive_seed(seed, "sensor"))
+
+    def noisy(x, level):
+        return x + level * float(np.std(x)) * rng.standard_normal(len(x)) if level > 0 else x
+
+    run = replace(run, output=noisy(run.output, noise), control=noisy(run.control, control_noise))
+    return replace(run, comments=tuple(run.comments) + (
+        f"synthetic hidden-effect run: effect={effect or 'none'} output noise={noise:g} "
+        f"control noise={control_noise:g} seed={seed}",))
