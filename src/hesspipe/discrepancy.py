@@ -221,16 +221,19 @@ class PlantCheck:
     """Plants driven by the measured control and disturbance, against the measured output.
 
     ``tests_control`` / ``tests_disturbance`` are :func:`hesspipe.arx.residual_tests`
-    (whiteness, correlations and bounds). ``independence_p`` holds p-values of
-    :func:`independence_test`, which accounts for the colour of the input; ``passes``
-    uses those (99 % level).
+    (whiteness, correlations and bounds; independence with the input prewhitened);
+    ``passes`` uses their independence p-values (99 % level).
     """
 
     fit_percent: float
     residual_rms: float
     tests_control: ResidualTests
     tests_disturbance: ResidualTests
-    independence_p: dict
+
+    @property
+    def independence_p(self) -> dict:
+        return {"control": self.tests_control.independence_p,
+                "disturbance": self.tests_disturbance.independence_p}
 
     @property
     def passes(self) -> bool:
@@ -241,40 +244,6 @@ class PlantCheck:
                 "passes": self.passes, "independence_p": self.independence_p,
                 "tests_control": self.tests_control.to_dict(),
                 "tests_disturbance": self.tests_disturbance.to_dict()}
-
-
-def independence_test(e: np.ndarray, u: np.ndarray, max_lag: int = 25, *,
-                      ar_order: int = 10) -> tuple[float, float]:
-    """Residual/input cross-correlation test for a coloured input (prewhitened).
-
-    The input is whitened by a least-squares AR(`ar_order`) filter; for a white residual
-    independent of the input, ``S = N sum_k r(k)^2`` over the normalised cross-
-    correlations of the residual at t + k with the whitened input at t, k = 0..max_lag,
-    is then chi-square with max_lag + 1 degrees of freedom. (Without prewhitening the
-    lags of a smooth input such as a pilot's control are strongly correlated and the
-    same sum rejects far too often.)
-
-    Returns
-    -------
-    statistic, p_value : float
-    """
-    e = np.asarray(e, dtype=float) - np.mean(e)
-    u = np.asarray(u, dtype=float) - np.mean(u)
-    n = len(e)
-    p = int(min(ar_order, n // 20))
-    if p > 0:
-        lagged = np.column_stack([u[p - i - 1:n - i - 1] for i in range(p)])
-        a = np.linalg.lstsq(lagged, u[p:], rcond=None)[0]
-        u = u[p:] - lagged @ a
-        e = e[p:]
-        n = len(e)
-    m = int(min(max_lag, n // 4))
-    se, su = float(np.std(e)), float(np.std(u))
-    if se == 0 or su == 0:
-        return 0.0, 1.0
-    r = np.array([float(e[k:] @ u[:n - k]) for k in range(m + 1)]) / (n * se * su)
-    stat = n * float(r @ r)
-    return stat, float(scipy.stats.chi2.sf(stat, m + 1))
 
 
 def forced_response(sys, u: np.ndarray, dt: float, *, pad_factor: int = 4) -> np.ndarray:
@@ -317,9 +286,7 @@ def plant_check(run: Run, plants: Plants, *, max_lag: int = 25, edge_s: float = 
     return PlantCheck(fit_percent=fit_percent(y, y_sim[sl]),
                       residual_rms=float(np.sqrt(np.mean(res ** 2))),
                       tests_control=residual_tests(res, run.control[sl], max_lag=max_lag),
-                      tests_disturbance=residual_tests(res, run.disturbance[sl], max_lag=max_lag),
-                      independence_p={"control": independence_test(res, run.control[sl], max_lag)[1],
-                                      "disturbance": independence_test(res, run.disturbance[sl], max_lag)[1]})
+                      tests_disturbance=residual_tests(res, run.disturbance[sl], max_lag=max_lag))
 
 
 # -- spectra, bins and bands ----------------------------------------------------------------
@@ -832,13 +799,13 @@ def _control_error_tests(problem: _Problem, fit: _Fit) -> dict | None:
     """Residual tests on the time-domain control error ``measured - model`` (the model
     driven by the measured disturbance), for deterministic models only: with a remnant
     the error is coloured by design. Whiteness: Ljung-Box of
-    :func:`hesspipe.arx.residual_tests`; independence of the disturbance:
-    :func:`independence_test`. 99 % level."""
+    :func:`hesspipe.arx.residual_tests`, with its (prewhitened) independence of the
+    disturbance. 99 % level."""
     if not fit.stable or problem.stochastic(fit.model, fit.parameters):
         return None
     err = problem.run.control - problem.control(fit.model, fit.parameters)
     tests = residual_tests(err, problem.run.disturbance, max_lag=problem.cfg.max_lag)
-    _, p_ind = independence_test(err, problem.run.disturbance, problem.cfg.max_lag)
+    p_ind = tests.independence_p
     return {"whiteness_p": tests.whiteness_p, "white": tests.white, "independence_p": p_ind,
             "independent": p_ind >= 0.01, "rms": float(np.sqrt(np.mean(err ** 2)))}
 
