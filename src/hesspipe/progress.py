@@ -12,6 +12,12 @@ import sys
 from tqdm import tqdm
 
 
+class _Bar(tqdm):
+    # No monitor thread: batches fork worker processes, and forking a process that runs
+    # threads is unsafe (hesspipe.batch falls back to the slower forkserver then).
+    monitor_interval = 0
+
+
 def progress_enabled(stream=None) -> bool:
     """True if `stream` (default ``sys.stderr``) is an interactive terminal."""
     stream = sys.stderr if stream is None else stream
@@ -37,5 +43,5 @@ def progress_bar(total: int, desc: str, *, enable: bool | None = None, unit: str
     """
     if enable is None:
         enable = progress_enabled()
-    return tqdm(total=total, desc=desc, unit=unit, disable=not enable, file=sys.stderr,
+    return _Bar(total=total, desc=desc, unit=unit, disable=not enable, file=sys.stderr,
                 dynamic_ncols=True, leave=False)

@@ -9,6 +9,11 @@ _NAMES = [
     # one line per command module, in the order of `hesspipe --help`
     "run",
     "status",
+    "flight",
+    "plants",
+    "identify",
+    "synth_pilots", "compare_pilots",
+    "diagnose",
 ]
 
 COMMANDS = [import_module(f"{__name__}.{name}") for name in _NAMES]

@@ -1,0 +1,345 @@
+"""compare-pilots: batch machinery, failures, JSON, CLI; and the real identification on a small cohort."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+
+import control as ct
+import numpy as np
+import pytest
+
+from hesspipe import compare as compare_mod
+from hesspipe.batch import run_batch
+from hesspipe.cli import main
+from hesspipe.compare import (CONFIGURATIONS, Comparison, PilotComparison, PilotsConfig, compare_pilots,
+                              list_runs)
+from hesspipe.errors import HesspipeError
+from hesspipe.formats import Plants, Run, write_plants, write_run
+from hesspipe.io import to_json
+from hesspipe.seeds import derive_seed
+
+
+def paper_plants() -> Plants:
+    """Yc = 2.436/(s+1.0496) (Table 4 rolling approximation), Yd = SPEC.md Eq. 16."""
+    return Plants(ct.tf([2.436], [1.0, 1.0496]),
+                  ct.tf([-0.2554, 14.4, -272.6, 25.72], [1.0, 84.37, 452.2, 1510.0, 628.8]))
+
+
+# -- a stand-in for the identification (test double: exercises the batch, not the model) --------
+
+def fake_job(run: Run) -> PilotComparison:
+    """Deterministic per-pilot result that depends on the data and on the pilot's derived seed."""
+    if "boom" in run.id:
+        raise RuntimeError("simulated crash")
+    rng = np.random.default_rng(derive_seed(7, run.id))
+    base = float(np.std(run.control)) + rng.uniform(0, 1e-3)
+    confs = {name: {"parameters": {"Ke": 20.0, "K1": 3.0, "K2": 2.0, **({"Km": 1.0} if "exp" in name else {})},
+                    "fitness": base * f, "crossover": {"frequency_rad_s": 3.0, "phase_margin_deg": 50.0}}
+             for name, f in zip(CONFIGURATIONS, (1.0, 1.0, 0.5))}
+    return PilotComparison(id=run.id, source=run.source, synthetic=run.synthetic, improvement=0.5,
+                           freq_hz=np.linspace(0, 5, 4), measured_psd=np.ones(4),
+                           simulated_psd={k: np.ones(4) for k in CONFIGURATIONS}, **confs)
+
+
+def _square(x):
+    return x * x
+
+
+def _write_runs(folder, n=4, samples=1100, synthetic=True):
+    folder.mkdir(parents=True, exist_ok=True)
+    for i in range(n):
+        rng = np.random.default_rng(i)
+        t = 0.02 * np.arange(samples)
+        write_run(folder / f"p{i}.csv", Run(time=t, disturbance=rng.standard_normal(samples),
+                                            output=rng.standard_normal(samples),
+                                            control=(1 + i) * rng.standard_normal(samples),
+                                            reference=np.zeros(samples), id=f"p{i}", synthetic=synthetic))
+    return folder
+
+
+def test_run_batch_keeps_item_order_for_any_worker_count():
+    items = list(range(7))
+    assert run_batch(_square, items, workers=1) == [i * i for i in items]
+    assert run_batch(_square, items, workers=2) == [i * i for i in items]
+    with pytest.raises(HesspipeError, match="--workers: expected an integer >= 1, got 0"):
+        run_batch(_square, items, workers=0)
+
+
+def test_results_do_not_depend_on_worker_count(tmp_path):
+    folder = _write_runs(tmp_path / "runs")
+    one = compare_pilots(folder, paper_plants(), workers=1, job=fake_job)
+    two = compare_pilots(folder, paper_plants(), workers=2, job=fake_job)
+    assert [p.id for p in one.pilots] == ["p0", "p1", "p2", "p3"]
+    assert to_json(one.to_dict()) == to_json(two.to_dict())
+
+
+def test_dask_local_cluster_gives_the_local_results(tmp_path, capsys, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    folder = _write_runs(tmp_path / "runs", n=3)
+    local = compare_pilots(folder, paper_plants(), workers=1, job=fake_job)
+    plants = write_plants(tmp_path / "plants.json", paper_plants())
+    monkeypatch.setattr(compare_mod, "compare_run", lambda run, plants, settings: fake_job(run))
+    # In-process cluster: no subprocesses, no TCP port (inproc:// transport).
+    with distributed.LocalCluster(processes=False, n_workers=1, threads_per_worker=2,
+                                  dashboard_address=None) as cluster:
+        remote = compare_pilots(folder, paper_plants(), scheduler=cluster.scheduler_address, job=fake_job)
+        code = main(["compare-pilots", str(folder), "--plants", str(plants), "--scheduler",
+                     cluster.scheduler_address, "--json", str(tmp_path / "dask.json")])
+    assert to_json(remote.to_dict()) == to_json(local.to_dict())
+    assert code == 0 and "p2" in capsys.readouterr().out
+    assert json.loads((tmp_path / "dask.json").read_text())["pilots"] == json.loads(
+        to_json(local.to_dict()))["pilots"]
+    # The cluster's threads may outlive it; local processes must still work afterwards.
+    again = compare_pilots(folder, paper_plants(), workers=2, job=fake_job)
+    assert to_json(again.to_dict()) == to_json(local.to_dict())
+
+
+def test_unreachable_scheduler_is_a_one_line_error():
+    pytest.importorskip("distributed")
+    with pytest.raises(HesspipeError, match=r"--scheduler tcp://127.0.0.1:9: cannot connect"):
+        run_batch(_square, [1], scheduler="tcp://127.0.0.1:9", connect_timeout=1)
+
+
+def test_bad_files_are_reported_and_the_good_ones_processed(tmp_path):
+    folder = _write_runs(tmp_path / "runs", n=3)
+    (folder / "broken.csv").write_text("time,disturbance,output\n0,1,2\n0.02,1,2\n")
+    shutil.copy(folder / "p0.csv", folder / "p_boom.csv")
+    (folder / "p0.truth.json").write_text("{}")  # beside the runs, ignored
+    result = compare_pilots(folder, paper_plants(), workers=1, job=fake_job)
+    assert [p.id for p in result.pilots] == ["p0", "p1", "p2"]
+    assert not result.ok
+    errors = {f.id: f.error for f in result.failures}
+    assert set(errors) == {"broken", "p_boom"}
+    assert str(folder / "broken.csv") in errors["broken"] and "column 'control' missing" in errors["broken"]
+    assert errors["p_boom"].startswith(str(folder / "p_boom.csv")) and "simulated crash" in errors["p_boom"]
+    d = result.to_dict()
+    assert [f["id"] for f in d["failures"]] == ["broken", "p_boom"]
+
+
+def test_json_keys_improvement_and_synthetic_flags(tmp_path):
+    folder = _write_runs(tmp_path / "runs", n=2)
+    _write_runs(tmp_path / "measured", n=1, synthetic=False)
+    shutil.copy(tmp_path / "measured" / "p0.csv", folder / "real.csv")
+    result = compare_pilots(folder, paper_plants(), workers=1, job=fake_job)
+    d = json.loads(to_json(result.to_dict()))
+    assert d["synthetic"] is True and d["synthetic_pilots"] == 2 and d["measured_pilots"] == 1
+    assert [p["synthetic"] for p in d["pilots"]] == [True, True, False]
+    for p in d["pilots"]:
+        for name in CONFIGURATIONS:
+            assert set(p[name]) >= {"parameters", "fitness"}
+        assert p["improvement"] == pytest.approx(0.5)
+    assert d["mean_improvement"] == pytest.approx(0.5)
+    table = result.table()
+    assert table.startswith("SYNTHETIC DATA") and "real" in table and "mean 50.0 %" in table
+
+
+def test_list_runs_errors(tmp_path):
+    with pytest.raises(HesspipeError, match="no run files"):
+        list_runs(tmp_path)
+    with pytest.raises(HesspipeError, match="not found"):
+        list_runs(tmp_path / "nope")
+
+
+def test_cli_bad_file_exit_status_and_message(tmp_path, capsys, monkeypatch):
+    folder = _write_runs(tmp_path / "runs", n=2)
+    (folder / "bad.csv").write_text("time,disturbance,output,control\n0,1,2,x\n")
+    plants = write_plants(tmp_path / "plants.json", paper_plants())
+    monkeypatch.setattr(compare_mod, "compare_run", lambda run, plants, settings: fake_job(run))
+    out_json = tmp_path / "out.json"
+    code = main(["compare-pilots", str(folder), "--plants", str(plants), "--workers", "1",
+                 "--json", str(out_json)])
+    captured = capsys.readouterr()
+    assert code == 1
+    assert f"hesspipe: error: {folder / 'bad.csv'}: column 'control'" in captured.err
+    assert "1 of 3 run(s) failed" in captured.err
+    assert "p0" in captured.out and "p1" in captured.out
+    d = json.loads(out_json.read_text())
+    assert [p["id"] for p in d["pilots"]] == ["p0", "p1"] and d["failures"][0]["id"] == "bad"
+
+
+@pytest.mark.parametrize("argv, code, words", [
+    (["compare-pilots", "{runs}", "--plants", "{plants}", "--workers", "0"], 1, "--workers: expected"),
+    (["compare-pilots", "{tmp}/none", "--plants", "{plants}"], 1, "not found"),
+    (["compare-pilots", "{runs}", "--plants", "{tmp}/missing.json"], 1, "missing.json: file not found"),
+    (["compare-pilots", "{runs}"], 2, "--plants"),
+    (["compare-pilots", "{runs}", "--plants", "{plants}", "--columns", "stick=control"], 1,
+     "--columns: unknown role 'stick'"),
+])
+def test_cli_argument_errors(tmp_path, capsys, argv, code, words):
+    runs = _write_runs(tmp_path / "runs", n=1)
+    plants = write_plants(tmp_path / "plants.json", paper_plants())
+    argv = [a.format(runs=runs, plants=plants, tmp=tmp_path) for a in argv]
+    with pytest.raises(SystemExit) if code == 2 else _nothing() as info:
+        result = main(argv)
+    err = capsys.readouterr().err
+    if code == 2:
+        assert info.value.code == 2
+    else:
+        assert result == 1 and err.startswith("hesspipe: error:") and err.count("\n") == 1
+    assert words in err
+
+
+class _nothing:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_pilots_config_defaults_and_errors():
+    cfg = PilotsConfig.from_table({}, "default.toml")
+    assert cfg.n == 8 and cfg.effects == ("motion_feedback",) and cfg.optimizer == "apid"
+    cfg = PilotsConfig.from_table({"n": 3, "seed": 5, "effects": [], "workers": 2}, "x.toml")
+    assert (cfg.n, cfg.seed, cfg.effects, cfg.workers) == (3, 5, (), 2)
+    for table, words in [({"n": 0}, "field 'pilots.n': expected an integer >= 1, got 0"),
+                         ({"optimizer": "ga"}, "field 'pilots.optimizer'"),
+                         ({"effects": "motion_feedback"}, "field 'pilots.effects': expected a list"),
+                         ({"nn": 3}, "field 'pilots.nn': unknown field"),
+                         ({"duration_s": 5.0}, "field 'pilots.duration_s': expected at least 1024 samples")]:
+        with pytest.raises(HesspipeError, match=words.replace(".", r"\.").replace("(", r"\(")):
+            PilotsConfig.from_table(table, "x.toml")
+
+
+def test_improvement_stats_ignore_nan():
+    p = fake_job(Run(np.arange(3.0), *(np.zeros(3),) * 4, id="a"))
+    nan = PilotComparison(**{**p.__dict__, "id": "b", "improvement": math.nan})
+    s = Comparison(pilots=(p, nan)).improvement_stats()
+    assert s["n"] == 1 and s["mean"] == pytest.approx(0.5) and math.isnan(s["std"])
+
+
+# -- the real identification on a small synthetic cohort ----------------------------------------
+
+@pytest.fixture(scope="module")
+def cohorts(tmp_path_factory):
+    from hesspipe.cohort import CohortSpec, synth_cohort
+
+    root = tmp_path_factory.mktemp("cohorts")
+    spec = CohortSpec(duration_s=24.0)  # 1200 samples: one spectral segment, fast
+    synth_cohort(paper_plants(), 3, 1, ["motion_feedback"], root / "mf", spec=spec)
+    synth_cohort(paper_plants(), 3, 1, [], root / "none", spec=spec)
+    return root
+
+
+def test_motion_feedback_cohort_pattern(cohorts):
+    # A light search (1 climb of 6 passes + polish) keeps the test fast; the benchmark uses defaults.
+    result = compare_pilots(cohorts / "mf", paper_plants(), workers=2, seed=0, restarts=1, passes=6)
+    assert result.ok and result.synthetic and len(result.pilots) == 3
+    assert result.settings.km_fixed == pytest.approx(0.1)  # Table 1
+    for p in result.pilots:
+        orig, fixed, exp = (p.configuration(n) for n in CONFIGURATIONS)
+        assert set(orig["parameters"]) >= {"Ke", "K1", "K2"} and "Km" not in orig["parameters"]
+        assert fixed["parameters"]["Km"] == pytest.approx(0.1)
+        assert {k: fixed["parameters"][k] for k in ("Ke", "K1", "K2")} == \
+            {k: orig["parameters"][k] for k in ("Ke", "K1", "K2")}
+        # Paper pattern: original ~ expanded with fixed Km; the expanded model contains the
+        # original (Km = 0) and the warm-started searches exchange optima, so it is never worse.
+        assert fixed["fitness"] == pytest.approx(orig["fitness"], rel=0.25)
+        assert exp["fitness"] <= orig["fitness"]
+        assert p.improvement == pytest.approx(1 - exp["fitness"] / orig["fitness"])
+        assert math.isfinite(exp["crossover"]["frequency_rad_s"])
+        assert p.freq_hz[-1] <= 5.0 and p.simulated_psd["expanded"].shape == p.measured_psd.shape
+    assert result.mean_improvement > 0.3, result.table()
+
+
+def test_cli_end_to_end_with_figures(cohorts, tmp_path, capsys):
+    plants = write_plants(tmp_path / "plants.json", paper_plants())
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    for name in ("pilot01.csv", "pilot01.truth.json"):
+        shutil.copy(cohorts / "none" / name, folder / name)
+    code = main(["compare-pilots", str(folder), "--plants", str(plants), "--workers", "1", "--passes", "2",
+                 "--restarts", "1",
+                 "--json", str(tmp_path / "c.json"), "--figures", str(tmp_path / "fig")])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert out.startswith("SYNTHETIC DATA") and "pilot01 *" in out and "expanded_fixed" in out
+    d = json.loads((tmp_path / "c.json").read_text())
+    assert d["synthetic"] is True and [p["id"] for p in d["pilots"]] == ["pilot01"]
+    assert d["settings"]["passes"] == 2 and d["pilots"][0]["original"]["passes"] == 2
+    assert (tmp_path / "fig" / "pilot01.png").stat().st_size > 10_000
+
+
+def test_short_run_is_reported_not_fatal(tmp_path):
+    from hesspipe.spectra import PaperWelch
+
+    assert compare_mod.MIN_SAMPLES == PaperWelch().nperseg
+    folder = _write_runs(tmp_path / "runs", n=2)
+    _write_runs(tmp_path / "short", n=1, samples=1000)
+    shutil.copy(tmp_path / "short" / "p0.csv", folder / "short.csv")
+    result = compare_pilots(folder, paper_plants(), workers=1, job=fake_job)
+    assert [p.id for p in result.pilots] == ["p0", "p1"]
+    assert "1000 samples; expected at least 1024" in result.failures[0].error
+
+
+def test_seeds_are_stable_and_distinct():
+    assert derive_seed(0, "pilot01") == derive_seed(0, "pilot01")
+    assert len({derive_seed(0, "pilot01"), derive_seed(1, "pilot01"), derive_seed(0, "pilot02"),
+                derive_seed(0, "pilot01", "original")}) == 4
+    assert 0 <= derive_seed(2 ** 40, "x") < 2 ** 63
+
+
+def test_progress_is_quiet_when_not_a_terminal(capsys):
+    import io
+
+    from hesspipe.progress import progress_bar, progress_enabled
+
+    assert not progress_enabled(io.StringIO())
+    with progress_bar(3, "pilots") as bar:  # stderr is captured here: not a tty
+        bar.update(3)
+    assert capsys.readouterr().err == ""
+    assert run_batch(_square, [2], workers=1, progress=False) == [4]
+
+
+def test_run_study_writes_the_pilots_stage_outputs(tmp_path):
+    from hesspipe.compare import run_study
+
+    config = PilotsConfig.from_table({"n": 2, "duration_s": 21.0, "passes": 2, "restarts": 1, "workers": 1,
+                                      "effects": ["motion_feedback"]}, "test.toml")
+    result = run_study(config, paper_plants(), tmp_path, seed=4, progress=False)
+    assert result.ok and result.synthetic and [p.id for p in result.pilots] == ["pilot01", "pilot02"]
+    names = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
+    assert names == ["cohort/cohort.json", "cohort/pilot01.csv", "cohort/pilot01.truth.json",
+                     "cohort/pilot02.csv", "cohort/pilot02.truth.json", "comparison.json", "comparison.md",
+                     "figures/pilot01.png", "figures/pilot02.png"]
+    d = json.loads((tmp_path / "comparison.json").read_text())
+    assert d["synthetic"] is True and d["settings"]["seed"] == 4
+    assert "SYNTHETIC DATA" in (tmp_path / "comparison.md").read_text()
+
+
+def test_progress_bar_is_drawn_on_a_terminal(monkeypatch):
+    pty = pytest.importorskip("pty")
+    import fcntl
+    import os
+    import select
+    import struct
+    import sys
+    import termios
+
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))
+    with open(slave, "w", closefd=True) as tty:
+        monkeypatch.setattr(sys, "stderr", tty)
+        assert run_batch(_square, [1, 2, 3], workers=1, desc="pilots", unit="pilot") == [1, 4, 9]
+        tty.flush()
+    out = b""
+    while select.select([master], [], [], 0.5)[0]:
+        try:
+            chunk = os.read(master, 65536)
+        except OSError:
+            break
+        if not chunk:
+            break
+        out += chunk
+    os.close(master)
+    assert b"pilots:" in out and b"/3 [" in out  # drawn (fast updates are throttled by tqdm)
+
+
+def test_scheduler_without_dask_names_the_extra(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import fails as if not installed
+    with pytest.raises(HesspipeError, match=r"pip install 'hesspipe\[dask\]'"):
+        run_batch(_square, [1], scheduler="tcp://127.0.0.1:8786")
