@@ -82,3 +82,14 @@ def test_atomic_file_gets_ordinary_permissions(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert (tmp_path / "p.json").stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_fields_optional_values_and_string_lists():
+    f = Fields({"names": ["a", "b"], "bad": ["a", 3]}, "s.toml", "pilots")
+    assert f.number("absent", None) is None and f.integer("absent2", None) is None
+    assert f.strings("names") == ("a", "b")
+    assert f.strings("none", None) is None
+    with pytest.raises(HesspipeError, match=r"field 'pilots.bad': expected a list of non-empty strings"):
+        f.strings("bad")
+    with pytest.raises(HesspipeError, match=r"expected a list of names from 'a'"):
+        f.strings("names", choices=("a",))

@@ -95,8 +95,12 @@ class Fields:
         return default
 
     def number(self, key: str, default: Any = _MISSING, *, min: float | None = None,
-               max: float | None = None, strict_min: bool = False) -> float:
-        """A finite real number, optionally bounded (``min <= x <= max``, or ``> min``)."""
+               max: float | None = None, strict_min: bool = False) -> float | None:
+        """A finite real number, optionally bounded (``min <= x <= max``, or ``> min``).
+
+        With ``default=None`` the field is optional and None is returned when absent
+        (likewise for :meth:`integer` and :meth:`strings`).
+        """
         what = "a number"
         if min is not None:
             what += f" {'>' if strict_min else '>='} {min:g}"
@@ -105,6 +109,8 @@ class Fields:
         value = self._get(key, default)
         if value is _MISSING:
             raise self.error(key, what)
+        if value is None and default is None:  # optional field left out (TOML has no null)
+            return None
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise self.error(key, what, value)
         if min is not None and (value <= min if strict_min else value < min):
@@ -114,13 +120,15 @@ class Fields:
         return float(value)
 
     def integer(self, key: str, default: Any = _MISSING, *, min: int | None = None,
-                max: int | None = None) -> int:
+                max: int | None = None) -> int | None:
         """An integer, optionally bounded."""
         what = "an integer" + (f" >= {min}" if min is not None else "") + (
             f" <= {max}" if max is not None else "")
         value = self._get(key, default)
         if value is _MISSING:
             raise self.error(key, what)
+        if value is None and default is None:  # optional field left out
+            return None
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.error(key, what, value)
         if (min is not None and value < min) or (max is not None and value > max):
@@ -157,6 +165,23 @@ class Fields:
                            and math.isfinite(v) for v in value)):
             raise self.error(key, what, value)
         return tuple(float(v) for v in value)
+
+    def strings(self, key: str, default: Any = _MISSING, *,
+                choices: Sequence[str] | None = None) -> tuple[str, ...] | None:
+        """A list of non-empty strings (optionally each one of `choices`); None if
+        absent and `default` is None."""
+        what = "a list of " + ("names from " + ", ".join(repr(c) for c in choices) if choices
+                               else "non-empty strings")
+        value = self._get(key, default)
+        if value is _MISSING:
+            raise self.error(key, what)
+        if value is None and default is None:
+            return None
+        if (not isinstance(value, (list, tuple))
+                or not all(isinstance(v, str) and v for v in value)
+                or (choices and not set(value) <= set(choices))):
+            raise self.error(key, what, value)
+        return tuple(value)
 
     def table_(self, key: str) -> "Fields":
         """The sub-table `key` (empty if absent) as a new :class:`Fields`."""

@@ -136,8 +136,79 @@ def _analytic(folder: Path, root: Path) -> list[str]:
     return out
 
 
-def build_report(folders: Mapping[str, Path], root: Path, *, config_file: str, seed: int,
-                 sections: Mapping | None = None) -> str:
+def _pilots(folder: Path, root: Path) -> list[str]:
+    comp = _load(folder / "comparison.json")
+    if comp is None:
+        return []
+    synthetic = comp.get("synthetic")
+    out = ["## 4. Pilots: original vs expanded Hess model (paper Table 5, Fig. 8)"
+           + (" — SYNTHETIC DATA" if synthetic else ""), ""]
+    if synthetic:
+        out += [SYNTHETIC_NOTE, ""]
+    out += ["Fitness is the paper's Eq. 10 (RMS difference of control PSDs, lower is better). "
+            "*expanded_fixed* adds motion feedback with Table 1's Km to the original's parameters; "
+            "*expanded* identifies Km with the rest. Improvement = 1 − expanded / original.", ""]
+    rows = []
+    for p in comp["pilots"]:
+        o, f, e = p["original"], p["expanded_fixed"], p["expanded"]
+        rows.append([p["id"] + (" (synthetic)" if p.get("synthetic") else ""),
+                     *(e["parameters"].get(k) for k in ("Ke", "K1", "K2", "Km")),
+                     o["fitness"], f["fitness"], e["fitness"], f"{100 * p['improvement']:.1f} %"])
+    out += _table(["pilot", "Ke", "K1", "K2", "Km", "fitness original", "fitness expanded, Km fixed",
+                   "fitness expanded", "improvement"], rows)
+    mean, std = comp.get("mean_improvement"), comp.get("std_improvement")
+    if mean is not None:
+        out += [f"Mean improvement from motion feedback over {comp.get('n_pilots')} pilot(s): "
+                f"**{100 * mean:.1f} %**" + (f" (sd {100 * std:.1f} %)" if std is not None else "")
+                + "; the paper reports about 50 % on average.", ""]
+    rows = []
+    limits = None
+    for p in comp["pilots"]:
+        for name in ("original", "expanded"):
+            c = p[name].get("crossover") or {}
+            limits = limits or c.get("limits")
+            rows.append([p["id"], name, c.get("frequency_rad_s"), c.get("phase_margin_deg"),
+                         c.get("within_limits")])
+    out += ["Crossover of the identified pilots (open loop broken at the displayed error; "
+            "— : |L| does not cross 1)" + (f"; limits {limits['frequency_rad_s']} rad/s and "
+                                           f"{limits['phase_margin_deg']} deg are an assumption of "
+                                           "hesspipe, not the paper's" if limits else "") + ":", ""]
+    out += _table(["pilot", "model", "crossover rad/s", "phase margin deg", "within limits"], rows)
+    if comp.get("failures"):
+        out += ["Failed runs: " + "; ".join(f"{f['id']}: {f['error']}" for f in comp["failures"]), ""]
+    for p in comp["pilots"]:
+        out += _figure(folder / "figures" / f"{p['id']}.png", root, f"control PSD, pilot {p['id']}")
+    return out
+
+
+def _diagnose(folder: Path, root: Path) -> list[str]:
+    d = _load(folder / "diagnosis.json")
+    if d is None:
+        return []
+    out = ["## 5. Diagnose: what the baseline model misses"
+           + (" — SYNTHETIC DATA" if d.get("synthetic") else ""), ""]
+    if d.get("synthetic"):
+        out += [SYNTHETIC_NOTE, ""]
+    named = d.get("named_effects") or []
+    out += [f"Run `{d.get('run')}`, baseline model `{d.get('baseline_model')}`. Named effects: "
+            + (", ".join(f"**{n}**" for n in named) if named else "none") + ".", "",
+            f"Gap (Eq. 10 fitness): before {_num(d.get('gap_before'))}, after {_num(d.get('gap_after'))}; "
+            f"log-spectral RMS {_num(d.get('log_rms_db_before'), '.2f')} dB → "
+            f"{_num(d.get('log_rms_db_after'), '.2f')} dB.", ""]
+    rows = [[s.get("round"), s.get("candidate"), s.get("status"), s.get("statistic"), s.get("p_value"),
+             s.get("delta_bic"), s.get("gap"), s.get("accepted")] for s in d.get("steps", [])]
+    out += _table(["round", "candidate", "status", "LR statistic", "p", "ΔBIC", "gap", "named"], rows)
+    rows = [[f"{b['lo_hz']:g}–{b['hi_hz']:g}", b["before"].get("level_db"), b["before"].get("disagrees"),
+             b["after"].get("level_db"), b["after"].get("disagrees"), b.get("closed")]
+            for b in d.get("bands", [])]
+    out += _table(["band Hz", "level dB before", "disagrees before", "level dB after",
+                   "disagrees after", "closed"], rows)
+    out += [f"Details: [diagnosis.md]({os.path.relpath(folder / 'diagnosis.md', root)})", ""]
+    out += _figure(folder / "diagnosis.png", root, "diagnosis: measured, baseline and final PSDs")
+    return out
+
+
+def build_report(folders: Mapping[str, Path], root: Path, *, config_file: str, seed: int) -> str:
     """Markdown for ``report.md``.
 
     Parameters
@@ -153,8 +224,8 @@ def build_report(folders: Mapping[str, Path], root: Path, *, config_file: str, s
              "Reproduces and extends AIAA 2009-6032 (Zaychik, Cardullo, George, Kelly).", "",
              f"Configuration `{config_file}`, seed {seed}. Versions: " +
              ", ".join(f"{k} {v}" for k, v in versions().items()) + ".", ""]
-    builders = [("flight", _flight), ("plants", _plants), ("analytic", _analytic)]
-    builders += [(name, fn) for name, fn in (sections or {}).items()]
+    builders = [("flight", _flight), ("plants", _plants), ("analytic", _analytic),
+                ("pilots", _pilots), ("diagnose", _diagnose)]
     for name, fn in builders:
         if name in folders:
             parts += fn(Path(folders[name]), root)

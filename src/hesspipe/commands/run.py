@@ -29,5 +29,5 @@ def _run(args) -> int:
     ran = [o.name for o in outcomes if o.action == "ran"]
     total = sum(o.wall_time_s for o in outcomes)
     print(f"ran {len(ran)} of {len(outcomes)} stages ({', '.join(ran) or 'none'}) in {total:.1f} s; "
-          f"report: {pipe.folder('report') / 'report.md'}")
+          f"report: {pipe.output_folder('report') / 'report.md'}")
     return 0
