@@ -13,7 +13,7 @@ from hesspipe.cli import main
 from hesspipe.cohort import CohortSpec, disturbance, draw_parameters, pilot_ids, synth_cohort
 from hesspipe.errors import HesspipeError
 from hesspipe.formats import Plants, read_run, write_plants
-from hesspipe.hess import PilotModel, table1
+from hesspipe.hess import PilotModel, gain_scale, table1
 from hesspipe.spectra import psd
 
 SHORT = CohortSpec(duration_s=24.0)  # 1200 samples at 50 Hz: one spectral segment and a bit
@@ -37,7 +37,9 @@ def test_cohort_files_truth_and_labels(tmp_path):
         assert truth["synthetic"] is True and truth["id"] == run.id and truth["base_seed"] == 11
         assert truth["effects"] == ["motion_feedback", "remnant"]
         lo, hi = SHORT.km_range
-        assert lo <= truth["parameters"]["Km"] <= hi
+        g = gain_scale(paper_plants())
+        assert truth["gain_scale"] == pytest.approx(g)
+        assert g * lo <= truth["parameters"]["Km"] <= g * hi
         assert np.all(np.isfinite(run.control)) and np.std(run.control) > 0
         np.testing.assert_allclose(run.disturbance, disturbance(SHORT, truth["seeds"]["gust"])[1], atol=1e-8)
     summary = json.loads((out / "cohort.json").read_text())
@@ -62,8 +64,10 @@ def test_no_motion_feedback_means_no_km(tmp_path):
     # The same seed gives the same core pilot whether or not motion feedback is added (when the
     # first draw is stable with both; an unstable draw is redrawn).
     assert truth["draws"] == truth_mf["draws"] == 1
-    for name in ("Ke", "K1", "K2", "tau0", "wn", "Kn"):
+    for name in ("Ke", "K1", "K2", "tau0", "wn"):
         assert truth["parameters"][name] == truth_mf["parameters"][name]
+    # The remnant's share of control power is the same; its gain Kn follows each loop.
+    assert truth["remnant_share"] == truth_mf["remnant_share"]
 
 
 def test_parameter_distributions_stay_in_the_search_box_around_table1():
@@ -71,15 +75,15 @@ def test_parameter_distributions_stay_in_the_search_box_around_table1():
     rng = np.random.default_rng(0)
     draws = [draw_parameters(model, rng, CohortSpec(tau0_spread=0.15, wn_spread=0.1)) for _ in range(400)]
     bounds = model.bounds()
-    for name in ("Ke", "K1", "K2", "tau0", "wn", "Km", "Kn"):
+    for name in ("Ke", "K1", "K2", "tau0", "wn", "Km"):
         x = np.array([d[name] for d in draws])
         assert np.all((x >= bounds[name][0]) & (x <= bounds[name][1])), name
         assert np.std(x) > 0, name
     t1 = table1(1)
     for name in ("K1", "K2", "tau0", "wn"):  # not truncated in practice: median at Table 1
         assert np.median([d[name] for d in draws]) == pytest.approx(t1[name], rel=0.1), name
-    ke = np.array([d["Ke"] for d in draws])
-    assert 14 < np.median(ke) < 20.47 and ke.max() <= 20.47
+    ke = np.array([d["Ke"] for d in draws])  # gain scale 1: Yc = 1/s, Table 1's own plant
+    assert np.median(ke) == pytest.approx(t1["Ke"], rel=0.1) and ke.max() <= bounds["Ke"][1]
     assert all(d["zn"] == t1["zn"] and d["1/T1"] == t1["1/T1"] for d in draws)
     # Default: only what the identification frees varies (tau0, wn at Table 1).
     default = draw_parameters(model, np.random.default_rng(1))

@@ -217,7 +217,9 @@ def cohorts(tmp_path_factory):
     from hesspipe.cohort import CohortSpec, synth_cohort
 
     root = tmp_path_factory.mktemp("cohorts")
-    spec = CohortSpec(duration_s=24.0)  # 1200 samples: one spectral segment, fast
+    # 1200 samples (one spectral segment, fast) and little remnant (2 % of the control power), so
+    # that 3 short records show the pattern; benchmarks/bench_compare.py runs the default cohort.
+    spec = CohortSpec(duration_s=24.0, remnant_share=0.02)
     synth_cohort(paper_plants(), 3, 1, ["motion_feedback"], root / "mf", spec=spec)
     synth_cohort(paper_plants(), 3, 1, [], root / "none", spec=spec)
     return root
@@ -227,11 +229,14 @@ def test_motion_feedback_cohort_pattern(cohorts):
     # A light search (1 climb of 6 passes + polish) keeps the test fast; the benchmark uses defaults.
     result = compare_pilots(cohorts / "mf", paper_plants(), workers=2, seed=0, restarts=1, passes=6)
     assert result.ok and result.synthetic and len(result.pilots) == 3
-    assert result.settings.km_fixed == pytest.approx(0.1)  # Table 1
+    from hesspipe.hess import gain_scale
+
+    km_fixed = 0.1 * gain_scale(paper_plants())  # Table 1's, scaled to the plants like every loop gain
+    assert result.settings.km_fixed == pytest.approx(km_fixed)
     for p in result.pilots:
         orig, fixed, exp = (p.configuration(n) for n in CONFIGURATIONS)
         assert set(orig["parameters"]) >= {"Ke", "K1", "K2"} and "Km" not in orig["parameters"]
-        assert fixed["parameters"]["Km"] == pytest.approx(0.1)
+        assert fixed["parameters"]["Km"] == pytest.approx(km_fixed)
         assert {k: fixed["parameters"][k] for k in ("Ke", "K1", "K2")} == \
             {k: orig["parameters"][k] for k in ("Ke", "K1", "K2")}
         # Paper pattern: original ~ expanded with fixed Km; the expanded model contains the
@@ -241,7 +246,11 @@ def test_motion_feedback_cohort_pattern(cohorts):
         assert p.improvement == pytest.approx(1 - exp["fitness"] / orig["fitness"])
         assert math.isfinite(exp["crossover"]["frequency_rad_s"])
         assert p.freq_hz[-1] <= 5.0 and p.simulated_psd["expanded"].shape == p.measured_psd.shape
-    assert result.mean_improvement > 0.3, result.table()
+    # Measured 25 % (pilots adapted to the plant's gain, Ke ~ 0.44 x Table 1, 2 % remnant); the
+    # same search on pilots without motion feedback finds next to nothing.
+    assert result.mean_improvement > 0.2, result.table()
+    none = compare_pilots(cohorts / "none", paper_plants(), workers=2, seed=0, restarts=1, passes=6)
+    assert none.ok and none.mean_improvement < 0.05, none.table()
 
 
 def test_cli_end_to_end_with_figures(cohorts, tmp_path, capsys):

@@ -8,21 +8,45 @@ effects, seed) is written beside the run so an identification can be checked
 against it. Every file says "synthetic".
 
 Parameter distributions (k = 1, the roll-rate task; ``LN(m, s)`` is
-``m * exp(N(0, s))``, truncated by redrawing to the model's search box):
+``m * exp(N(0, s))``, truncated by redrawing to the model's search box;
+``g`` = :func:`hesspipe.hess.gain_scale` of the plants):
 
 =========  =========================================================
-Ke, K1, K2 ``LN(Table 1, gain_spread)``, default spread 0.25
+Ke         ``LN(g x Table 1, gain_spread)``, default spread 0.25
+K1, K2     ``LN(Table 1, gain_spread)``
 tau0, wn   ``LN(Table 1, tau0_spread / wn_spread)``, default spread 0 (Table 1:
            0.1 s, 10 rad/s; see :class:`CohortSpec` for why)
 zn, 1/T1   Table 1 (0.707, 0.01)
-Km         log-uniform on ``km_range`` (default 2-8) when motion feedback is
-           present; Table 1's 0.1 leaves no visible trace in the spectra
-Kn         ``LN(0.3, 0.3)``; Tn the remnant default (0.5 s)
+Km         ``g x`` log-uniform on ``km_range`` (default 2-8) when motion
+           feedback is present; Table 1's 0.1 leaves no visible trace in the spectra
+Kn         set so that remnant makes up a share ``LN(remnant_share, remnant_spread)``
+           (default 0.1, 0.01-0.5) of the pilot's control variance; Tn the
+           remnant default (0.5 s)
 others     the effect's defaults (extra_delay, dutch_roll ...)
 =========  =========================================================
 
-A draw whose closed loop is unstable is redrawn from the same stream (10 %
-of draws without, 16 % with motion feedback, with SPEC.md's plants): the
+Plant gain: Table 1 is calibrated for ``Yc = 1/s`` (crossover 2.9 rad/s). A
+pilot adapts his gain to the controlled element (McRuer's crossover model),
+so the loop gains Ke and Km are drawn around Table 1 times ``g``, the factor
+that puts Table 1's crossover around these plants back at 2.9 rad/s (0.44
+for SPEC.md's analytic roll plant, 2.7 for the JSBSim 737's ARX plant). The
+identification's default boxes and bit fields use the same ``g``
+(:func:`hesspipe.identify.default_fields`).
+
+Remnant level: relative, so that the cohort is realistic for any plants and
+any disturbance level (an absolute Kn swamps a small control signal: Kn =
+0.3 was 0.1 % of the control power on SPEC.md's plants and 40 % on the
+737's). Trained subjects in single-axis compensatory tracking have a linear
+correlation of about 0.8-0.95 between model and measured control (McRuer &
+Jex 1967, "A review of quasi-linear pilot models", IEEE Trans. HFE-8), i.e.
+remnant 5-20 % of the control power; the default share 0.1 is mid-range.
+It matters: benchmarks/bench_compare.py's mean improvement falls as the
+share rises (0.05: 28 %, 0.1: 17 %, 0.2: 10 % on SPEC.md's plants). The share is of the whole
+control variance (noise free + remnant):
+``Kn = sqrt(share / (1 - share) x var(u0) / var(u1))`` with ``u0`` the
+noise-free control and ``u1`` the control response to the remnant with Kn = 1.
+
+A draw whose closed loop is unstable is redrawn from the same stream: the
 cohort is the distribution above conditioned on a pilot who can fly the task.
 
 Disturbance: the paper's side-wind profile (lateral component, :class:`hesspipe.wind.SideWind`)
@@ -51,7 +75,9 @@ from .wind import Excitation, SideWind
 #: Remnant noise is part of every synthetic pilot: real pilots are never noise free.
 REMNANT = "remnant"
 #: Parameter draws tried per pilot before giving up on a stable closed loop.
-MAX_DRAWS = 50
+MAX_DRAWS = 200
+#: Bounds of a pilot's remnant share of control variance.
+SHARE_RANGE = (0.01, 0.5)
 
 
 @dataclass(frozen=True)
@@ -72,10 +98,12 @@ class CohortSpec:
         0.1, Km "improves" a cohort without motion feedback by about a fifth
         (benchmarks/bench_compare.py measures it).
     km_range : (float, float)
-        Range of the log-uniform Km of pilots with motion feedback.
-    remnant_gain, remnant_spread : float
-        Remnant gain Kn: log-normal around `remnant_gain` (the registry's
-        default, 0.02, is too small to show in a spectrum).
+        Range of the log-uniform Km of pilots with motion feedback, for
+        ``Yc = 1/s`` (multiplied by the plants' gain scale).
+    remnant_share, remnant_spread : float
+        Share of the pilot's control variance that is remnant noise:
+        log-normal around `remnant_share` (truncated to 0.01-0.5); Kn follows
+        from it (see the module docstring).
     side_wind : SideWind
         Slow turning wind (lateral component used).
     gust : Excitation
@@ -90,7 +118,7 @@ class CohortSpec:
     tau0_spread: float = 0.0
     wn_spread: float = 0.0
     km_range: tuple[float, float] = (2.0, 8.0)
-    remnant_gain: float = 0.3
+    remnant_share: float = 0.1
     remnant_spread: float = 0.3
     side_wind: SideWind = field(default_factory=SideWind)
     gust: Excitation = field(default_factory=lambda: Excitation(kind="noise", rms=3.0, f_max_hz=1.0,
@@ -100,12 +128,17 @@ class CohortSpec:
     def describe(self) -> dict:
         """The distributions in words (written into every truth file)."""
         return {
-            "Ke, K1, K2": f"Table 1 x exp(N(0, {self.gain_spread:g}))",
+            "Ke": f"g x Table 1 x exp(N(0, {self.gain_spread:g})), g = plant gain scale",
+            "K1, K2": f"Table 1 x exp(N(0, {self.gain_spread:g}))",
             "tau0": f"Table 1 x exp(N(0, {self.tau0_spread:g}))",
             "wn": f"Table 1 x exp(N(0, {self.wn_spread:g}))",
             "zn, 1/T1, 1/T2": "Table 1",
-            "Km": f"log-uniform on [{self.km_range[0]:g}, {self.km_range[1]:g}] (motion_feedback only)",
-            "Kn": f"{self.remnant_gain:g} x exp(N(0, {self.remnant_spread:g})); Tn default",
+            "Km": f"g x log-uniform on [{self.km_range[0]:g}, {self.km_range[1]:g}] "
+                  "(motion_feedback only)",
+            "Kn": f"remnant share of control variance {self.remnant_share:g} x "
+                  f"exp(N(0, {self.remnant_spread:g})), truncated to [{SHARE_RANGE[0]:g}, "
+                  f"{SHARE_RANGE[1]:g}]; Tn default",
+            "g": "hesspipe.hess.gain_scale(plants): Table 1's crossover at 2.9 rad/s around the plants",
             "other effect parameters": "the effect's defaults",
             "all": "log-normals truncated (redrawn) to the model's search box",
         }
@@ -114,9 +147,8 @@ class CohortSpec:
 def _lognormal(rng, centre, spread, lo=-math.inf, hi=math.inf):
     """``centre * exp(N(0, spread))`` truncated to [lo, hi] by redrawing.
 
-    Truncation by redrawing, not clipping: Table 1's Ke = 20 sits at the top
-    of the APID search box (20.47), and clipping would pile pilots up on the
-    bound, where no identification can reach them from inside.
+    Truncation by redrawing, not clipping: clipping would pile pilots up on
+    the bound, where no identification can reach them from inside.
     """
     if spread <= 0:
         return float(min(max(centre, lo), hi))
@@ -127,7 +159,8 @@ def _lognormal(rng, centre, spread, lo=-math.inf, hi=math.inf):
     return float(min(max(centre, lo), hi))
 
 
-def draw_parameters(model, rng: np.random.Generator, spec: CohortSpec = CohortSpec()) -> dict[str, float]:
+def draw_parameters(model, rng: np.random.Generator, spec: CohortSpec = CohortSpec(),
+                    gain: float = 1.0) -> dict[str, float]:
     """Draw one pilot's parameters for `model` (see the module docstring).
 
     Parameters
@@ -135,28 +168,61 @@ def draw_parameters(model, rng: np.random.Generator, spec: CohortSpec = CohortSp
     model : hesspipe.hess.PilotModel
     rng : numpy.random.Generator
     spec : CohortSpec
+    gain : float
+        Plant gain scale (:func:`hesspipe.hess.gain_scale`); 1 for ``Yc = 1/s``.
 
     Returns
     -------
     dict
-        Every parameter of ``model.parameter_names()``.
+        Every parameter of ``model.parameter_names()``; the remnant gain Kn is
+        left at its default (:func:`remnant_gain` sets it from the loop).
     """
     from .hess import PilotModel
 
-    params = dict(model.defaults(spec.k))
+    params = dict(model.defaults(spec.k, gain))
     # Bounds of the largest model, so that a draw never depends on which effects are present:
     # pilot 3 of seed S has the same Ke with and without motion feedback.
-    bounds = PilotModel(("motion_feedback", REMNANT)).bounds()
+    bounds = PilotModel(("motion_feedback", REMNANT)).bounds(gain)
     draws = {}
     for name, centre, spread in (("Ke", "Ke", spec.gain_spread), ("K1", "K1", spec.gain_spread),
                                  ("K2", "K2", spec.gain_spread), ("tau0", "tau0", spec.tau0_spread),
                                  ("wn", "wn", spec.wn_spread)):
         draws[name] = _lognormal(rng, params[centre], spread, *bounds[name])
     lo, hi = spec.km_range
-    draws["Km"] = float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-    draws["Kn"] = _lognormal(rng, spec.remnant_gain, spec.remnant_spread, *bounds["Kn"])
+    draws["Km"] = gain * float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
     params.update({name: value for name, value in draws.items() if name in params})
     return params
+
+
+def remnant_gain(model, params, sim, share: float) -> float:
+    """Kn that makes remnant `share` of the pilot's control variance.
+
+    Parameters
+    ----------
+    model : hesspipe.hess.PilotModel
+        With the remnant effect.
+    params : dict
+        Complete parameters (Kn ignored).
+    sim : hesspipe.hess.Simulator
+        Prepared with the pilot's disturbance and remnant noise seed.
+    share : float
+        In (0, 1): ``var(remnant part) / var(control)``.
+
+    Returns
+    -------
+    float
+        Kn; the loop is linear, so the control is ``u0 + Kn u1`` with ``u0``
+        noise free and ``u1`` the response to the unit remnant.
+    """
+    u0 = sim.control(model.loop({**params, "Kn": 0.0}))
+    u1 = sim.control(model.loop({**params, "Kn": 1.0}))
+    if u0 is None or u1 is None:
+        raise HesspipeError("remnant gain: the closed loop is unstable")
+    v0, v1 = float(np.var(u0)), float(np.var(u1 - u0))
+    if not (v0 > 0 and v1 > 0):
+        raise HesspipeError("remnant gain: the pilot's noise-free control is zero; expected a "
+                            "disturbance that moves the aircraft")
+    return math.sqrt(share / (1.0 - share) * v0 / v1)
 
 
 def disturbance(spec: CohortSpec, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -188,23 +254,26 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
     truth : dict
         Parameters, effects, seeds, disturbance and distributions.
     """
-    from .hess import PilotModel, Simulator, synthetic_run
+    from .hess import PilotModel, Simulator, gain_scale, synthetic_run
 
     model = PilotModel(effects=_with_remnant(effects))
+    gain = gain_scale(plants, spec.k)
     rng = np.random.default_rng(derive_seed(seed, "parameters"))
     gust_seed = derive_seed(seed, "gust")
     t, wind = disturbance(spec, gust_seed)
     remnant_seed = derive_seed(seed, "remnant")
     # A pilot who cannot stabilise the loop is not a pilot: redraw (from the same stream, so the
     # cohort stays reproducible) until the closed loop is stable.
-    sim = Simulator(plants, wind, spec.dt_s)
+    sim = Simulator(plants, wind, spec.dt_s, noise_seed=remnant_seed)
     for draws in range(1, MAX_DRAWS + 1):
-        params = draw_parameters(model, rng, spec)
+        params = draw_parameters(model, rng, spec, gain)
         if sim.stable(model.loop(model.complete(params))):
             break
     else:
         raise HesspipeError(f"synthetic pilot {pilot_id}: no stable closed loop in {MAX_DRAWS} draws "
                             "around Table 1 with these plants; expected plants like SPEC.md's")
+    share = _lognormal(rng, spec.remnant_share, spec.remnant_spread, *SHARE_RANGE)
+    params["Kn"] = remnant_gain(model, model.complete(params), sim, share)
     run = synthetic_run(model, params, plants, wind, spec.dt_s, seed=remnant_seed, run_id=pilot_id)
     truth = {
         "id": pilot_id,
@@ -213,6 +282,8 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
         "effects": list(model.effects),
         "parameters": params,
         "draws": draws,
+        "gain_scale": gain,
+        "remnant_share": share,
         "k": spec.k,
         "seed": seed,
         "seeds": {"parameters": derive_seed(seed, "parameters"), "gust": gust_seed,

@@ -69,7 +69,8 @@ class CompareSettings:
     k : int
         Hess model order for the controlled element (1: rate-like, the roll-rate task).
     km_fixed : float or None
-        Km of the ``expanded_fixed`` configuration (None: Table 1's 0.1).
+        Km of the ``expanded_fixed`` configuration (None: Table 1's 0.1 times
+        :func:`hesspipe.hess.gain_scale` of the plants, like every default loop gain).
     start : {"warm", "random"}
         Every search is the optimizer (APID: `restarts` climbs, best kept)
         followed by a local bounded-Powell polish from its result. "warm"
@@ -85,9 +86,10 @@ class CompareSettings:
         described); results then also carry the luck of each search.
     restarts : int
         APID climbs per identification (the best is kept). 2: with the local
-        polish and the exchange of optima, 4 changes neither conclusion of
-        benchmarks/bench_compare.py (mean improvement 88.3 % with motion
-        feedback, 1.4 vs 1.6 % without) and costs a quarter more.
+        polish and the exchange of optima, 4 changed neither conclusion of
+        benchmarks/bench_compare.py (measured on the first, nearly remnant-free
+        cohort: mean improvement 88.3 % with motion feedback, 1.4 vs 1.6 %
+        without) and costs a quarter more.
     benchmark : bool
         Also fit the McRuer precision model (the paper's benchmark score);
         off by default: it costs as much as the three configurations together.
@@ -246,8 +248,15 @@ class Comparison:
         }
 
     def km_fixed_value(self) -> float | None:
-        """Km of the expanded_fixed configuration (None if the job did not say)."""
-        return self.settings.km_fixed
+        """Km of the expanded_fixed configuration (None if no pilot was processed).
+
+        The default (``settings.km_fixed`` None) is Table 1's scaled to the plants, as used.
+        """
+        if self.settings.km_fixed is not None:
+            return self.settings.km_fixed
+        for p in self.pilots:
+            return float(p.expanded_fixed["parameters"]["Km"])
+        return None
 
     def table(self) -> str:
         """The comparison as a plain-text table (Table 5 per pilot), mean and spread."""
@@ -256,12 +265,13 @@ class Comparison:
 
 # -- one pilot ------------------------------------------------------------------------------
 
-def _km_fixed(settings: CompareSettings) -> float:
+def _km_fixed(settings: CompareSettings, plants) -> float:
     if settings.km_fixed is not None:
         return float(settings.km_fixed)
-    from .hess import table1
+    from .hess import PilotModel, gain_scale
 
-    return float(table1(settings.k)["Km"])
+    # Table 1's Km, in the same plant-gain units as the identification's defaults.
+    return float(PilotModel(("motion_feedback",)).defaults(settings.k, gain_scale(plants, settings.k))["Km"])
 
 
 def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
@@ -390,7 +400,7 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
     common = dict(optimizer=settings.optimizer, passes=settings.passes, band=tuple(settings.band),
                   k=settings.k, restarts=settings.restarts, with_benchmark=settings.benchmark)
     seed = functools.partial(derive_seed, settings.seed, run.id)
-    km = _km_fixed(settings)
+    km = _km_fixed(settings, plants)
     spent = {}
     original, spent["original"] = _search(run, plants, "original", seed("original"), common)
     warm = settings.start == "warm"
@@ -532,7 +542,7 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
                                km_fixed=None if km_fixed is None else float(km_fixed), start=start,
                                restarts=int(restarts), benchmark=bool(benchmark))
     if job is None and settings.km_fixed is None:
-        settings = replace(settings, km_fixed=_km_fixed(settings))
+        settings = replace(settings, km_fixed=_km_fixed(settings, plants))
     _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
     paths = list_runs(paths_or_dir)
     runs, failures = read_runs(paths, columns=columns, resample=resample)
@@ -648,7 +658,7 @@ class PilotsConfig:
     band_hz : (float, float)
         Fitness band.
     km_fixed : float or None
-        Km of the expanded_fixed configuration (None: Table 1).
+        Km of the expanded_fixed configuration (None: Table 1 times the plants' gain scale).
     start : str
         "warm" or "random" (see :class:`CompareSettings`).
     restarts : int

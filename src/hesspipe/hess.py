@@ -24,6 +24,7 @@ an unstable loop returns finite nonsense.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 from typing import Mapping
 
@@ -39,10 +40,13 @@ PARAMETERS: tuple[str, ...] = ("Ke", "K1", "K2", "1/T1", "1/T2", "k", "tau0", "z
 """Core parameter names, as in the paper's Table 1 (Km belongs to ``motion_feedback``)."""
 
 # name: (Table 1 value, search box lo, hi, APID bits, scale, offset, unit)
-# Boxes: the paper's APID ranges for the gains (Ke 11 bits, K1/K2 10 bits at
-# scale 100); the others are bounded to physically sensible values.
+# Boxes: the paper's APID ranges for K1/K2 (10 bits at scale 100); Ke 11 bits
+# at scale 50 (0..40.94, twice the paper's 0..20.47, which put Table 1's
+# Ke = 20 at its edge: pilots around Table 1 need room on both sides); the
+# others are bounded to physically sensible values. Ke's box and field are
+# further scaled by the plants' gain (gain_scale).
 _CORE = {
-    "Ke": (20.0, 0.0, 20.47, 11, 100.0, 0.0, "1"),
+    "Ke": (20.0, 0.0, 40.94, 11, 50.0, 0.0, "1"),
     "K1": (3.0, 0.0, 10.23, 10, 100.0, 0.0, "1"),
     "K2": (2.0, 0.0, 10.23, 10, 100.0, 0.0, "1"),
     "1/T1": (0.01, 0.0, 1.023, 10, 1000.0, 0.0, "rad/s"),
@@ -54,6 +58,13 @@ _CORE = {
 }
 STRUCTURAL = ("k",)
 """Parameters that select the structure and are never identified."""
+
+LOOP_GAINS = ("Ke", "Km", "Ko")
+"""Gains on the plant's output on its way into the pilot (visual error, vestibular and otolith
+sensations). Table 1 sets them for ``Yc = 1/s^k``; a pilot adapts them to the controlled
+element (crossover model), so their defaults, search boxes and bit fields are scaled by
+:func:`gain_scale` of the plants. K1, K2 (proprioceptive) act on the pilot's own control
+and are not scaled."""
 
 UNSTABLE_FITNESS = 1.0e12
 """Least fitness given to a parameter set whose closed loop is unstable: finite (optimisers
@@ -111,26 +122,33 @@ class PilotModel:
             names.extend(EFFECTS[e].parameters)
         return tuple(names)
 
-    def defaults(self, k: int = 1) -> dict[str, float]:
-        """Table 1 values (for `k`) and each effect's default."""
+    def defaults(self, k: int = 1, gain: float = 1.0) -> dict[str, float]:
+        """Table 1 values (for `k`) and each effect's default.
+
+        `gain` (:func:`gain_scale` of the plants) multiplies the :data:`LOOP_GAINS`.
+        """
         out = {n: v for n, v in table1(k).items() if n in PARAMETERS}
         for e in self.effects:
             out.update({n: spec[0] for n, spec in EFFECTS[e].parameters.items()})
-        return out
+        return _scaled(out, gain, lambda v, g: v * g)
 
-    def bounds(self) -> dict[str, tuple[float, float]]:
-        """Search box of every parameter, name → (lo, hi)."""
+    def bounds(self, gain: float = 1.0) -> dict[str, tuple[float, float]]:
+        """Search box of every parameter, name → (lo, hi); :data:`LOOP_GAINS` times `gain`."""
         out = {n: (spec[1], spec[2]) for n, spec in _CORE.items()}
         for e in self.effects:
             out.update({n: (spec[1], spec[2]) for n, spec in EFFECTS[e].parameters.items()})
-        return out
+        return _scaled(out, gain, lambda b, g: (b[0] * g, b[1] * g))
 
-    def fields(self) -> dict[str, tuple[int, float, float]]:
-        """Default APID bit field of every parameter, name → (bits, scale, offset)."""
+    def fields(self, gain: float = 1.0) -> dict[str, tuple[int, float, float]]:
+        """Default APID bit field of every parameter, name → (bits, scale, offset).
+
+        The fields of :data:`LOOP_GAINS` span their box times `gain` (scale / gain,
+        offset x gain), with the same number of bits.
+        """
         out = {n: (spec[3], spec[4], spec[5]) for n, spec in _CORE.items()}
         for e in self.effects:
             out.update(EFFECTS[e].fields)
-        return out
+        return _scaled(out, gain, lambda f, g: (f[0], f[1] / g, f[2] * g))
 
     def units(self) -> dict[str, str]:
         out = {n: spec[6] for n, spec in _CORE.items()}
@@ -143,10 +161,11 @@ class PilotModel:
         return PilotModel(self.effects + (effect_id,))
 
     def complete(self, params: Mapping[str, float] | None = None, k: int | None = None, *,
-                 strict: bool = False) -> dict[str, float]:
+                 strict: bool = False, gain: float = 1.0) -> dict[str, float]:
         """All parameters: `params` over the defaults.
 
-        `k` (if given, else ``params["k"]``, else 1) picks the Table 1 column.
+        `k` (if given, else ``params["k"]``, else 1) picks the Table 1 column;
+        `gain` scales the default :data:`LOOP_GAINS` (see :meth:`defaults`).
         Names no model knows are an error; parameters of effects this model
         does not have (Km of :func:`table1` for the original model) are
         dropped, or are an error if `strict`.
@@ -160,7 +179,7 @@ class PilotModel:
                                 f"expected one of {', '.join(names)}")
         params = {n: v for n, v in params.items() if n in names}
         kk = int(round(params.get("k", k if k is not None else 1)))
-        out = self.defaults(kk)
+        out = self.defaults(kk, gain)
         out.update({n: float(v) for n, v in params.items()})
         out["k"] = float(kk)
         bad = [n for n, v in out.items() if not np.isfinite(v)]
@@ -176,6 +195,61 @@ class PilotModel:
         for e in self.effects:
             loop = EFFECTS[e].apply(loop, params)
         return loop
+
+
+def _scaled(table: dict, gain: float, how) -> dict:
+    if not (gain > 0 and np.isfinite(gain)):
+        raise HesspipeError(f"gain scale: expected a positive finite number, got {gain!r}")
+    if gain == 1.0:
+        return table
+    return {n: how(v, gain) if n in LOOP_GAINS else v for n, v in table.items()}
+
+
+@functools.lru_cache(maxsize=4)
+def reference_crossover(k: int = 1) -> float:
+    """Crossover (rad/s) of Table 1's original model around ``Yc = 1/s^k``.
+
+    2.886 rad/s for k = 1, the value Table 1 is calibrated for (SPEC.md).
+    """
+    import control as ct
+
+    from .crossover import crossover
+
+    return float(crossover(PilotModel(), table1(k), ct.tf([1.0], [1.0] + [0.0] * k)).frequency_rad_s)
+
+
+def gain_scale(plants, k: int = 1) -> float:
+    """Factor by which a pilot's loop gains (:data:`LOOP_GAINS`) differ from Table 1's on `plants`.
+
+    Table 1 is calibrated for ``Yc = 1/s^k``, where it crosses over at
+    ``wr`` = :func:`reference_crossover` (2.9 rad/s for k = 1). A pilot
+    adapts his gain to the controlled element (McRuer's crossover model), so
+    the factor is the one that puts the crossover of Table 1's original model
+    around `plants` at the same ``wr``: ``g = 1 / |L(j wr)|`` with ``L`` the
+    open loop of Table 1's pilot and the plants' Yc. Exactly 1 for ``1/s^k``;
+    about 0.44 for the paper's analytic roll plant ``2.436/(s + 1.05)`` and
+    2.7 for the JSBSim 737's ARX plant (normalised aileron command).
+
+    Parameters
+    ----------
+    plants : Plants or control.TransferFunction
+        The plants (only Yc, control → output, is used).
+    k : int
+        Table 1 column (1: rate-like, 2: acceleration-like controlled element).
+
+    Returns
+    -------
+    float
+        Positive factor multiplying Ke, Km, Ko defaults, boxes and bit fields.
+    """
+    wr = reference_crossover(k)
+    yc = from_tf(getattr(plants, "control_to_output", plants))
+    s = np.array([1j * wr])
+    mag = float(np.abs(PilotModel().loop(table1(k)).pilot_open_loop(s, yc.response(s))[0]))
+    if not (mag > 0 and np.isfinite(mag)):
+        raise HesspipeError(f"plants: control_to_output has gain {mag:g} at the reference crossover "
+                            f"{wr:.3g} rad/s; expected a finite non-zero gain")
+    return 1.0 / mag
 
 
 def core_loop(p: Mapping[str, float]) -> Loop:

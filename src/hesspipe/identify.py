@@ -29,7 +29,7 @@ from scipy.optimize import differential_evolution
 from .apid import ClimbResult, Field, bit_climb
 from .crossover import Crossover, CrossoverLimits, loop_crossover
 from .errors import HesspipeError
-from .hess import STRUCTURAL, UNSTABLE_FITNESS, PilotModel, Simulator, model_from_name
+from .hess import STRUCTURAL, UNSTABLE_FITNESS, PilotModel, Simulator, gain_scale, model_from_name
 from .mcruer import bounded_powell
 
 STABLE_CAP = UNSTABLE_FITNESS / 10
@@ -189,6 +189,7 @@ class Identification:
     benchmark_parameters: dict = field(default_factory=dict)
     fields: dict = field(default_factory=dict)
     climb: ClimbResult | None = field(default=None, repr=False)
+    gain_scale: float = 1.0
 
     def to_dict(self, spectra: bool = True) -> dict:
         out = {
@@ -203,6 +204,7 @@ class Identification:
             "passes": self.passes, "band_hz": list(self.band), "psd_method": self.psd_method,
             "stable": self.stable,
             "fields": {n: {"bits": b, "scale": s, "offset": o} for n, (b, s, o) in self.fields.items()},
+            "gain_scale": self.gain_scale,
         }
         if self.climb is not None:
             out["passes_run"] = self.climb.passes
@@ -220,7 +222,17 @@ def _as_field(name, spec) -> Field:
     return Field(name, int(bits), float(scale), float(offset))
 
 
-def _resolve(model, free, fixed, k, fields):
+def default_fields(model, plants, k: int = 1) -> dict[str, tuple[int, float, float]]:
+    """APID bit fields of `model` around `plants`, name → (bits, scale, offset).
+
+    Table 1's fields with the loop gains' (Ke, Km, Ko) spans scaled by
+    :func:`hesspipe.hess.gain_scale` of the plants, so that the search box
+    holds the gain a pilot adapted to these plants would use.
+    """
+    return model_from_name(model).fields(gain_scale(plants, k))
+
+
+def _resolve(model, free, fixed, k, fields, plants):
     names = model.parameter_names()
     fixed = dict(fixed or {})
     for n, v in fixed.items():
@@ -244,9 +256,11 @@ def _resolve(model, free, fixed, k, fields):
                                 f"identified; fix it instead (--fix {n}=2)")
     if len(set(free)) != len(free):
         raise HesspipeError(f"--free: a parameter is listed twice in {','.join(free)}")
-    base = model.complete(fixed, k, strict=True)
-    bounds = model.bounds()
-    defaults = model.fields()
+    # Default gains, boxes and fields follow the plants' gain (see hesspipe.hess.gain_scale).
+    gain = gain_scale(plants, k)
+    base = model.complete(fixed, k, strict=True, gain=gain)
+    bounds = model.bounds(gain)
+    defaults = model.fields(gain)
     fields = dict(fields or {})
     for n in fields:
         if n not in free:
@@ -257,7 +271,7 @@ def _resolve(model, free, fixed, k, fields):
         f = _as_field(n, fields.get(n, defaults[n]))
         f.check_within(*bounds[n])
         out.append(f)
-    return base, free, fixed, out
+    return base, free, fixed, out, gain
 
 
 _BENCHMARK_CACHE: dict = {}
@@ -328,7 +342,8 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         Parameters to identify (default: Ke, K1, K2 and the effects' parameters,
         less any fixed). Empty: no search, the fixed/default values are evaluated.
     fixed : mapping, optional
-        Parameters held at given values (others not free: Table 1 defaults).
+        Parameters held at given values (others not free: Table 1 defaults, the
+        loop gains Ke, Km, Ko scaled by :func:`hesspipe.hess.gain_scale` of `plants`).
     seed : int
         APID's random chromosome and bit orders; differential evolution's seed;
         the remnant noise seed.
@@ -342,7 +357,8 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         Table 1 column (1: plant ~ K/s, 2: ~ K/s^2) unless ``fixed["k"]``.
     fields : mapping, optional
         APID bit fields name → Field or (bits, scale, offset); must lie in the
-        parameter's bounds.
+        parameter's bounds. Default :func:`default_fields` (Table 1's, the loop
+        gains' spans scaled to the plants).
     with_benchmark, with_identifiability : bool
         Compute the McRuer benchmark score / the identifiability analysis.
     restarts : int
@@ -366,7 +382,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     if len(run) < nper:
         raise HesspipeError(f"{where}: {len(run)} samples is shorter than one spectral segment "
                             f"({nper} samples); expected a longer record")
-    base, free, fixed, flds = _resolve(model, free, fixed, k, fields)
+    base, free, fixed, flds, gain = _resolve(model, free, fixed, k, fields, plants)
     obj = SpectralObjective(run, plants, model, base, band=band, psd_method=psd_method,
                             noise_seed=seed)
     climb = None
@@ -409,7 +425,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         freq_hz=obj.freq_hz, optimizer=optimizer, seed=seed, passes=passes,
         band=obj.band, psd_method=psd_method, run_id=run.id, restarts=int(restarts), coding=coding, synthetic=run.synthetic, stable=stable,
         benchmark_parameters=bench_par, fields={f.name: (f.bits, f.scale, f.offset) for f in flds},
-        climb=climb)
+        climb=climb, gain_scale=gain)
 
 
 def identifiability(objective: SpectralObjective, values: Mapping[str, float],
