@@ -119,7 +119,11 @@ def test_free_fixed_and_expanded_defaults(data):
     # Everything fixed: the given parameters are evaluated, no search.
     ev = identify(run, pl, "original", fixed={"Ke": 12.0, "K1": 3.0, "K2": 1.5},
                   with_benchmark=False)
-    assert ev.optimizer == "none" and ev.evaluations == 1 and ev.fitness < 1e-9
+    assert ev.optimizer == "none" and ev.evaluations == 1
+    # Data and evaluation are the same model; they differ only in the FFT padding (the data
+    # are simulated causally to e^-7, the evaluation on a grid sized for the plants).
+    scale = float(np.sqrt(np.mean(ev.measured_psd ** 2)))
+    assert ev.fitness < 1e-6 * scale
 
 
 def test_unstable_sets_get_worst_finite_fitness(data):

@@ -19,7 +19,8 @@ from hesspipe.compare import CompareSettings, compare_run
 from hesspipe.crossover import crossover
 from hesspipe.errors import HesspipeError
 from hesspipe.formats import Plants
-from hesspipe.hess import LOOP_GAINS, PilotModel, Simulator, gain_scale, reference_crossover, table1
+from hesspipe.hess import (LOOP_GAINS, PilotModel, Simulator, gain_scale, reference_crossover, simulate,
+                           table1)
 from hesspipe.identify import default_fields, identify
 
 SHORT = CohortSpec(duration_s=24.0)  # 1200 samples: one spectral segment and a bit
@@ -131,8 +132,9 @@ def test_remnant_is_the_drawn_share_of_control_variance(name):
     assert SHARE_RANGE[0] <= share <= SHARE_RANGE[1]
     assert truth["gain_scale"] == pytest.approx(gain_scale(plants))
     model = PilotModel(tuple(truth["effects"]))
-    sim = Simulator(plants, run.disturbance, run.dt, noise_seed=truth["seeds"]["remnant"])
-    u0 = sim.control(model.loop({**truth["parameters"], "Kn": 0.0}))
+    # The noise-free control of the same (causal) simulation synthetic runs are made by.
+    u0 = simulate(model, {**truth["parameters"], "Kn": 0.0}, plants, run.disturbance, run.dt,
+                  seed=truth["seeds"]["remnant"]).control
     remnant = run.control - u0
     assert np.var(remnant) / (np.var(u0) + np.var(remnant)) == pytest.approx(share, rel=1e-6)
 

@@ -690,18 +690,13 @@ class PilotsConfig:
     def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
         f = Fields(table, source, prefix)
         d = cls()
-        effects = f._get("effects", list(d.effects))
-        if not isinstance(effects, (list, tuple)) or not all(isinstance(e, str) for e in effects):
-            raise f.error("effects", "a list of effect ids", effects)
-        _check_effects(tuple(effects), f"{source}: field '{prefix}.effects'")
-        seed = f._get("seed", None)
-        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
-            raise f.error("seed", "an integer >= 0", seed)
+        effects = f.strings("effects", d.effects)
+        _check_effects(effects, f"{source}: field '{prefix}.effects'")
+        seed = f.integer("seed", None, min=0)
         band = f.numbers("band_hz", list(d.band_hz), length=2)
         if not 0 <= band[0] < band[1]:
             raise f.error("band_hz", "[low, high] Hz with 0 <= low < high", list(band))
-        km = f._get("km_fixed", None)
-        km = None if km is None else f.number("km_fixed", min=0.0)
+        km = f.number("km_fixed", None, min=0.0)
         cfg = cls(data=f.string("data", d.data), n=f.integer("n", d.n, min=1),
                   seed=seed, effects=tuple(effects),
                   duration_s=f.number("duration_s", d.duration_s, min=0.0, strict_min=True),

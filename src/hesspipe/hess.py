@@ -28,6 +28,8 @@ import functools
 from dataclasses import dataclass, replace
 from typing import Mapping
 
+import math
+
 import numpy as np
 import scipy.fft as sfft
 
@@ -311,6 +313,29 @@ class Simulation:
     stable: bool = True
 
 
+def plant_pad_factor(plants, duration_s: float, *, decays: float = 5.0, cap: int = 16) -> int:
+    """FFT padding (multiples of the record) that lets the slowest loop dynamics decay.
+
+    The slowest pole or zero of Yc and Yd (zeros too: a high-gain loop puts a
+    closed-loop mode next to a slow zero) or the pilot's proprioceptive washout
+    (1/T1 = 0.01 rad/s in Table 1) sets the longest tail; the grid is made long
+    enough for `decays` of its time constants, at least 4 and at most `cap`
+    records. Identification uses it: an evaluation on a grid whose tail wraps
+    onto the record mis-states the lowest PSD bins and biases the gains.
+    """
+    rates = []
+    for sys in (plants.control_to_output, plants.disturbance_to_output):
+        for poly in (np.squeeze(sys.num[0][0]), np.squeeze(sys.den[0][0])):
+            poly = np.trim_zeros(np.atleast_1d(poly).astype(float), "f")
+            if poly.size > 1:
+                roots = np.abs(np.roots(poly))
+                rates += [r for r in roots if r > 1e-9]
+    # The pilot's own slowest dynamics (Table 1's proprioceptive washout 1/T1) too.
+    rates.append(table1(1)["1/T1"])
+    tail = decays / min(rates)
+    return int(min(cap, max(4, np.ceil(1 + tail / duration_s))))
+
+
 class Simulator:
     """Closed-loop simulation prepared for one record: call it with many loops.
 
@@ -331,14 +356,17 @@ class Simulator:
         r (default 0).
     noise_seed : int
         Seed of the unit-variance white sequence that remnant shapes.
-    pad_factor : int
-        The record is zero-padded to this many times its length: the
-        response beyond it wraps around (4: tails longer than three record
-        lengths, slower than any mode that matters in a 0-5 Hz spectrum).
+    pad_factor : int, optional
+        The record is zero-padded to this many times its length; the
+        response beyond it wraps around onto the record's start. Default:
+        :func:`plant_pad_factor` — at least 4, more when the plants hold
+        modes or zeros slow enough that a closed loop tail would outlast
+        the padding (a pilot's high gain pulls a closed-loop mode onto a
+        slow plant zero).
     """
 
     def __init__(self, plants, disturbance, dt: float, *, reference=None, noise_seed: int = 0,
-                 pad_factor: int = 4):
+                 pad_factor: int | None = None):
         w = np.asarray(disturbance, dtype=float)
         if w.ndim != 1 or w.size < 2:
             raise HesspipeError("disturbance: expected a 1-D signal of at least 2 samples")
@@ -346,6 +374,8 @@ class Simulator:
             raise HesspipeError(f"dt: expected a positive sample interval, got {dt!r}")
         self.n = w.size
         self.dt = float(dt)
+        if pad_factor is None:
+            pad_factor = plant_pad_factor(plants, self.n * self.dt)
         self.nfft = sfft.next_fast_len(max(int(pad_factor), 2) * self.n, real=True)
         omega = 2.0 * np.pi * np.fft.rfftfreq(self.nfft, self.dt)
         # The DC point is evaluated just above zero so that integrating plants
@@ -515,9 +545,32 @@ def simulate(model, params: Mapping[str, float] | None, plants, disturbance, dt:
     """
     model = model_from_name(model)
     p = model.complete(params, k)
+    loop = model.loop(p)
     sim = Simulator(plants, disturbance, dt, reference=reference,
                     noise_seed=0 if seed is None else int(seed))
-    return sim.run(model.loop(p))
+    pad = causal_pad_factor(sim, loop)
+    if pad > sim.nfft / sim.n:
+        sim = Simulator(plants, disturbance, dt, reference=reference,
+                        noise_seed=0 if seed is None else int(seed), pad_factor=pad)
+    return sim.run(loop)
+
+
+def causal_pad_factor(sim: Simulator, loop, *, decays: float = 7.0, max_samples: int = 1 << 21) -> int:
+    """Zero-padding factor that makes one FFT simulation of `loop` causal to ``e^-decays``.
+
+    The FFT grid wraps the response around after ``nfft`` samples. A closed loop
+    whose slowest mode outlasts that — a pilot's gain pulls a closed-loop mode
+    next to a slow plant zero, with a time constant of many records — would
+    fold its tail back onto the record's start. A single simulation, synthetic
+    data above all, must be the causal response a time-domain simulator gives,
+    so it pads until that mode has decayed `decays` times (at most
+    `max_samples`). Unstable loops keep the simulator's padding.
+    """
+    rate = sim.growth_rate(loop)
+    if not rate < 0.0:
+        return 4
+    samples = sim.n + decays / (-rate * sim.dt)
+    return int(max(4, math.ceil(min(samples, max_samples) / sim.n)))
 
 
 def synthetic_run(model, params: Mapping[str, float] | None, plants, disturbance, dt: float, *,
