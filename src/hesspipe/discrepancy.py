@@ -19,8 +19,10 @@ Steps
 3. **Decide.** Each candidate is scored against the current model with a likelihood-
    ratio test on log-spectral residuals (see *The criterion*). The best candidate is
    named only if it is significant after a Bonferroni correction for the number of
-   candidates tried in that round and its BIC improves; it is added and the round
-   repeats until nothing significant is left.
+   candidates tried in that round, its BIC improves and it is not vetoed: its Eq. 10
+   gap may not rise (see *Two measures*), and an aircraft-side effect (dutch_roll) needs
+   a failed plant check (plants that reproduce the output leave no room for a missing
+   aircraft mode). It is added and the round repeats until nothing significant is left.
 4. **Report.** Gap (SPEC.md Eq. 10 fitness) before and after, the bands that closed.
 
 The criterion
@@ -29,23 +31,41 @@ Fits and scores use the same residual: ``r_k = ln P_model(f_k) - ln P_measured(f
 over the paper-Welch bins of the band (DC excluded). ``P_model`` is the PSD of the
 model's deterministic response to the measured disturbance plus the *expected* PSD of
 its remnant through the closed loop (exact, not a random draw, so fits do not depend on
-a noise realization). Log residuals are used because the linear Eq. 10 fitness is
-dominated by the few bins around the PSD peak and is blind to the low-power bands where
-a remnant, an extra delay or a Dutch-roll pair show. Welch bins are not independent (the
-Hamming window correlates neighbours), so the residuals count as
-``n_eff = n_bins / ENBW`` observations (ENBW: equivalent noise bandwidth of the window,
-1.36 bins). With Gaussian residuals of unknown variance, the likelihood-ratio statistic
+a noise realization). "Expected" means the expectation of the paper-Welch estimate: the
+remnant's density folded through the Hamming window's kernel (:func:`welch_kernel`),
+not the density at the bin's centre — a closed loop around a plant with a small static
+gain passes slow noise almost unopposed, a spike at DC far narrower than a bin, and its
+point value once made every remnant model's Eq. 10 gap (which includes DC) explode.
+
+Log residuals are used because the linear Eq. 10 fitness is dominated by the few bins
+around the PSD peak and is blind to the low-power bands where a remnant, an extra delay
+or a Dutch-roll pair show. Welch bins are not independent (the Hamming window correlates
+neighbours), so the residuals count as ``n_eff = n_bins / ENBW`` observations (ENBW:
+equivalent noise bandwidth of the window, 1.36 bins).
+
+The residuals are Gaussian with bin variances ``s2 + a_k`` (``weighting =
+"random-share"``, :meth:`_Problem.random_variance`): ``a_k = psi'(nu/2)(1 - rho_k^2)``
+is the chance scatter of a Welch log-estimate whose share ``1 - rho_k`` of power is
+random (the model's remnant; its deterministic part is driven by the measured
+disturbance, the data's own realization, and does not scatter against them), and
+``s2`` is a common model-error variance, estimated by maximum likelihood for each
+parameter set. The log of a chance estimate is biased low (``psi(nu/2) - ln(nu/2)``,
+scaled like ``a_k``); the model's log PSD carries the same bias. Treating every bin alike (``weighting = "uniform"``, ``a = 0``) lets the
+Welch scatter of the remnant-dominated bins drown a pilot effect that shows, free of
+chance, in the bins the pilot's response dominates: with a remnant of a fifth of the
+control power, motion feedback was then never named. The likelihood-ratio statistic
 between the current model and the model with one more effect is
-``Lambda = n_eff ln(V0 / V1)``, chi-square with ``dof`` = number of added parameters
-under the null. Robustness to chance and to over-fitting:
+``Lambda = (NLL_0 - NLL_1) / ENBW`` (``NLL``: -2 log-likelihood over the bins; with
+``a = 0`` it is ``n_eff ln((V0 + res) / (V1 + res))``, ``res`` below), chi-square with ``dof`` = number of added
+parameters under the null. Robustness to chance and to over-fitting:
 
 * The best of ``m`` candidates of a round is named only if ``p < alpha / m``
   (Bonferroni: the best of m tries is a multiple comparison) and
   ``delta_BIC = Lambda - dof ln(n_eff) > 0``, which pays for every added parameter.
   delta_BIC is the reported score.
-* ``V`` is floored at ``(resolution_db / 4.34)^2`` (0.1 dB RMS by default): a model
-  that matches the data to better than that leaves only optimizer round-off, and a
-  ratio of two round-off residuals must not count as evidence.
+* Each squared residual counts as ``e^2 + (resolution_db / 4.34)^2`` (0.1 dB RMS by
+  default): a model that matches the data to better than that leaves only optimizer
+  round-off, and a ratio of two round-off residuals must not count as evidence.
 * The augmented fit starts from the effect switched off, so it is never worse than the
   model it extends (nested models, ``Lambda >= 0``), and from a grid over the effect's
   parameters jointly with the pilot gains, so a real effect is not missed for a bad
@@ -54,6 +74,23 @@ under the null. Robustness to chance and to over-fitting:
 * Both PSDs are floored at ``dynamic_range_db`` (40 dB) below the band's measured peak
   before the logs: a Hamming window's leakage (-43 dB sidelobes) bounds what a Welch
   estimate resolves, and deeper bins would otherwise dominate the log residual.
+
+Two measures
+------------
+The reported gap is the paper's Eq. 10 fitness (linear PSD difference, RMS over the
+band's bins, DC included); it is dominated by the bins around the PSD peak. The
+selection criterion is log-spectral (above). The two can disagree: an effect can fix the
+shape of the spectrum in the low-power bands while moving power away from the peak. A
+candidate is therefore named only if, besides being significant on the log scale, its
+Eq. 10 gap is no larger than that of the model it extends (``Step.gap_ok``): the named
+effect must explain the data better on both the shape and the power level, so an
+accepted effect never worsens the reported gap, and ``gap_after <= gap_before`` holds by
+construction. The guard costs no fit; a single objective mixing both was not used
+because the Welch scatter of linear PSDs is proportional to their level (Eq. 10 has no
+calibrated likelihood), so the significance test could not be kept. Both measures are
+reported for every candidate (``gap``, ``log_rms_db``). (The disagreement that made
+this guard necessary on the JSBSim 737 data was mostly the DC point value of the
+remnant's PSD, fixed above; the guard makes the property hold whatever its cause.)
 
 A likelihood-ratio test was preferred over cross-validation across record segments
 because a 70 s record holds only three to four 1024-sample Welch segments: halving it
@@ -99,6 +136,15 @@ CORE_FREE = ("Ke", "K1")
 
 _DB = 10.0 / math.log(10.0)
 _UNSTABLE_RESIDUAL = 25.0  # ln-units per bin for an unstable parameter set (e^25 mismatch)
+#: Welch bins of the density beyond the highest reported frequency folded into the
+#: expected remnant PSD (Hamming sidelobes 32 bins out are below -60 dB).
+_KERNEL_MARGIN = 32
+#: Slowest remnant (s) for which the widened Kn box (:meth:`_Problem.bounds`) still lets
+#: the remnant carry twice the measured control's RMS.
+_REMNANT_TN_REF = 2.0
+#: Frequency (Hz) below which the expected remnant PSD samples the density on the
+#: simulator's fine grid (:meth:`_Problem.remnant_psd`).
+_FINE_HZ = 1.0
 
 
 # -- configuration --------------------------------------------------------------------------
@@ -143,6 +189,10 @@ class DiagnoseConfig:
         (the Hamming window's leakage, -43 dB sidelobes, limits what a Welch estimate
         resolves); it also sets how weak a broadband noise floor may be and still be
         named a remnant.
+    weighting : {"random-share", "uniform"}
+        Variance model of the log-spectral residual: "random-share" (default) gives each
+        bin the Welch scatter of the model's random (remnant) share of it on top of a
+        common model-error variance; "uniform" the common variance alone.
     k : int
         Controlled-element order of the Hess model (1 rate, 2 attitude).
     """
@@ -161,6 +211,7 @@ class DiagnoseConfig:
     min_plant_fit: float = -100.0
     resolution_db: float = 0.1
     dynamic_range_db: float = 40.0
+    weighting: str = "random-share"
     k: int = 1
 
     @classmethod
@@ -192,6 +243,7 @@ class DiagnoseConfig:
                   min_plant_fit=f.number("min_plant_fit", d.min_plant_fit),
                   resolution_db=f.number("resolution_db", d.resolution_db, min=0.0, strict_min=True),
                   dynamic_range_db=f.number("dynamic_range_db", d.dynamic_range_db, min=10.0, max=200.0),
+                  weighting=f.string("weighting", d.weighting, choices=("random-share", "uniform")),
                   k=f.integer("k", d.k, min=1, max=2))
         f.reject_unknown()
         return cfg
@@ -426,6 +478,7 @@ class _Fit:
     residual: np.ndarray     # ln model PSD - ln measured PSD over the band's bins
     evaluations: int
     stable: bool
+    nll: float = math.inf    # -2 log-likelihood (+ constant) over the band's bins
 
     @property
     def variance(self) -> float:
@@ -446,6 +499,54 @@ def _window_gain(n_samples: int) -> float:
     step = est.nperseg - est.noverlap
     energy = sum(float(np.sum(w2[:max(0, min(est.nperseg, n_samples - i * step))])) for i in range(k))
     return energy / (k * est.nperseg) / est.correction
+
+
+def welch_kernel(n_samples: int, fs: float, freq_hz: np.ndarray, grid_hz: np.ndarray,
+                 *, lattice: int = 1 << 16) -> np.ndarray:
+    """Matrix turning a two-sided PSD on `grid_hz` into the paper-Welch estimate's expectation.
+
+    ``E[P_welch(f_k)] = sum_j G[k, j] S(nu_j)`` for a stationary signal of two-sided
+    density ``S`` (units^2/Hz, even in frequency) sampled on the increasing grid
+    ``grid_hz`` (starting at 0, spacing free to vary): the Riemann sum (each point
+    weighted by half the distance between its neighbours; the point at 0 by its whole
+    cell, which spans both signs) of
+    ``∫ S(nu) K(f_k - nu) dnu / (N fs U)`` over both signs of ``nu``, with ``K`` the
+    squared magnitude of the window's transform averaged over the segments (the last
+    segment's window counts only on its data samples, as in :func:`_window_gain`).
+
+    Why not ``S(f_k)`` times the window gain: a Welch bin averages the density over the
+    window's main lobe (4 bins wide for Hamming), and a closed-loop remnant can have
+    features much narrower than that — e.g. a spike at DC where the plant's static gain
+    is near zero, so the loop does not oppose slow noise. A point value there is what
+    the estimator never sees, and it wrecked the Eq. 10 gap (which includes DC) of every
+    model with a remnant.
+    """
+    from .spectra import PaperWelch
+
+    est = PaperWelch()
+    n = est.nperseg
+    k_seg = est.segments(n_samples)
+    step = n - est.noverlap
+    w = np.asarray(est.window)
+    kern = np.zeros(lattice // 2 + 1)
+    for i in range(k_seg):
+        m = max(0, min(n, n_samples - i * step))
+        kern += np.abs(np.fft.rfft(w[:m], lattice)) ** 2
+    kern /= k_seg
+    lat_f = np.fft.rfftfreq(lattice, 1.0 / fs)
+    f = np.asarray(freq_hz, dtype=float)[:, None]
+    nu = np.asarray(grid_hz, dtype=float)[None, :]
+    edges = np.asarray(grid_hz, dtype=float)
+    d = np.empty_like(edges)
+    d[1:-1] = 0.5 * (edges[2:] - edges[:-2])
+    d[0] = edges[1] - edges[0]
+    d[-1] = edges[-1] - edges[-2]
+
+    def k_at(phi):
+        return np.interp(np.abs(phi), lat_f, kern)
+
+    g = k_at(f - nu) + np.where(nu > 0, k_at(f + nu), 0.0)
+    return g * d / (n * fs * est.correction)
 
 
 class _Problem:
@@ -472,6 +573,7 @@ class _Problem:
         est = PaperWelch()
         self.nu, self.var_floor, self.enbw = welch_statistics(len(run))
         self.n_eff = float(self.mask.sum()) / self.enbw
+        self.log_bias = float(scipy.special.digamma(self.nu / 2.0) - math.log(self.nu / 2.0))
         self.resolution = (cfg.resolution_db / _DB) ** 2
         # A Hamming window's leakage (highest sidelobe -43 dB) bounds what a Welch
         # estimate can resolve below its peak; deeper bins are compared at that level.
@@ -485,6 +587,27 @@ class _Problem:
         f[0] = f[1] * 1e-6
         self.s = 2j * np.pi * f
         self.yc = from_tf(plants.control_to_output).response(self.s)
+        # Expected remnant PSD (see :meth:`remnant_psd`): the density up to `_KERNEL_MARGIN`
+        # bins past the highest reported frequency, folded through the window kernel. It
+        # is sampled every 1/16 Welch bin below `_FINE_HZ`, where the narrow features are
+        # (lightly damped aircraft pairs, slow remnant that the loop barely opposes), every
+        # quarter bin above (closed-loop features there are broad), and geometrically
+        # from 1e-6 Hz up to the first fine point: a plant with a near-zero static gain
+        # leaves a spike at DC narrower than any affordable uniform grid.
+        top = max(float(cfg.band_hz[1]), float(cfg.band_edges_hz[-1]))
+        self.n_kernel = int(np.searchsorted(self.freq, top, side="right"))
+        bin_hz = run.fs / est.nperseg
+        end = min(top + _KERNEL_MARGIN * bin_hz, run.fs / 2)
+        fine = np.arange(bin_hz / 16, min(_FINE_HZ, end), bin_hz / 16)
+        grid = np.concatenate([[0.0], np.geomspace(1e-6, fine[0], 41)[:-1], fine,
+                               np.arange(fine[-1] + bin_hz / 4, end + bin_hz / 8, bin_hz / 4)])
+        self.kernel = welch_kernel(len(run), run.fs, self.freq[:self.n_kernel], grid)
+        g = grid.copy()
+        g[0] = 1e-9   # finite value just above DC (integrating plants)
+        # One evaluation per block serves both: the fine grid, then the bins above it.
+        self.n_fine = g.size
+        self.s_all = np.concatenate([2j * np.pi * g, self.s[self.n_kernel:]])
+        self.yc_all = from_tf(plants.control_to_output).response(self.s_all)
 
     # model pieces -----------------------------------------------------------------------
     def loop(self, model, params):
@@ -503,35 +626,119 @@ class _Problem:
         u = self.sim.control(loop.replace(noise=ZERO))
         return None if u is None or not np.all(np.isfinite(u)) else u
 
-    def remnant_psd(self, loop) -> np.ndarray:
-        """Expected paper-Welch PSD of the remnant's share of the control.
+    def remnant_density(self, loop, s: np.ndarray, yc: np.ndarray) -> np.ndarray:
+        """Two-sided PSD (control units^2/Hz) of the remnant's share of the control at `s`.
 
         The unit-variance white sequence of :class:`hesspipe.hess.Simulator` has a
         two-sided density ``dt``; the closed loop passes it to the control through
         ``noise / (1 + NM PF + NM (visual + vestibular) Yc plant)`` (the loop of
-        :class:`hesspipe.blocks.Loop`); the estimator's expectation multiplies the
-        density by :func:`_window_gain`.
+        :class:`hesspipe.blocks.Loop`); `yc` is Yc's response at `s`.
+        """
+        nm = loop.neuromuscular.response(s)
+        den = 1.0 + nm * loop.proprioceptive.response(s) + nm * (
+            loop.visual.response(s) + loop.vestibular.response(s)) * yc * loop.plant.response(s)
+        return np.abs(loop.noise.response(s) / den) ** 2 * self.run.dt
+
+    def remnant_psd(self, loop) -> np.ndarray:
+        """Expected paper-Welch PSD of the remnant's share of the control.
+
+        Up to the highest reported frequency the density is folded through the window
+        kernel (:func:`welch_kernel`), which is what the estimator's expectation is; above
+        it (outside every fit, score and report) the density at the bin times the
+        window's gain (:func:`_window_gain`) stands in.
         """
         if loop.noise.is_zero:
             return np.zeros_like(self.freq)
-        s = self.s
-        nm = loop.neuromuscular.response(s)
-        den = 1.0 + nm * loop.proprioceptive.response(s) + nm * (
-            loop.visual.response(s) + loop.vestibular.response(s)) * self.yc * loop.plant.response(s)
-        return np.abs(loop.noise.response(s) / den) ** 2 * self.run.dt * self.window_gain
+        dens = self.remnant_density(loop, self.s_all, self.yc_all)
+        return np.concatenate([self.kernel @ dens[:self.n_fine], dens[self.n_fine:] * self.window_gain])
 
-    def residual(self, model, params) -> tuple[np.ndarray, np.ndarray] | None:
-        """(``ln P_model - ln P_measured`` over the band's bins, model PSD on the full
-        grid), None for an unstable loop."""
+    def residual(self, model, params, s2: float | None = None) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """(likelihood residual vector, model PSD on the full grid, s2), None for an
+        unstable loop. The vector's sum of squares is -2 log-likelihood
+        (:meth:`likelihood_vector`, with the model-error variance `s2` given or profiled)."""
         loop = self.loop(model, params)
         u = self.control(model, params, loop)
         if u is None:
             return None
         _, det = _psd(u, self.run.fs)
-        p = det + self.remnant_psd(loop)
-        return _log_residual(self.measured[self.mask], p[self.mask], self.psd_floor), p
+        rem = self.remnant_psd(loop)
+        p = det + rem
+        vec, s2 = self.likelihood_vector(p, rem, s2)
+        return vec, p, s2
+
+    def log_residual(self, psd: np.ndarray) -> np.ndarray:
+        """``ln P_model - ln P_measured`` over the band's bins (floored, see module doc)."""
+        return _log_residual(self.measured[self.mask], psd[self.mask], self.psd_floor)
+
+    def random_variance(self, psd: np.ndarray, remnant: np.ndarray) -> np.ndarray:
+        """Chance variance of each bin's log residual given the model's random share.
+
+        The deterministic part of the model is driven by the measured disturbance: it is
+        the same realization as the data's, and its Welch estimate has no scatter against
+        them. Only the remnant's share is random. With ``rho = deterministic / total``
+        power of a bin, the estimate ``|D + R|^2`` has relative variance
+        ``(2 / nu)(1 - rho^2)`` (the ``|R|^2`` term and the cross term), so the log
+        residual scatters by ``psi'(nu / 2)(1 - rho^2)``: the Welch scatter where the
+        remnant dominates, nothing where it is absent. ``weighting = "uniform"`` gives
+        zero (every bin alike, the model-error variance alone).
+        """
+        if self.cfg.weighting == "uniform":
+            return np.zeros(int(self.mask.sum()))
+        tot = psd[self.mask] + self.psd_floor
+        rho = np.clip((psd[self.mask] - remnant[self.mask] + self.psd_floor) / tot, 0.0, 1.0)
+        return self.var_floor * (1.0 - rho ** 2)
+
+    def likelihood_vector(self, psd: np.ndarray, remnant: np.ndarray,
+                          s2: float | None = None) -> tuple[np.ndarray, float]:
+        """Residual vector of the Gaussian likelihood of the log residuals ``e``.
+
+        Bin variances ``s2 + a_k``: ``a_k`` the chance variance of
+        :meth:`random_variance`, ``s2`` a common model-error variance estimated by
+        maximum likelihood for this parameter set (profiled). Each squared residual
+        counts as ``e_k^2 + resolution`` (``resolution_db``: mismatches below it are
+        round-off, not evidence; a smooth version of a floor). Returned:
+        ``[sqrt(e_k^2 + resolution) / sigma_k, sqrt(ln(sigma_k^2 / resolution))]`` whose sum
+        of squares is ``sum (e^2 + resolution) / sigma^2 + sum ln sigma^2`` + constant, i.e.
+        -2 log-likelihood. With ``a = 0`` it is ``n (1 + ln((mean e^2 + resolution) /
+        resolution))``: the homoscedastic likelihood-ratio test of ``uniform`` weighting.
+
+        A given `s2` is used instead of the profiled one, and ``e_k`` keeps its sign: that
+        is the weighted least-squares form in which Gauss-Newton steps work (a profiled
+        variance normalises the first half of the vector to a constant sum). Every
+        comparison between parameter sets uses the profiled form.
+        Returns the vector and the ``s2`` used.
+        """
+        a = self.random_variance(psd, remnant)
+        # The log of a Welch estimate is biased low by psi(nu/2) - ln(nu/2) where the bin
+        # is all chance, scaled like the variance for a mixed bin (delta method).
+        e = self.log_residual(psd) + self.log_bias * (a / self.var_floor)
+        e2 = e * e + self.resolution
+        given = s2 is not None
+        s2 = s2 if given else _profile_variance(e2, a, self.resolution)
+        var = s2 + a
+        # Least-squares mode keeps the residual's sign (a smooth Gauss-Newton model).
+        first = e / np.sqrt(var) if given else np.sqrt(e2 / var)
+        return np.concatenate([first, np.sqrt(np.log(var / self.resolution))]), s2
 
     # identification --------------------------------------------------------------------
+    def bounds(self, model) -> dict[str, tuple[float, float]]:
+        """Search boxes: the model's, with the remnant gain's widened to the data's level.
+
+        Kn is in control units, so a fixed box cannot suit every control column (a
+        normalised aileron command of 0.03 RMS and a stick of 1 RMS). The upper bound is
+        raised, if needed, to what lets the remnant alone, open loop and as slow as
+        ``Tn = _REMNANT_TN_REF``, carry twice the measured control's RMS
+        (``Kn sqrt(dt / (2 Tn))`` is the RMS of sampled white noise through
+        ``Kn / (Tn s + 1)``): the closed loop only lowers it, so any remnant share of the
+        control up to the whole of it stays inside the box.
+        """
+        out = dict(model.bounds())
+        if "Kn" in out:
+            lo, hi = out["Kn"]
+            need = 2.0 * float(np.std(self.run.control)) * math.sqrt(2.0 * _REMNANT_TN_REF / self.run.dt)
+            out["Kn"] = (lo, max(hi, need))
+        return out
+
     def free_parameters(self, model) -> tuple[str, ...]:
         names = model.parameter_names()
         missing = [p for p in self.cfg.free if p not in names]
@@ -550,17 +757,22 @@ class _Problem:
         than the model it extends.
         """
         names = model.parameter_names()
-        bounds = model.bounds()
+        bounds = self.bounds(model)
         params = {**model.defaults(k=self.cfg.k), **{k: v for k, v in start.items() if k in names}}
         free = self.free_parameters(model)
         scale = _UnitScale([bounds[p] for p in free], [p not in self.cfg.free for p in free])
-        bad = np.full(int(self.mask.sum()), _UNSTABLE_RESIDUAL)
+        bad = np.full(2 * int(self.mask.sum()), _UNSTABLE_RESIDUAL)
         count = [0]
 
-        def residual(values: Mapping[str, float]) -> np.ndarray:
+        def residual(values: Mapping[str, float], s2: float | None = None) -> np.ndarray:
             count[0] += 1
-            out = self.residual(model, {**params, **values})
+            out = self.residual(model, {**params, **values}, s2)
             return bad if out is None else out[0]
+
+        def model_error_variance(values) -> float:
+            """The profiled s2 at `values`: the fixed weights of a least-squares run."""
+            out = self.residual(model, {**params, **values})
+            return self.resolution if out is None else out[2]
 
         best_vals = {p: float(np.clip(params[p], bounds[p][0], bounds[p][1])) for p in free}
         best_r = residual(best_vals)
@@ -602,7 +814,8 @@ class _Problem:
             starts = [best_vals] + [v for _, v in ranked[:self.cfg.starts] if v is not best_vals]
         for start_vals in (starts if free else []):
             u0 = scale.to_unit([start_vals[p] for p in free])
-            sol = scipy.optimize.least_squares(lambda u: residual(dict(zip(free, scale.from_unit(u)))),
+            s2 = model_error_variance(start_vals)
+            sol = scipy.optimize.least_squares(lambda u: residual(dict(zip(free, scale.from_unit(u))), s2),
                                                u0, bounds=(0.0, 1.0), diff_step=1e-2,
                                                max_nfev=self.cfg.max_evaluations, method="trf")
             consider(dict(zip(free, scale.from_unit(sol.x))))
@@ -610,8 +823,9 @@ class _Problem:
         out = self.residual(model, final)
         p = None if out is None else out[1]
         if p is None:
-            return _Fit(model, final, free, np.full_like(self.measured, np.nan), bad, count[0] + 1, False)
-        return _Fit(model, final, free, p, best_r, count[0] + 1, True)
+            nan = np.full_like(self.measured, np.nan)
+            return _Fit(model, final, free, nan, bad[:bad.size // 2], count[0] + 1, False, math.inf)
+        return _Fit(model, final, free, p, self.log_residual(p), count[0] + 1, True, float(best_r @ best_r))
 
     # scoring and reporting ---------------------------------------------------------------
     def variance(self, fit: _Fit) -> float:
@@ -634,6 +848,23 @@ class _Problem:
 #: Parameter values that switch an effect off (the augmented model then equals the
 #: model it extends). Effects not listed start from their defaults only.
 _NULL = {"Km": 0.0, "Ko": 0.0, "tau_x": 0.0, "Kn": 0.0, "r_dr": 1.0}
+
+
+def _profile_variance(e2: np.ndarray, a: np.ndarray, floor: float, iterations: int = 30) -> float:
+    """Maximum-likelihood common variance ``s2 >= floor`` of residuals with squares `e2`
+    whose bins have extra known variances `a` (``e_k ~ N(0, s2 + a_k)``): fixed-point
+    iteration of the score equation ``sum (e^2 - s2 - a) / (s2 + a)^2 = 0``; exact
+    (``mean e^2``) when every ``a`` is zero."""
+    if not np.any(a > 0):
+        return max(float(np.mean(e2)), floor)
+    s2 = max(float(np.mean(e2 - a)), floor)
+    for _ in range(iterations):
+        w = 1.0 / (s2 + a) ** 2
+        new = max(float(np.sum(w * (e2 - a)) / np.sum(w)), floor)
+        if abs(new - s2) <= 1e-9 * s2:
+            break
+        s2 = new
+    return s2
 
 
 def _effect(effect_id: str):
@@ -680,6 +911,10 @@ class Step:
     ``statistic`` is the likelihood-ratio statistic against the model of the round,
     ``dof`` the parameters it adds, ``p_value`` its chance probability, ``delta_bic``
     its BIC improvement (positive = better after paying for parameters) — the score.
+    ``gap`` is the candidate's Eq. 10 fitness and ``gap_ok`` whether it is no larger
+    than the round's current model's (a condition for being named). ``veto`` says why a
+    candidate may not be named whatever its score ("" if it may): its gap rises, or it is
+    an aircraft-side effect while the plant check passes.
     ``status`` is "ok" or "failed" (then ``error`` says why and the scores are NaN).
     """
 
@@ -694,6 +929,8 @@ class Step:
     threshold: float = float("nan")
     delta_bic: float = float("nan")
     gap: float = float("nan")
+    gap_ok: bool = False
+    veto: str = ""
     log_rms_db: float = float("nan")
     parameters: dict = field(default_factory=dict)
     evaluations: int = 0
@@ -793,6 +1030,25 @@ def _check_inputs(run: Run, plants: Plants, cfg: DiagnoseConfig) -> None:
     if hi > run.fs / 2:
         raise HesspipeError(f"{where}: band up to {hi:g} Hz is above the Nyquist frequency "
                             f"{run.fs / 2:g} Hz of the record")
+
+
+def _veto(step: "Step", gap_now: float, check: PlantCheck) -> str:
+    """Why `step`'s candidate may not be named whatever its score ("" if it may).
+
+    * Its Eq. 10 gap is larger than the current model's (module docstring, *Two
+      measures*).
+    * It changes the aircraft (``where == "aircraft"``, e.g. dutch_roll) while the plant
+      check passes: the plants then reproduce the measured output from the measured
+      control and disturbance with a residual independent of both, which an aircraft
+      mode missing from them would not allow (the check fails on such data). The
+      control spectrum alone cannot always tell a lightly damped aircraft pair from a
+      pilot effect of similar shape; the output can.
+    """
+    if not step.gap <= gap_now:
+        return "gap rises"
+    if _effect(step.candidate).where == "aircraft" and check.passes:
+        return "aircraft effect, but the plant check passes"
+    return ""
 
 
 def _control_error_tests(problem: _Problem, fit: _Fit) -> dict | None:
@@ -901,7 +1157,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
                                    error=f"{type(exc).__name__}: {exc}".splitlines()[0]), None))
                 continue
             dof = len(fit.free) - len(current.free)
-            stat = problem.n_eff * math.log(problem.variance(current) / problem.variance(fit))
+            stat = (current.nll - fit.nll) / problem.enbw
             tried.append((Step(round=rnd, candidate=cand, model=aug.name, status="ok", statistic=stat,
                                dof=dof, p_value=float(scipy.stats.chi2.sf(stat, max(dof, 1))),
                                delta_bic=stat - dof * math.log(problem.n_eff), gap=problem.gap(fit.psd),
@@ -909,10 +1165,16 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
                                evaluations=fit.evaluations), fit))
         ok = [(s, f) for s, f in tried if s.status == "ok"]
         threshold = cfg.alpha / max(len(ok), 1)
-        tried = [(replace(s, threshold=threshold) if s.status == "ok" else s, f) for s, f in tried]
-        ok = [(s, f) for s, f in tried if s.status == "ok"]
-        best = min(ok, key=lambda sf: (sf[0].p_value, -sf[0].delta_bic)) if ok else None
-        accept = best is not None and best[0].p_value < threshold and best[0].delta_bic > 0
+        # The Eq. 10 gap a candidate may not exceed: the current model's (see the module
+        # docstring, "Two measures").
+        gap_now = problem.gap(current.psd)
+        tried = [(replace(s, threshold=threshold, gap_ok=bool(s.gap <= gap_now),
+                          veto=_veto(s, gap_now, check)) if s.status == "ok" else s, f)
+                 for s, f in tried]
+        eligible = [(s, f) for s, f in tried
+                    if s.status == "ok" and s.p_value < threshold and s.delta_bic > 0 and not s.veto]
+        best = min(eligible, key=lambda sf: (sf[0].p_value, -sf[0].delta_bic)) if eligible else None
+        accept = best is not None
         for s, f in tried:
             steps.append(replace(s, accepted=bool(accept and s is best[0])))
         if not accept:
@@ -934,6 +1196,9 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         control_error_after=_control_error_tests(problem, current),
         criterion={"name": "likelihood-ratio test on log-spectral residuals over Welch bins "
                            "(Bonferroni per round), delta BIC as the score",
+                   "weighting": cfg.weighting,
+                   "vetoes": ["the Eq. 10 gap may not rise",
+                              "aircraft-side effects need a failed plant check"],
                    "alpha": cfg.alpha, "n_bins": int(problem.mask.sum()), "n_eff": problem.n_eff,
                    "enbw_bins": problem.enbw, "welch_dof": problem.nu, "resolution_db": cfg.resolution_db,
                    "scatter_db": _DB * math.sqrt(scatter),
@@ -973,14 +1238,16 @@ def format_report(d: Diagnosis) -> str:
     for b in d.bands_before:
         verdict = f"DISAGREES: {b.direction}" if b.disagrees else "agrees within chance"
         out.append(f"  {b.lo_hz:5.2f}-{b.hi_hz:<5.2f} {b.level_db:9.1f} {b.rms_db:7.1f} {b.share:6.0%}  {verdict}")
-    out.append(f"Candidates (score = delta BIC; named if p < alpha/m and delta BIC > 0, alpha={d.config.alpha:g}):")
+    out.append(f"Candidates (score = delta BIC; named if p < alpha/m, delta BIC > 0 and not vetoed: "
+               f"Eq. 10 gap must not rise, aircraft effects need a failed plant check; "
+               f"alpha={d.config.alpha:g}):")
     for s in d.steps:
         if s.status != "ok":
             out.append(f"  round {s.round}: {s.candidate:<16} FAILED ({s.error})")
             continue
         out.append(f"  round {s.round}: {s.candidate:<16} LR={s.statistic:8.1f} dof={s.dof} p={s.p_value:9.2e} "
                    f"(needs < {s.threshold:.1e}) dBIC={s.delta_bic:8.1f} gap={s.gap:.3g}"
-                   f"{'  <- NAMED' if s.accepted else ''}")
+                   f"{f' [{s.veto}]' if s.veto else ''}{'  <- NAMED' if s.accepted else ''}")
     if d.named_effects:
         out.append("Named: " + ", ".join(d.named_effects) + " (in the order added)")
         for eff in d.named_effects:
@@ -1039,26 +1306,46 @@ def validation_disturbance(n: int, dt: float, *, seed: int, rms: float = 5.0,
     return rms * w / np.std(w)
 
 
-def hidden_effect_run(plants: Plants, effect: str | None = None, *, seed: int,
+def hidden_effect_run(plants: Plants, effect: str | Sequence[str] | None = None, *, seed: int,
                       parameters: Mapping[str, float] | None = None, noise: float = 0.0,
-                      control_noise: float = 0.0, duration: float = 70.0, dt: float = 0.02) -> Run:
-    """A synthetic run from the original model plus one hidden `effect` (None: baseline).
+                      control_noise: float = 0.0, duration: float = 70.0, dt: float = 0.02,
+                      remnant_share: float | None = None) -> Run:
+    """A synthetic run from the original model plus hidden effect(s) (None: baseline).
 
-    `parameters` override the model defaults. `noise` and `control_noise` add white
+    `effect` is one effect id or a sequence of them (several hidden effects at once).
+    `parameters` override the model defaults. `remnant_share` (with the remnant among
+    the effects) sets Kn so that the remnant makes up that share of the control's
+    variance (the loop is linear: control = u0 + Kn u1 for the same noise draw), the
+    level convention of the synthetic cohort. `noise` and `control_noise` add white
     recording noise to the output (roll-rate sensor) and to the control (stick sensor),
     each as a fraction of the signal's RMS; it is outside the loop. White noise on the
     recorded control is, to a control spectrum, broadband control noise, i.e. a remnant
     with Tn = 0: large enough, it is rightly named ``remnant``.
-    The run is labelled synthetic and its comments name the hidden effect.
+    The run is labelled synthetic and its comments name the hidden effects.
     """
     from .hess import PilotModel, synthetic_run
 
-    model = PilotModel() if effect is None else PilotModel().with_effect(effect)
+    effects = () if effect is None else (effect,) if isinstance(effect, str) else tuple(effect)
+    model = PilotModel()
+    for e in effects:
+        model = model.with_effect(e)
+    label = "+".join(effects) or "none"
     params = {**model.defaults(k=1), **dict(parameters or {})}
     n = int(round(duration / dt))
     w = validation_disturbance(n, dt, seed=derive_seed(seed, "wind"))
-    run = synthetic_run(model, params, plants, w, dt, seed=derive_seed(seed, "remnant"),
-                        run_id=f"hidden-{effect or 'none'}-{seed}")
+
+    def simulate(p):
+        return synthetic_run(model, p, plants, w, dt, seed=derive_seed(seed, "remnant"),
+                             run_id=f"hidden-{label}-{seed}")
+
+    if remnant_share is not None:
+        if "remnant" not in effects or not 0.0 < remnant_share < 1.0:
+            raise HesspipeError(f"hidden_effect_run: remnant_share: expected a share in (0, 1) and the "
+                                f"remnant among the effects, got {remnant_share!r} with {label}")
+        u0 = simulate({**params, "Kn": 0.0}).control
+        u1 = simulate({**params, "Kn": 1.0}).control - u0
+        params["Kn"] = math.sqrt(remnant_share / (1.0 - remnant_share) * float(np.var(u0) / np.var(u1)))
+    run = simulate(params)
     rng = np.random.default_rng(derive_seed(seed, "sensor"))
 
     def noisy(x, level):
@@ -1066,5 +1353,5 @@ def hidden_effect_run(plants: Plants, effect: str | None = None, *, seed: int,
 
     run = replace(run, output=noisy(run.output, noise), control=noisy(run.control, control_noise))
     return replace(run, comments=tuple(run.comments) + (
-        f"synthetic hidden-effect run: effect={effect or 'none'} output noise={noise:g} "
+        f"synthetic hidden-effect run: effect={label} output noise={noise:g} "
         f"control noise={control_noise:g} seed={seed}",))
