@@ -619,7 +619,14 @@ def write_comparison(comparison: Comparison, out_dir: str | Path, *, figures: bo
     this in :func:`hesspipe.io.staged_output`.
     """
     out_dir = Path(out_dir)
-    written = [write_json(out_dir / json_name, comparison.to_dict()),
+    record = comparison.to_dict()
+    # Runs made inside out_dir (the pipeline's cohort) are named relative to it: the folder
+    # may be a staging folder that is renamed once the stage succeeds.
+    for entry in record["pilots"] + record["failures"]:
+        src = Path(entry["source"])
+        if src.is_absolute() and src.is_relative_to(out_dir.resolve()):
+            entry["source"] = str(src.relative_to(out_dir.resolve()))
+    written = [write_json(out_dir / json_name, record),
                write_text(out_dir / table_name, "```\n" + comparison.table() + "\n```\n")]
     if figures:
         from .viz.compare import plot_pilot

@@ -162,6 +162,19 @@ def _external_hashes(paths: Sequence) -> dict[str, str]:
     return out
 
 
+def _remove_leftovers(folder: Path) -> None:
+    """Remove staging folders and temporary files a killed run left in `folder`."""
+    import shutil
+
+    if not folder.is_dir():
+        return
+    for path in folder.iterdir():
+        if path.name.startswith(".staging-") and path.is_dir():
+            shutil.rmtree(path, ignore_errors=True)
+        elif path.name.startswith(".") and ".tmp" in path.name and path.is_file():
+            path.unlink(missing_ok=True)
+
+
 def _read_manifest(folder: Path) -> dict | None:
     try:
         return json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
@@ -329,6 +342,7 @@ class Pipeline:
         previous = (_read_manifest(folder) or {}).get("outputs", {})
         # Invalidate first: from here until the new manifest lands the stage is not fresh.
         (folder / MANIFEST).unlink(missing_ok=True)
+        _remove_leftovers(target)
         start = time.perf_counter()
         section = self.config.get(stage.name, {})
         with staged_output(target) as staging:

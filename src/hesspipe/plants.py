@@ -575,9 +575,10 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
     fits = {ch.key: identify_channel(records[ch.key], ch, config, prepared[ch.key]) for ch in CHANNELS}
     synthetic = any(f.synthetic for f in fits.values())
     inputs = {ch.file: file_hash(flight_dir / ch.file) for ch in CHANNELS}
-    for extra in ("trim.json", "manifest.json"):
-        if (flight_dir / extra).is_file():
-            inputs[extra] = file_hash(flight_dir / extra)
+    # Data files only: a manifest holds wall times, and hashing it would make these
+    # outputs differ between two runs on the same records.
+    if (flight_dir / "trim.json").is_file():
+        inputs["trim.json"] = file_hash(flight_dir / "trim.json")
     frac = config.validation_fraction
     report = {
         "stage": "plants", "synthetic": synthetic,

@@ -50,6 +50,22 @@ def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
     return config, source
 
 
+def validate(config: dict, source: str) -> None:
+    """Check every stage's table before anything runs, so a typo in the last stage's
+    table fails in a second, not after the first stages have run."""
+    from .compare import PilotsConfig
+    from .discrepancy import DiagnoseConfig
+    from .flight import FlightConfig
+    from .plants import AnalyticConfig, PlantsConfig
+
+    FlightConfig.from_table(_split(config.get("flight", {}), "aircraft")[0], source)
+    PlantsConfig.from_table(config.get("plants", {}), source)
+    AnalyticConfig.from_table(config.get("analytic", {}), source)
+    PilotsConfig.from_table(config.get("pilots", {}), source)
+    DiagnoseConfig.from_table(_split(config.get("diagnose", {}), "run", "model")[0], source)
+    Fields(config.get("report", {}), source, "report").reject_unknown()
+
+
 def build_pipeline(config_path=None, out="hesspipe-out", *, aircraft=None, seed=None) -> Pipeline:
     """The pipeline of ``pipeline/stages.toml`` on the given configuration."""
     config, source = load_config(config_path, aircraft=aircraft, seed=seed)
@@ -163,6 +179,7 @@ def report(ctx) -> None:
     from .io import write_text
     from .report import build_report
 
+    Fields(ctx.section, ctx.source, "report").reject_unknown()  # nothing to configure yet
     root = ctx.out_dir.parent
     text = build_report(ctx.upstream, root, config_file=ctx.source, seed=ctx.seed)
     write_text(ctx.out_dir / "report.md", text)

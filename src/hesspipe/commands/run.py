@@ -21,9 +21,10 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
-    from ..stages import build_pipeline
+    from ..stages import build_pipeline, validate
 
     pipe = build_pipeline(args.config, args.out, aircraft=args.aircraft, seed=args.seed)
+    validate(pipe.config, pipe.source)
     say = (lambda line: print(f"[hesspipe] {line}", file=sys.stderr))
     outcomes = pipe.run(force=args.force, from_stage=args.from_stage, progress=say)
     ran = [o.name for o in outcomes if o.action == "ran"]

@@ -1,0 +1,58 @@
+"""pipeline/default.toml says what the code does: each table equals the code's defaults.
+
+The file is what users copy and edit, so it must list the real defaults; these
+tests fail when a default changes in one place and not the other.
+"""
+
+import pytest
+
+from hesspipe.config import data_dir, load_toml
+from hesspipe.stages import SECTIONS, load_config
+
+DEFAULT = data_dir("pipeline") / "default.toml"
+
+
+@pytest.fixture(scope="module")
+def table():
+    return load_toml(DEFAULT)
+
+
+def test_every_section_is_present(table):
+    assert set(SECTIONS) - {"report"} <= set(table)
+
+
+def test_flight(table):
+    from hesspipe.flight import FlightConfig
+
+    section = {k: v for k, v in table["flight"].items() if k != "aircraft"}
+    assert FlightConfig.from_table(section, DEFAULT) == FlightConfig.from_table({}, DEFAULT)
+    assert table["flight"]["aircraft"] == "737"
+
+
+def test_plants_and_analytic(table):
+    from hesspipe.plants import AnalyticConfig, PlantsConfig
+
+    assert PlantsConfig.from_table(table["plants"], DEFAULT) == PlantsConfig()
+    assert AnalyticConfig.from_table(table["analytic"], DEFAULT) == AnalyticConfig()
+
+
+def test_pilots(table):
+    from hesspipe.compare import PilotsConfig
+
+    assert PilotsConfig.from_table(table["pilots"], DEFAULT) == PilotsConfig()
+
+
+def test_diagnose(table):
+    from hesspipe.discrepancy import DiagnoseConfig
+
+    section = {k: v for k, v in table["diagnose"].items() if k not in ("run", "model")}
+    assert DiagnoseConfig.from_table(section, DEFAULT) == DiagnoseConfig()
+
+
+def test_user_file_merges_over_defaults(tmp_path):
+    user = tmp_path / "mine.toml"
+    user.write_text('seed = 7\n[pilots]\nn = 3\ndata = "runs"\n')
+    config, source = load_config(user)
+    assert source == str(user) and config["seed"] == 7 and config["pilots"]["n"] == 3
+    assert config["pilots"]["data"] == str(tmp_path / "runs")  # relative to the file
+    assert config["flight"]["aircraft"] == "737"  # untouched defaults stay
