@@ -19,7 +19,7 @@ from hesspipe.compare import CompareSettings, compare_run
 from hesspipe.crossover import crossover
 from hesspipe.errors import HesspipeError
 from hesspipe.formats import Plants
-from hesspipe.hess import (LOOP_GAINS, PilotModel, Simulator, gain_scale, reference_crossover, simulate,
+from hesspipe.hess import (LOOP_GAINS, PilotModel, gain_scale, reference_crossover, simulate,
                            table1)
 from hesspipe.identify import default_fields, identify
 

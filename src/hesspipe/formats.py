@@ -133,49 +133,18 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     """
     path = Path(path)
     mapping = _parse_columns(columns)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise HesspipeError(f"{path}: file not found") from None
-    except IsADirectoryError:
-        raise HesspipeError(f"{path}: is a folder, expected a measured-run CSV") from None
-    except UnicodeDecodeError:
-        raise HesspipeError(f"{path}: not a UTF-8 text file, expected a measured-run CSV") from None
-    comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
-                     if line.lstrip().startswith("#"))
-    try:
-        df = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
-    df.columns = [str(c).strip() for c in df.columns]
-    data = {}
-    for role in RUN_COLUMNS + OPTIONAL_COLUMNS:
-        name = mapping.get(role, role)
-        if name not in df.columns:
-            if role in OPTIONAL_COLUMNS:
-                continue
-            raise HesspipeError(f"{path}: column '{name}' missing (role {role}); found columns: "
-                                f"{', '.join(df.columns)}; map other names with --columns {role}=NAME")
-        values = pd.to_numeric(df[name], errors="coerce").to_numpy(dtype=float)
-        bad = ~np.isfinite(values)
-        if bad.any():
-            row = int(np.argmax(bad))
-            raise HesspipeError(f"{path}: column '{name}': expected finite numbers, got "
-                                f"{df[name].iloc[row]!r} in data row {row + 1}")
-        data[role] = values
+    names = {role: mapping.get(role, role) for role in RUN_COLUMNS + OPTIONAL_COLUMNS}
+    data, comments = read_csv_columns(path, names, optional=OPTIONAL_COLUMNS,
+                                      what="a measured-run CSV", hint="--columns")
     n = len(data["time"])
     if n < max(min_samples, 2):
         raise HesspipeError(f"{path}: {n} samples; expected at least {max(min_samples, 2)}")
     t = data["time"]
-    steps = np.diff(t)
-    if np.any(steps <= 0):
-        row = int(np.argmax(steps <= 0)) + 1
-        raise HesspipeError(f"{path}: column '{mapping.get('time', 'time')}': expected strictly "
-                            f"increasing time, not at data row {row + 1}")
-    dt = float(np.median(steps))
-    if np.max(np.abs(steps - dt)) > rtol * dt + 1e-12:
+    dt, uniform = sample_interval(path, t, names["time"], rtol=rtol)
+    if not uniform:
+        steps = np.diff(t)
         if not resample:
-            raise HesspipeError(f"{path}: column '{mapping.get('time', 'time')}': expected uniform "
+            raise HesspipeError(f"{path}: column '{names['time']}': expected uniform "
                                 f"sampling (interval {dt:g} s), found intervals from {steps.min():g} "
                                 f"to {steps.max():g} s; pass --resample to interpolate")
         grid = t[0] + dt * np.arange(int(math.floor((t[-1] - t[0]) / dt + 1e-9)) + 1)
@@ -185,6 +154,86 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
                control=data["control"], reference=ref, id=path.stem,
                synthetic=any("synthetic" in c.lower() for c in comments),
                comments=comments, source=str(path))
+
+
+def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
+                     what: str = "a CSV", hint: str | None = None) -> tuple[dict, tuple[str, ...]]:
+    """Read numeric columns of a CSV with ``#`` comment lines.
+
+    Parameters
+    ----------
+    path : path
+    names : mapping
+        Role → column name; every role is required unless listed in `optional`.
+    optional : sequence of str
+        Roles that may be missing (left out of the result).
+    what : str
+        What the file should be, for messages ("a measured-run CSV").
+    hint : str, optional
+        Command-line option that maps other column names (named in the message).
+
+    Returns
+    -------
+    data : dict
+        Role → float array (all finite).
+    comments : tuple of str
+        The comment lines, without ``#``.
+
+    Raises
+    ------
+    HesspipeError
+        Naming the file, the column and the problem.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise HesspipeError(f"{path}: file not found; expected {what}") from None
+    except IsADirectoryError:
+        raise HesspipeError(f"{path}: is a folder, expected {what}") from None
+    except UnicodeDecodeError:
+        raise HesspipeError(f"{path}: not a UTF-8 text file, expected {what}") from None
+    comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
+                     if line.lstrip().startswith("#"))
+    try:
+        df = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
+    df.columns = [str(c).strip() for c in df.columns]
+    data = {}
+    for role, name in names.items():
+        if name not in df.columns:
+            if role in optional:
+                continue
+            tail = f"; map other names with {hint} {role}=NAME" if hint else ""
+            label = f" (role {role})" if role != name else ""
+            raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
+                                f"{', '.join(df.columns)}{tail}")
+        values = pd.to_numeric(df[name], errors="coerce").to_numpy(dtype=float)
+        bad = ~np.isfinite(values)
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise HesspipeError(f"{path}: column '{name}': expected finite numbers, got "
+                                f"{df[name].iloc[row]!r} in data row {row + 1}")
+        data[role] = values
+    return data, comments
+
+
+def sample_interval(path, t: np.ndarray, column: str = "time", *, rtol: float = 1e-6) -> tuple[float, bool]:
+    """Median sample interval of `t` and whether it is uniform within `rtol`.
+
+    Raises
+    ------
+    HesspipeError
+        If `t` is not strictly increasing (naming the file, the column and the row).
+    """
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        row = int(np.argmax(steps <= 0)) + 1
+        raise HesspipeError(f"{path}: column '{column}': expected strictly increasing time, "
+                            f"not at data row {row + 1}")
+    dt = float(np.median(steps))
+    return dt, bool(np.max(np.abs(steps - dt)) <= rtol * dt + 1e-12)
 
 
 def write_run(path: str | Path, run: Run, comments: tuple[str, ...] | list[str] = ()) -> Path:

@@ -49,14 +49,12 @@ Steps per channel (all configurable in ``[plants]``, see :class:`PlantsConfig`):
 
 from __future__ import annotations
 
-import io
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Mapping
 
 import control as ct
 import numpy as np
-import pandas as pd
 from scipy import signal
 
 from . import arx as _arx
@@ -65,7 +63,7 @@ from .analytic import (AnalyticPlants, analytic_path, analytic_transfer_function
 from .config import Fields
 from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
 from .errors import HesspipeError
-from .formats import Plants, tf_coefficients, write_plants
+from .formats import Plants, read_csv_columns, sample_interval, tf_coefficients, write_plants
 from .io import staged_output, write_json, write_text
 from .provenance import file_hash, versions
 
@@ -219,40 +217,14 @@ def read_record(path: str | Path, input_column: str, output_column: str, *,
         strictly increasing and uniform (within `rtol` of the median step).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise HesspipeError(f"{path}: file not found; expected a stage-one flight record") from None
-    except (IsADirectoryError, UnicodeDecodeError):
-        raise HesspipeError(f"{path}: not a text file; expected a stage-one flight record CSV") from None
-    lines = text.splitlines()
-    comments = tuple(ln.lstrip()[1:].strip() for ln in lines if ln.lstrip().startswith("#"))
-    body = "\n".join(ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#"))
-    try:
-        df = pd.read_csv(io.StringIO(body))
-    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        raise HesspipeError(f"{path}: not a readable CSV ({' '.join(str(exc).split())})") from None
-    df.columns = [str(c).strip() for c in df.columns]
-    data = {}
-    for name in ("time", input_column, output_column):
-        if name not in df.columns:
-            raise HesspipeError(f"{path}: column '{name}' missing; found columns: {', '.join(df.columns)}")
-        values = pd.to_numeric(df[name], errors="coerce").to_numpy(dtype=float)
-        bad = ~np.isfinite(values)
-        if bad.any():
-            row = int(np.argmax(bad))
-            raise HesspipeError(f"{path}: column '{name}': expected finite numbers, got "
-                                f"{df[name].iloc[row]!r} in data row {row + 1}")
-        data[name] = values
+    names = {"time": "time", input_column: input_column, output_column: output_column}
+    data, comments = read_csv_columns(path, names, what="a stage-one flight record CSV")
     t = data["time"]
     if len(t) < 2:
         raise HesspipeError(f"{path}: {len(t)} samples; expected a record")
-    steps = np.diff(t)
-    if np.any(steps <= 0):
-        row = int(np.argmax(steps <= 0)) + 2
-        raise HesspipeError(f"{path}: column 'time': expected strictly increasing time, not at data row {row}")
-    dt = float(np.median(steps))
-    if np.max(np.abs(steps - dt)) > rtol * dt:
+    dt, uniform = sample_interval(path, t, rtol=rtol)
+    if not uniform:
+        steps = np.diff(t)
         raise HesspipeError(f"{path}: column 'time': expected uniform sampling (interval {dt:g} s), "
                             f"found intervals from {steps.min():g} to {steps.max():g} s")
     return Record(time=t, input=data[input_column], output=data[output_column], path=str(path),
@@ -414,7 +386,8 @@ def describe_tf(sys: ct.TransferFunction) -> dict:
             "dc_gain": float(np.real(dc)) if np.isfinite(dc) else None}
 
 
-def _fmt_tf(sys_or_coeffs) -> str:
+def format_tf(sys_or_coeffs) -> str:
+    """``(num) / (den)`` in descending powers of s, of a tf or a ``{"num", "den"}`` mapping."""
     co = sys_or_coeffs if isinstance(sys_or_coeffs, dict) else tf_coefficients(sys_or_coeffs)
 
     def poly(c):
@@ -529,7 +502,7 @@ def _markdown(report: dict, synthetic: bool) -> str:
                   f"max {chk['max_gain_error_db']:.3f} dB, {chk['max_phase_error_deg']:.2f} deg "
                   f"(limits {chk['gain_limit_db']:g} dB, {chk['phase_limit_deg']:g} deg): "
                   f"{'pass' if chk['pass'] else 'FAIL'}",
-                  "", f"Continuous: `{_fmt_tf(ch['continuous'])}`", "",
+                  "", f"Continuous: `{format_tf(ch['continuous'])}`", "",
                   f"- poles: {_roots_md(ch['continuous']['poles'])}",
                   f"- zeros: {_roots_md(ch['continuous']['zeros'])}",
                   f"- DC gain: {ch['continuous']['dc_gain']}", ""]
@@ -543,7 +516,7 @@ def _markdown(report: dict, synthetic: bool) -> str:
         if key == "disturbance_to_output":
             e = report["paper_eq16"]
             lines += ["For comparison, the paper's Eq. 16 (Boeing 757, NASA Langley model; its units "
-                      "are not stated):", "", f"`{_fmt_tf(e)}`", "",
+                      "are not stated):", "", f"`{format_tf(e)}`", "",
                       f"- poles: {_roots_md(e['poles'])}", f"- zeros: {_roots_md(e['zeros'])}",
                       f"- DC gain: {e['dc_gain']:.4g}", ""]
     return "\n".join(lines) + "\n"
@@ -692,12 +665,12 @@ def _analytic_markdown(r: dict) -> str:
     chosen = {f"{r['choice']['control_to_output']}_control": "control_to_output",
               f"{r['choice']['disturbance_to_output']}_disturbance": "disturbance_to_output"}
     for k, v in r["models"].items():
-        lines.append(f"| {k} | `{_fmt_tf(v)}` | {chosen.get(k, '')} |")
+        lines.append(f"| {k} | `{format_tf(v)}` | {chosen.get(k, '')} |")
     lines += ["", f"Units: {r['units']['control_to_output']}; {r['units']['disturbance_to_output']}.", ""]
     if r["paper_eq15"]:
         e = r["paper_eq15"]
-        lines += [f"The paper's Eq. 15 prints p/δa = `{_fmt_tf(e)}`; computed from Table 4 with Eq. 14 "
-                  f"it is `{_fmt_tf(r['models']['rolling_control'])}`. **The paper's Eq. 15 does not "
+        lines += [f"The paper's Eq. 15 prints p/δa = `{format_tf(e)}`; computed from Table 4 with Eq. 14 "
+                  f"it is `{format_tf(r['models']['rolling_control'])}`. **The paper's Eq. 15 does not "
                   "follow from its Table 4**; it is shown here only for comparison and not used.", ""]
     return "\n".join(lines) + "\n"
 
