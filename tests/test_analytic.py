@@ -9,6 +9,7 @@ import pytest
 from hesspipe import analytic
 from hesspipe.cli import main
 from hesspipe.errors import HesspipeError
+from hesspipe.config import aircraft_file
 from hesspipe.formats import read_plants
 
 
@@ -66,7 +67,7 @@ def test_structure_and_signs_of_full_model(roskam):
 
 
 def test_bad_analytic_file(tmp_path):
-    text = analytic.analytic_path("roskam").read_text()
+    text = aircraft_file("roskam").read_text()
     bad = tmp_path / "plane.toml"
     bad.write_text(text.replace("[condition]\n", "[condition]\nspeed = 3\n"))
     with pytest.raises(HesspipeError, match="plane.toml: field 'condition.speed': unknown"):

@@ -147,3 +147,11 @@ def test_stage_publishing_into_the_root(tmp_path):
     assert ran(Pipeline(st, {}, tmp_path).run()) == []
     (tmp_path / "out.txt").unlink()
     assert ran(Pipeline(st, {}, tmp_path).run()) == ["report"]
+
+
+def test_before_hook_runs_once_and_only_when_something_runs(tmp_path):
+    calls = []
+    Pipeline(stages(), {}, tmp_path).run(before=lambda: calls.append(1))
+    assert calls == [1]
+    Pipeline(stages(), {}, tmp_path).run(before=lambda: calls.append(2))
+    assert calls == [1]

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from .config import Fields, data_dir, load_toml
+from .config import Fields, aircraft_file, data_dir, load_toml
 from .errors import HesspipeError
 
 #: The aircraft flown when none is named: the closest bundled type to the paper's 757.
@@ -78,7 +78,7 @@ def load_aircraft(name: str) -> AircraftConfig:
     known = known_aircraft()
     if not isinstance(name, str) or name not in known:
         raise HesspipeError(f"unknown aircraft {name!r}; expected one of: {', '.join(known)}")
-    path = data_dir("aircraft") / f"{name}.toml"
+    path = aircraft_file(name)
     f = Fields(load_toml(path), path)
     j = f.table_("jsbsim")
     model = j.string("model")

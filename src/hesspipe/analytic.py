@@ -33,7 +33,7 @@ from pathlib import Path
 import control as ct
 import numpy as np
 
-from .config import Fields, data_dir, load_toml
+from .config import Fields, aircraft_file, data_dir, load_toml
 from .errors import HesspipeError
 
 _DERIVATIVES = ("Cy_beta", "Cy_p", "Cy_r", "Cy_da", "Cl_beta", "Cl_p", "Cl_r", "Cl_da",
@@ -73,17 +73,9 @@ class AnalyticAircraft:
         return 0.5 * self.rho_slug_ft3 * self.U_fps ** 2
 
 
-def analytic_path(name_or_path: str | Path) -> Path:
-    """``aircraft/<name>.toml`` for a bare name, else the path itself."""
-    p = Path(name_or_path)
-    if p.suffix == ".toml" or p.parent != Path("."):
-        return p
-    return data_dir("aircraft") / f"{name_or_path}.toml"
-
-
 def load_analytic(name_or_path: str | Path) -> AnalyticAircraft:
     """Read an analytic aircraft file (``kind = "analytic"``, e.g. ``roskam``)."""
-    path = analytic_path(name_or_path)
+    path = aircraft_file(name_or_path)
     if not path.exists():
         known = sorted(p.stem for p in data_dir("aircraft").glob("*.toml")
                        if load_toml(p).get("kind") == "analytic")

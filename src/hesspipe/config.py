@@ -29,6 +29,14 @@ def data_dir(name: str) -> Path:
     return path
 
 
+def aircraft_file(name_or_path: str | Path) -> Path:
+    """``aircraft/<name>.toml`` for a bare name, else the path itself."""
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.parent != Path("."):
+        return p
+    return data_dir("aircraft") / f"{name_or_path}.toml"
+
+
 def load_toml(path: str | Path) -> dict:
     """Load a TOML file, turning I/O and syntax errors into one-line errors."""
     path = Path(path)

@@ -300,7 +300,8 @@ class Pipeline:
         return out
 
     def run(self, *, force: Sequence[str] = (), from_stage: str | None = None,
-            progress: Callable[[str], None] | None = None) -> list[StageOutcome]:
+            progress: Callable[[str], None] | None = None,
+            before: Callable[[], None] | None = None) -> list[StageOutcome]:
         """Run every stale stage (and the forced ones) in order.
 
         Parameters
@@ -312,6 +313,9 @@ class Pipeline:
             Re-run this stage and everything downstream of it.
         progress : callable, optional
             Called with a line of text as each stage starts and ends.
+        before : callable, optional
+            Called once before the first stage that runs (not at all when
+            everything is fresh), e.g. to check the whole configuration.
         """
         forced = {self._stage(n).name for n in force}
         if from_stage is not None:
@@ -327,6 +331,9 @@ class Pipeline:
                 if progress:
                     progress(f"{stage.name}: up to date")
                 continue
+            if before is not None:
+                before()
+                before = None
             if progress:
                 progress(f"{stage.name}: running ({reason})")
             wall = self._execute(stage, parts)

@@ -58,9 +58,9 @@ import numpy as np
 from scipy import signal
 
 from . import arx as _arx
-from .analytic import (AnalyticPlants, analytic_path, analytic_transfer_functions,
+from .analytic import (AnalyticPlants, analytic_transfer_functions,
                        dimensional_derivatives, load_analytic, modes)
-from .config import Fields
+from .config import Fields, aircraft_file
 from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
 from .errors import HesspipeError
 from .formats import Plants, read_csv_columns, sample_interval, tf_coefficients, write_plants
@@ -686,7 +686,7 @@ def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
     yc = ap.rolling_control if config.control == "rolling" else ap.full_control
     yd = ap.full_disturbance if config.disturbance == "full" else ap.rolling_disturbance
     plants = Plants(yc, yd)
-    path = analytic_path(name_or_path)
+    path = aircraft_file(name_or_path)
     names = ["plants.json", "plants_report.md", "plants_report.json", "manifest.json"]
     with staged_output(out_dir) as stage:
         write_plants(stage / "plants.json", plants, units=report["units"],

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .config import Fields, data_dir, load_toml, merge
+from .config import Fields, aircraft_file, data_dir, load_toml, merge
 from .errors import HesspipeError
 from .pipeline import Pipeline, load_stages
 
@@ -78,14 +78,10 @@ def _split(section: dict, *keys: str) -> tuple[dict, list]:
     return rest, [rest.pop(k, None) for k in keys]
 
 
-def _aircraft_file(name: str) -> Path:
-    return data_dir("aircraft") / f"{name}.toml"
-
-
 # -- flight -------------------------------------------------------------------------------
 
 def flight_inputs(section: dict, config: dict) -> list:
-    path = _aircraft_file(section.get("aircraft", "737"))
+    path = aircraft_file(section.get("aircraft", "737"))
     return [path] if path.exists() else []
 
 
@@ -105,9 +101,7 @@ def plants(ctx) -> None:
 
 
 def analytic_inputs(section: dict, config: dict) -> list:
-    from .analytic import analytic_path
-
-    path = analytic_path(section.get("model", "roskam"))
+    path = aircraft_file(section.get("model", "roskam"))
     return [path] if path.exists() else []
 
 
