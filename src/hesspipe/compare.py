@@ -677,7 +677,7 @@ class PilotsConfig:
     """
 
     data: str = ""
-    n: int = 8
+    n: int = 6
     seed: int | None = None
     effects: tuple[str, ...] = ("motion_feedback",)
     duration_s: float = 70.0
