@@ -191,7 +191,7 @@ class _nothing:
 
 def test_pilots_config_defaults_and_errors():
     cfg = PilotsConfig.from_table({}, "default.toml")
-    assert cfg.n == 8 and cfg.effects == ("motion_feedback",) and cfg.optimizer == "apid"
+    assert cfg.n == 6 and cfg.effects == ("motion_feedback",) and cfg.optimizer == "apid"
     cfg = PilotsConfig.from_table({"n": 3, "seed": 5, "effects": [], "workers": 2}, "x.toml")
     assert (cfg.n, cfg.seed, cfg.effects, cfg.workers) == (3, 5, (), 2)
     for table, words in [({"n": 0}, "field 'pilots.n': expected an integer >= 1, got 0"),
