@@ -1,0 +1,190 @@
+"""Tests of the independent human-like trial generator (hesspipe.humanlike).
+
+The generator is checked against its own analytic formulas and against plain
+numpy spectra; hesspipe's readers appear only in the smoke test at the end.
+"""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from hesspipe.errors import HesspipeError
+from hesspipe.humanlike import (closed_loop, csv_bytes, draw_trial, make_plant, make_trials,
+                                simulate_trial, write_trial)
+from hesspipe.humanlike.pilots import loop_metrics
+
+SHORT = dict(T_m=15.0, run_in=10.0)     # 900 samples at 60 Hz: fast, whole periods
+
+
+def test_independent_of_the_code_under_test():
+    forbidden = ["hess", "blocks", "effects", "spectra", "identify", "discrepancy", "cohort",
+                 "crossover", "mcruer", "analytic", "compare", "formats", "plants", "arx"]
+    code = ("import sys, hesspipe.humanlike; "
+            "print(' '.join(m for m in sys.modules if m.startswith('hesspipe')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    loaded = set(out.stdout.split())
+    assert not loaded & {f"hesspipe.{m}" for m in forbidden}, loaded
+    assert {m for m in loaded if not m.startswith("hesspipe.humanlike")} <= \
+        {"hesspipe", "hesspipe.errors", "hesspipe.io", "hesspipe.seeds"}, loaded
+
+
+def test_fine_step_convergence():
+    # Remnant noise is defined at a fixed rate, so halving the step keeps its realisation.
+    spec = draw_trial("1/(s(s+1))", 4, task="both", pilot="hess", **SHORT)
+    a, b = simulate_trial(spec), simulate_trial(spec, fine_ratio=40)
+    for name in ("output", "control"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert np.max(np.abs(x - y)) < 0.01 * np.std(x), name
+    assert np.array_equal(a.disturbance, b.disturbance)
+
+
+@pytest.mark.parametrize("task", ["disturbance", "both"])
+def test_simulation_matches_analytic_closed_loop(task):
+    # A pilot without equalisation (gain, delay, neuromuscular lag) on 1/s, no remnant.
+    pilot = {"structure": "precision", "tau": 0.2, "wn": 12.0, "zn": 0.3, "TL": 0.0,
+             "TI": 0.0, "Kp": 3.0}
+    spec = draw_trial("1/s", 5, task=task, pilot_params=pilot, remnant_share=0.0, **SHORT)
+    tr = simulate_trial(spec)
+    h = tr.truth["forcing"]["fine_step_s"]
+    U, Y, D = (np.fft.fft(x) for x in (tr.control, tr.output, tr.disturbance))
+    k = spec.disturbance.k
+    cl = closed_loop(spec, spec.disturbance.w, h)
+    assert np.max(np.abs(U[k] / D[k] / cl["u_d"] - 1)) < 0.02
+    assert np.max(np.abs(Y[k] / D[k] / cl["y_d"] - 1)) < 0.02
+    # Off the forcing lines there is (almost) nothing: steady state, whole periods.
+    off = np.ones(U.size, dtype=bool)
+    off[k] = off[-k] = False
+    if spec.target is not None:
+        R = np.fft.fft(tr.reference)
+        kt = spec.target.k
+        clt = closed_loop(spec, spec.target.w, h)
+        assert np.max(np.abs(U[kt] / R[kt] / clt["u_r"] - 1)) < 0.02
+        off[kt] = off[-kt] = False
+    assert np.sum(np.abs(U[off]) ** 2) < 1e-4 * np.sum(np.abs(U) ** 2)
+    # The truth's describing function is the pilot's U/E at the disturbance lines.
+    H = np.array(tr.truth["describing_function"]["re"]) \
+        + 1j * np.array(tr.truth["describing_function"]["im"])
+    sets = tr.truth["describing_function"]["line_set"]
+    E = np.fft.fft(tr.reference - tr.output)
+    hd = H[[i for i, s in enumerate(sets) if s == "disturbance"]]
+    assert np.max(np.abs(U[k] / E[k] / hd - 1)) < 0.02
+
+
+def test_remnant_share():
+    for seed in range(2):
+        spec = draw_trial("1/s", seed)          # 45 s: lines sparse enough to interpolate
+        tr = simulate_trial(spec)
+        rem = tr.truth["remnant"]
+        assert 0.10 <= rem["share_drawn"] <= 0.40
+        assert rem["share_realised"] == pytest.approx(rem["share_drawn"], rel=1e-6)
+        # Independent check from the spectrum: power off the lines plus, at each line, the
+        # remnant interpolated from its neighbours.
+        u = tr.control - tr.control.mean()
+        P = np.abs(np.fft.rfft(u)) ** 2
+        lines = np.zeros(P.size, dtype=bool)
+        lines[spec.disturbance.k] = True
+        est = P[1:][~lines[1:]].sum() + sum(
+            P[[j for j in (k - 2, k - 1, k + 1, k + 2) if not lines[j]]].mean()
+            for k in spec.disturbance.k)
+        assert est / P[1:].sum() == pytest.approx(rem["share_drawn"], abs=0.04)
+
+
+@pytest.mark.parametrize("plant", ["1/s", "1/(s(s+1))", "K/s2", "roll"])
+@pytest.mark.parametrize("pilot", ["precision", "hess"])
+def test_pilots_meet_the_crossover_model(plant, pilot):
+    for seed in range(3):
+        spec = draw_trial(plant, seed, pilot=pilot)
+        p = spec.pilot
+        assert 0.15 <= p["tau_v"] <= 0.35 and 7 <= p["wn"] <= 15 and 0.1 <= p["zn"] <= 0.5
+        m = loop_metrics(lambda w: sum(spec.pilot_parts(w)) * spec.yc_effective(w))
+        assert 1.5 <= m["frequency_rad_s"] <= 4.0 and 20 <= m["phase_margin_deg"] <= 60
+        if pilot == "precision" and plant in ("K/s2", "1/(s(s+1))"):
+            assert p["TL"] > 0          # lead for K/s^2-like plants
+        if pilot == "precision" and plant == "1/s":
+            assert p["TL"] == 0         # lag or nothing for K/s
+
+
+def test_same_seed_same_bytes(tmp_path):
+    paths = [make_trials(tmp_path / name, "1/s", 2, 11, **SHORT) for name in ("a", "b")]
+    for pa, pb in zip(*paths):
+        for suffix in (".csv", ".truth.json"):
+            assert pa.with_suffix(suffix).read_bytes() == pb.with_suffix(suffix).read_bytes()
+    assert (tmp_path / "a" / "plants.json").read_bytes() == (tmp_path / "b" / "plants.json").read_bytes()
+    other = make_trials(tmp_path / "c", "1/s", 1, 12, **SHORT)[0]
+    assert other.read_bytes() != paths[0][0].read_bytes()
+
+
+def test_csv_styles(tmp_path):
+    spec = draw_trial("1/s", 2, task="both", **SHORT)
+    tr = simulate_trial(spec)
+    raw = csv_bytes(tr, {"time": "ms", "bom": True, "newline": "\r\n"})
+    assert raw.startswith(b"\xef\xbb\xbf#")
+    text = raw[3:].decode("utf-8")
+    assert text.count("\r\n") == text.count("\n") == len(tr.time) + 2
+    lines = text.split("\r\n")
+    assert "synthetic data: independent human-like generator" in lines[0]
+    assert lines[1] == "time,disturbance,output,control,reference"
+    t = [row.split(",")[0] for row in lines[2:-1]]
+    assert all(len(x.split(".")[1]) == 3 for x in t[1:])
+    assert np.max(np.abs(np.array(t, dtype=float) - tr.time)) <= 0.0005 + 1e-12
+    vals = np.array([row.split(",")[1:] for row in lines[2:-1]], dtype=float)
+    assert np.allclose(vals[:, 2], tr.control, rtol=1e-5, atol=0)
+    raw = csv_bytes(tr, {"time": "epoch_us", "epoch0": 1.7e9,
+                         "columns": ["time", "reference", "output", "control", "disturbance"]})
+    rows = raw.decode().split("\n")
+    assert rows[1] == "time,reference,output,control,disturbance" and "\r" not in raw.decode()
+    assert float(rows[3].split(",")[0]) == pytest.approx(1.7e9 + 1 / 60, abs=1e-6)
+    g9 = csv_bytes(tr, {"time": "g9"}).decode().split("\n")
+    assert g9[3].split(",")[0] == "0.0166666667"
+    path = write_trial(tmp_path, tr)
+    truth = json.loads(path.with_suffix(".truth.json").read_text())
+    assert truth["synthetic"] is True and truth["style"]["time"] == spec.style["time"]
+
+
+def test_plants_file_and_dutch_roll(tmp_path):
+    spec = draw_trial("roll", 3, effects=("dutch_roll",), **SHORT)
+    tr = simulate_trial(spec)
+    write_trial(tmp_path, tr)
+    plants = json.loads((tmp_path / "plants.json").read_text())
+    assert plants["control_to_output"]["den"] == pytest.approx([1.0, 1.0496], abs=1e-4)
+    assert plants["control_to_output"]["num"] == pytest.approx([2.436], abs=1e-3)
+    assert plants["disturbance_to_output"] == plants["control_to_output"]
+    # The aircraft flown is the full lateral one: its Dutch-roll pair shows near 0.74 rad/s.
+    poles = np.linalg.eigvals(spec.plant.true.A)
+    assert np.any(np.abs(poles - (-0.0341 + 0.7362j)) < 1e-3)
+    other = draw_trial("1/s", 3, **SHORT)
+    with pytest.raises(HesspipeError, match="plants.json"):
+        write_trial(tmp_path, simulate_trial(other))
+
+
+def test_bad_input():
+    with pytest.raises(HesspipeError, match="unknown option"):
+        draw_trial("1/s", 1, tua=0.2)
+    with pytest.raises(HesspipeError, match="effects"):
+        draw_trial("1/s", 1, effects=("nope",))
+    with pytest.raises(HesspipeError, match="motion_feedback"):
+        draw_trial("1/s", 1, effects=("motion_feedback",))
+    with pytest.raises(HesspipeError, match="plant"):
+        make_plant("no/such/plants.json")
+    with pytest.raises(HesspipeError, match="T_m"):
+        draw_trial("1/s", 1, T_m=45.01)
+
+
+def test_readable_by_hesspipe(tmp_path):
+    from hesspipe.formats import read_run
+    tr = simulate_trial(draw_trial("1/s", 6, task="both", **SHORT))
+    path = write_trial(tmp_path, tr, style="plain")
+    run = read_run(path)
+    assert np.allclose(run.control, tr.control, rtol=1e-5)
+
+
+@pytest.mark.xfail(strict=False, reason="read_run refuses 60 Hz times written with 9 significant "
+                   "digits (1e-7 s jitter); being fixed in issue 8")
+def test_readable_by_hesspipe_rounded_times(tmp_path):
+    from hesspipe.formats import read_run
+    tr = simulate_trial(draw_trial("1/s", 6, **SHORT))
+    path = write_trial(tmp_path, tr, style={"time": "g9", "bom": True, "newline": "\r\n"})
+    assert len(read_run(path).time) == len(tr.time)
