@@ -188,3 +188,46 @@ def test_readable_by_hesspipe_rounded_times(tmp_path):
     tr = simulate_trial(draw_trial("1/s", 6, **SHORT))
     path = write_trial(tmp_path, tr, style={"time": "g9", "bom": True, "newline": "\r\n"})
     assert len(read_run(path).time) == len(tr.time)
+
+
+@pytest.mark.parametrize("output", ["rate", "angle"])
+def test_motion_feedback_is_simulated_as_reported(output, tmp_path):
+    spec = draw_trial("roll", 9, task="both", pilot="hess", effects=("motion_feedback",),
+                      output=output, remnant_share=0.0, T_m=15.0)
+    assert spec.pilot["Km"] != 0 and spec.motion_tf is not None
+    tr = simulate_trial(spec)
+    t = tr.truth
+    U, E = np.fft.fft(tr.control), np.fft.fft(tr.reference - tr.output)
+    df = t["describing_function"]
+    H = np.array(df["re"]) + 1j * np.array(df["im"])
+    sets = np.array(df["line_set"])
+    k = spec.disturbance.k
+    assert np.max(np.abs(U[k] / E[k] / H[sets == "disturbance"] - 1)) < 0.03
+    tl = t["target_lines_u_over_e"]
+    kt = spec.target.k
+    ue = np.array(tl["re"]) + 1j * np.array(tl["im"])
+    assert np.max(np.abs(U[kt] / E[kt] / ue - 1)) < 0.03
+    # With motion the two differ: the vestibular path is closed through the plant.
+    assert np.max(np.abs(ue / H[sets == "target"] - 1)) > 0.05
+    write_trial(tmp_path, tr)
+    plants = json.loads((tmp_path / "plants.json").read_text())
+    assert ("motion_path" in plants) == (output == "angle")
+    if output == "angle":
+        assert plants["motion_path"] == {"num": [1.0, 0.0], "den": [0.01, 1.0]}
+
+
+def test_effects_are_in_the_truth():
+    base = draw_trial("roll", 5, pilot="hess", **SHORT)
+    spec = draw_trial("roll", 5, pilot="hess", effects=("extra_delay", "actuator_lag",
+                                                         "rate_limit", "remnant"), **SHORT)
+    tr = simulate_trial(spec)
+    t = tr.truth
+    assert 0.04 <= t["pilot"]["extra_delay"] <= 0.10
+    assert t["pilot"]["tau_realised"] == pytest.approx(t["pilot"]["tau_v"] + t["pilot"]["extra_delay"],
+                                                       abs=1.0 / 2400)
+    assert 0.05 <= t["actuator"]["tau_s"] <= 0.15
+    assert 0.0 < t["actuator"]["rate_limited_fraction"] < 0.5
+    assert 0.40 <= t["remnant"]["share_drawn"] <= 0.60 and base.remnant["share"] <= 0.40
+    # The plants file leaves the actuator out: the nominal loop crosses elsewhere.
+    assert t["crossover"]["frequency_rad_s"] != pytest.approx(
+        t["crossover_nominal_plant"]["frequency_rad_s"], rel=0.02)

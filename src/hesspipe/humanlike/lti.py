@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+import scipy.signal
 
 from ..errors import HesspipeError
 
@@ -152,6 +153,22 @@ def zoh(sys: StateSpace, h: float) -> Discrete:
     M[:n, n:] = sys.B
     E = scipy.linalg.expm(M * h)
     return Discrete(E[:n, :n], E[:n, n:], sys.C.copy(), sys.D.copy())
+
+
+def discretise(sys: StateSpace, h: float) -> Discrete:
+    """ZOH for strictly proper blocks, bilinear (Tustin) for blocks with feedthrough.
+
+    A held input seen by a block with feedthrough (a near-differentiator such as
+    the motion path s/(0.01 s + 1)) mixes the current input with a state that
+    lags half a step, which distorts its output by several per cent at h = 1/1200 s;
+    the bilinear map keeps both parts consistent while staying causal.
+    """
+    if not np.any(sys.D):
+        return zoh(sys, h)
+    n, m = sys.B.shape
+    Ad, Bd, Cd, Dd, _ = scipy.signal.cont2discrete(
+        (sys.A, sys.B, sys.C.reshape(1, n), sys.D.reshape(1, m)), h, method="bilinear")
+    return Discrete(Ad, Bd, np.asarray(Cd).reshape(n), np.asarray(Dd).reshape(m))
 
 
 def is_stable(den, *, allow_integrators: int = 0) -> bool:

@@ -217,7 +217,8 @@ def make_plant(plant, *, output: str = "rate", disturbance: str | None = None,
     yc, yd = rolling_approximation(output)
     if plant == "paper":
         yd = EQ16 if output == "rate" else series(EQ16, ([1.0], [1.0, 0.0]))
-    d_rms = 5.0 if disturbance == "wind" else 0.05
+    # Side wind in ft/s: the paper's Eq. 16 path is ~40 times stronger than Table 4's.
+    d_rms = (1.0 if plant == "paper" else 5.0) if disturbance == "wind" else 0.05
     p = _tf_plant(f"{plant}-{output}", yc, yd, disturbance, output=output, d_rms=d_rms)
     if not dutch_roll:
         return p

@@ -16,7 +16,7 @@ import numpy as np
 from ..errors import HesspipeError
 from ..seeds import derive_seed
 from . import forcing, pilots
-from .lti import freqresp, ss_from_tf, zoh
+from .lti import discretise, freqresp, ss_from_tf, zoh
 from .plants import Plant, make_plant
 from .simulate import Wiring, delay_steps
 
@@ -31,7 +31,7 @@ RANGES = dict(tau=(0.15, 0.35), wn=(7.0, 15.0), zn=(0.1, 0.5), wc=(1.5, 4.0), pm
               km_ratio=(0.2, 1.0), extra_delay=(0.04, 0.10), actuator_tau=(0.05, 0.15),
               rate_limit_factor=(1.0, 2.0))
 EFFECT_REMNANT = (0.40, 0.60)
-OPTIONS = dict(fs=60.0, T_m=45.0, run_in=15.0, fade=5.0, fine_ratio=20, n_lines=10,
+OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=10,
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
                remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
                pilot_params=None)
@@ -153,7 +153,9 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         ``remnant_share``, ``remnant_tn`` (s), ``w_corner`` (rad/s), ``km_ratio``,
         ``extra_delay`` (s), ``actuator_tau`` (s), ``rate_limit_factor``.
         Options: ``fs`` (Hz, 60), ``T_m`` (s, 45; fs*T_m must be whole),
-        ``run_in`` (s, 15), ``fade`` (s, 5), ``fine_ratio`` (fine steps per
+        ``run_in`` (s; 15, or 60 with motion feedback or Dutch roll, whose slow modes
+        - canals 5.7 s and 80 s, Dutch roll damping 0.034/s - need longer to
+        settle), ``fade`` (s, 5), ``fine_ratio`` (fine steps per
         logged sample, 20), ``n_lines`` (10 per set), ``output`` ("rate"/"angle"),
         ``disturbance`` ("input"/"wind"), ``gain``, ``d_rms``, ``r_rms``,
         ``remnant_at`` ("control"/"error"), ``tau_m`` (vestibular delay, s, 0),
@@ -174,6 +176,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         raise HesspipeError(f"draw_trial: unknown option(s) {', '.join(sorted(ov))}; expected "
                             f"{', '.join(list(RANGES) + list(OPTIONS))}")
     effects = tuple(effects)
+    if opts["run_in"] is None:
+        opts["run_in"] = 60.0 if {"motion_feedback", "dutch_roll"} & set(effects) else 15.0
     bad = [e for e in effects if e not in EFFECTS]
     if bad:
         raise HesspipeError(f"effects: unknown {', '.join(bad)}; expected {', '.join(EFFECTS)}")
@@ -238,8 +242,10 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     dist = forcing.design(k_d, opts["T_m"], d_rms, g_f, w_corner=corner) \
         if task in ("disturbance", "both") else None
     if task == "both":
-        r_rms = opts["r_rms"] if opts["r_rms"] is not None else abs(
-            d_rms * abs(yc(np.array([0.5]))[0]))
+        # Target about as large at the output as the disturbance's effect on it.
+        yd = plant.true.freqresp(np.array([0.5]), 1)[0] if plant.disturbance == "wind" \
+            else yc(np.array([0.5]))[0]
+        r_rms = opts["r_rms"] if opts["r_rms"] is not None else float(d_rms * abs(yd))
         targ = forcing.design(k_t, opts["T_m"], r_rms, g_f, w_corner=corner)
     elif task == "tracking":
         r_rms = opts["r_rms"] if opts["r_rms"] is not None else 1.0
@@ -281,10 +287,10 @@ def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
         blocks["eqnm"] = zoh(ss_from_tf(*pilots.equaliser_nm_tf(p)), h)
     else:
         blocks["nm"] = zoh(ss_from_tf(*pilots.nm_tf(p["wn"], p["zn"])), h)
-        blocks["pf"] = zoh(ss_from_tf(*pilots.pf_tf(p)), h)
+        blocks["pf"] = discretise(ss_from_tf(*pilots.pf_tf(p)), h)
         if p.get("Km") and spec.motion_tf is not None:
-            blocks["motion"] = zoh(ss_from_tf(*spec.motion_tf), h)
-            blocks["scc"] = zoh(ss_from_tf(*pilots.SCC), h)
+            blocks["motion"] = discretise(ss_from_tf(*spec.motion_tf), h)
+            blocks["scc"] = discretise(ss_from_tf(*pilots.SCC), h)
     return Wiring(h=h, delay_steps=steps, pilot=p["structure"], blocks=blocks,
                   Ke=p.get("Ke", 0.0), Km=p.get("Km", 0.0),
                   motion_delay_steps=int(round(p.get("tau_m", 0.0) / h)),
@@ -362,7 +368,13 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     fn = compile_loop(_wiring(spec, h, None))
     y_f, u_f = sim(fn, r, d, zeros, 0.0)
     if spec.actuator["rate_limit_factor"] is not None:
-        rate = spec.actuator["rate_limit_factor"] * float(np.std(np.diff(u_f[idx[0]:]) / h))
+        # The limit is a multiple of the RMS rate the actuator output would have without it
+        # (remnant included): factor 1-2 limits about 30-5 % of the time.
+        a_f = sim.actuator
+        y_n, u_n = sim(fn, zeros, zeros, w, 1.0)
+        g = _solve_gain(u_f[idx], u_n[idx], spec.remnant["share"])
+        a_lin = (a_f + g * sim.actuator)[idx[0]:]
+        rate = spec.actuator["rate_limit_factor"] * float(np.std(np.diff(a_lin) / h))
         fn = compile_loop(_wiring(spec, h, rate))
         y_f, u_f = sim(fn, r, d, zeros, 0.0)
     y_n, u_n = sim(fn, zeros, zeros, w, 1.0)
@@ -378,7 +390,7 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
                 "remnant_gain": g, "rate_limit_per_s": rate,
                 "u_forcing": u_f[idx], "u": u[idx], "h": h, "ratio": ratio,
                 "rate_limited_fraction": (None if rate is None else float(
-                    np.mean(np.abs(np.diff(sim.actuator[idx[0]:])) >= rate * h * (1 - 1e-9))))}
+                    np.mean(np.abs(np.diff(sim.actuator[idx[0]:])) >= rate * h * (1 - 1e-6))))}
     truth = build_truth(spec, sim_info)
     return Trial(spec=spec, time=np.arange(n_log) / fs, disturbance=d_log[idx], output=y[idx],
                  control=u[idx], reference=r[idx], truth=truth)
