@@ -48,7 +48,6 @@ def main(argv=None) -> int:
                     "g17 (default: drawn per trial)")
     a = ap.parse_args(argv)
     effects = tuple(e for e in a.effects.split(",") if e)
-    # Split on commas that are not inside parentheses (plant names contain none, files may).
     plants = [p.strip() for p in a.plants.split(",") if p.strip()]
     try:
         for plant in plants:
