@@ -64,7 +64,7 @@ def test_column_mapping(tmp_path):
 
 
 @pytest.mark.parametrize("spec, words", [
-    ("control", ["--columns", "ROLE=NAME", "'control'"]),
+    ("control", ["columns: expected ROLE=NAME", "'control'"]),
     ("stick=control", ["unknown role", "'stick'"]),
 ])
 def test_bad_column_mapping(tmp_path, spec, words):
@@ -80,7 +80,8 @@ def test_missing_column_names_file_column_and_hint(tmp_path):
     with pytest.raises(HesspipeError) as info:
         read_run(path)
     msg = str(info.value)
-    assert str(path) in msg and "'control'" in msg and "--columns control=NAME" in msg
+    assert str(path) in msg and "'control'" in msg and "columns control=NAME" in msg
+    assert "--" not in msg  # the library names its settings, never a command-line flag
     assert "\n" not in msg
 
 
@@ -101,7 +102,7 @@ def test_non_uniform_time_fails_unless_resampled(tmp_path):
     rows = _rows(n=101)
     del rows[40]  # one dropped sample: a 0.04 s gap
     path = _csv(tmp_path / "f.csv", ("time", "disturbance", "output", "control"), rows)
-    with pytest.raises(HesspipeError, match=r"column 'time': expected uniform sampling.*--resample"):
+    with pytest.raises(HesspipeError, match=r"column 'time': expected uniform sampling.*set resample"):
         read_run(path)
     run = read_run(path, resample=True)
     assert len(run) == 101

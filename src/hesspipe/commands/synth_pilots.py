@@ -10,7 +10,9 @@ def register(sub) -> None:
                                    "in the measured-run format and <id>.truth.json beside each.")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants JSON (Yc, Yd)")
     p.add_argument("--n", required=True, type=int, metavar="N", help="number of pilots")
-    p.add_argument("--seed", type=int, default=0, metavar="S", help="base seed (default: %(default)s)")
+    from ._options import add_seed
+
+    add_seed(p, 0, "base seed")
     p.add_argument("--effects", default="motion_feedback", metavar="LIST",
                    help="comma-separated effects every pilot has, '' for none (remnant noise is "
                         "always added; default: %(default)s)")
