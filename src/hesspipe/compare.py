@@ -292,7 +292,7 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
     loop = model.loop(complete)
     sim_psd = obj.loop_psd(loop)
     fit = (float(np.sqrt(np.mean((obj.measured[obj.mask] - sim_psd[obj.mask]) ** 2)))
-           if sim_psd is not None else math.nan)
+           if sim_psd is not None else obj.unstable_fitness(loop))  # finite, never NaN
     bench_fit, bench_par = math.nan, {}
     if benchmark:
         bench = mcruer_benchmark(run, plants, band=band)
@@ -429,7 +429,9 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
         expanded_d = expanded.to_dict(spectra=False)
     expanded_d.update(evaluations_total=spent["expanded"], search=search)
     o_fit, e_fit = original_d["fitness"], expanded_d["fitness"]
-    improvement = 1.0 - e_fit / o_fit if o_fit and math.isfinite(o_fit) and o_fit > 0 else math.nan
+    # Undefined (NaN) when either optimum is unstable: their scores are penalties, not fits.
+    improvement = (1.0 - e_fit / o_fit if original_d.get("stable", True) and expanded_d.get("stable", True)
+                   and o_fit and math.isfinite(o_fit) and o_fit > 0 else math.nan)
     return PilotComparison(
         id=run.id, source=run.source, synthetic=run.synthetic,
         original=original_d, expanded_fixed=fixed, expanded=expanded_d, improvement=float(improvement),

@@ -182,7 +182,7 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
             spread = float(np.max(np.abs(steps - dt)) / dt)
             raise HesspipeError(f"{path}: column '{tcol}': expected uniform sampling (every interval "
                                 f"within {rtol:g} of {dt:.9g} s), found intervals from {steps.min():.9g} "
-                                f"to {steps.max():.9g} s (spread {spread:.2g} of the interval); "
+                                f"to {steps.max():.9g} s (up to {spread:.2g} of the interval off); "
                                 "set resample to interpolate onto a uniform grid")
         t0, rel = t[0], t - t[0]
         grid = dt * np.arange(int(math.floor(rel[-1] / dt + 1e-9)) + 1)
@@ -299,11 +299,11 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     """Sample interval of `t` and whether the sampling is uniform.
 
     Times are taken relative to the first (Unix-epoch stamps keep their
-    precision). Uniform means every interval is within `rtol` of the interval
-    plus what the rounding of the two written times explains (SPEC.md
-    "Time"). The interval of uniform times is the least-squares slope of time
-    against sample number over the whole record (rounding averages out);
-    otherwise the median interval.
+    precision). The interval is the least-squares slope of time against
+    sample number over the whole record (rounding averages out). Uniform
+    means every interval is within `rtol` of it plus what the rounding of the
+    two written times explains (SPEC.md "Time"). For non-uniform times the
+    median interval is returned (the grid of a resampling).
 
     Raises
     ------
@@ -317,17 +317,18 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
         row = int(np.argmax(steps <= 0)) + 1
         raise HesspipeError(f"{path}: column '{column}': expected strictly increasing time, "
                             f"not at data row {row + 1}")
-    median = float(np.median(steps))
     # What writing the times to text explains: half a last digit on each end, plus the
     # float64 spacing of the absolute times (epoch stamps) and of their difference.
     res = _written_resolution(t)
     rounding = 0.5 * (res[1:] + res[:-1]) + 2.0 * np.spacing(np.abs(t[1:]) + np.abs(t[:-1]))
-    if not np.all(np.abs(steps - median) <= rtol * median + rounding):
-        return median, False
+    # The interval over the whole record (rounded intervals are biased: with 6 digits most
+    # 1/60 s steps read 0.0167, so their median is not the interval).
     i = np.arange(t.size, dtype=float)
     i -= i.mean()
     slope = float(np.dot(i, rel - rel.mean()) / np.dot(i, i))
-    return slope, bool(np.all(np.abs(steps - slope) <= rtol * slope + rounding))
+    if slope > 0 and np.all(np.abs(steps - slope) <= rtol * slope + rounding):
+        return slope, True
+    return float(np.median(steps)), False
 
 
 def write_run(path: str | Path, run: Run, comments: tuple[str, ...] | list[str] = ()) -> Path:
@@ -381,6 +382,13 @@ def tf_coefficients(sys: ct.TransferFunction) -> dict:
 def _read_tf(obj, path, key) -> ct.TransferFunction:
     if not isinstance(obj, Mapping):
         raise HesspipeError(f"{path}: field '{key}': expected an object with 'num' and 'den', got {obj!r}")
+    dt = obj.get("dt")
+    # python-control's convention: dt None or 0 is continuous time; anything else is a
+    # sampled system whose coefficients mean powers of z, not s.
+    if dt is not None and not (isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt == 0):
+        raise HesspipeError(f"{path}: field '{key}.dt': {dt!r} makes it a discrete-time transfer "
+                            "function; expected continuous time (dt null or 0, or no dt): convert "
+                            "it to continuous time first")
     coeffs = {}
     for part in ("num", "den"):
         value = obj.get(part)

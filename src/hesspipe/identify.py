@@ -161,7 +161,9 @@ class Identification:
     free, fixed : tuple / dict
         Identified names; fixed name → value (user-fixed only).
     fitness : float
-        RMS PSD difference over the band at the optimum (lower is better).
+        RMS PSD difference over the band at the optimum (lower is better);
+        never NaN: an unstable optimum keeps its graded score >= UNSTABLE_FITNESS
+        (and ``stable`` is False).
     benchmark_fitness : float
         The same fitness for the McRuer precision model fitted to the data
         (NaN if not computed).
@@ -457,7 +459,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         bench_fit, bench_par = b.fitness, b.parameters
     return Identification(
         model=model.name, parameters=params, free=free, fixed=fixed,
-        fitness=best if best < UNSTABLE_FITNESS else float("nan"), benchmark_fitness=bench_fit,
+        fitness=best if np.isfinite(best) else _graded(float("nan")), benchmark_fitness=bench_fit,
         crossover=cross, evaluations=evaluations, identifiability=ident,
         measured_psd=obj.measured, simulated_psd=sim_psd if stable else np.full_like(obj.measured, np.nan),
         freq_hz=obj.freq_hz, optimizer=optimizer, seed=seed, passes=passes,

@@ -98,14 +98,23 @@ def format_table(result) -> str:
         status = "identified" if name in result.free else (
             "fixed" if name in result.fixed else "default")
         lines.append(f"{name:<10} {value:>10.4g}  {status}")
-    lines.append(f"fitness            {result.fitness:.6g}   (RMS PSD difference, "
+    what = ("RMS PSD difference" if result.stable else
+            "unstable closed loop: the worst score, graded by its growth rate")
+    lines.append(f"fitness            {result.fitness:.6g}   ({what}, "
                  f"{result.band[0]:g}-{result.band[1]:g} Hz; lower is better)")
-    lines.append(f"benchmark fitness  {result.benchmark_fitness:.6g}   (McRuer precision model)")
+    bench = result.benchmark_fitness
+    lines.append(f"benchmark fitness  {bench:.6g}   (McRuer precision model)" if math.isfinite(bench)
+                 else "benchmark fitness  not computed")
     c = result.crossover
-    lines.append(f"crossover          {c.frequency_rad_s:.3f} rad/s, phase margin "
-                 f"{c.phase_margin_deg:.1f} deg, within limits: {'yes' if c.within_limits else 'no'} "
-                 f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
-                 f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
+    limits = (f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
+              f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
+    if math.isfinite(c.frequency_rad_s):
+        lines.append(f"crossover          {c.frequency_rad_s:.3f} rad/s, phase margin "
+                     f"{c.phase_margin_deg:.1f} deg, within limits: {'yes' if c.within_limits else 'no'} "
+                     + limits)
+    else:
+        lines.append("crossover          none found (the open loop's gain never crosses 1), within "
+                     "limits: no " + limits)
     lines.append(f"evaluations        {result.evaluations}")
     ident = result.identifiability
     lines.append(f"identifiability    {ident.get('summary', ident.get('method'))}")
