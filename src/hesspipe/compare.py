@@ -35,9 +35,9 @@ import numpy as np
 from .batch import run_batch
 from .config import Fields
 from .errors import HesspipeError
-from .formats import Plants, Run, _parse_columns, read_run
+from .formats import Plants, Run, _parse_columns, read_run, record_samples
 from .io import write_json, write_text
-from .seeds import derive_seed
+from .seeds import MAX_SEED, check_seed, derive_seed
 
 CONFIGURATIONS = ("original", "expanded_fixed", "expanded")
 #: Parameters shown in the comparison table (Table 5's columns).
@@ -539,7 +539,7 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
     """
     if start not in STARTS:
         raise HesspipeError(f"--start: expected one of {', '.join(STARTS)}, got {start!r}")
-    settings = CompareSettings(seed=int(seed), optimizer=optimizer, passes=int(passes),
+    settings = CompareSettings(seed=check_seed(seed), optimizer=optimizer, passes=int(passes),
                                band=(float(band[0]), float(band[1])), k=int(k),
                                km_fixed=None if km_fixed is None else float(km_fixed), start=start,
                                restarts=int(restarts), benchmark=bool(benchmark))
@@ -676,6 +676,10 @@ class PilotsConfig:
         Also compute the McRuer benchmark score per pilot.
     figures : bool
         Write a PSD figure per pilot.
+    columns : str
+        Column names of the data's files, "ROLE=NAME,..." ("": the format's names).
+    resample : bool
+        Interpolate non-uniform time columns onto a uniform grid instead of refusing them.
     """
 
     data: str = ""
@@ -694,6 +698,8 @@ class PilotsConfig:
     restarts: int = 2
     benchmark: bool = False
     figures: bool = True
+    columns: str = ""
+    resample: bool = False
 
     @classmethod
     def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
@@ -701,7 +707,7 @@ class PilotsConfig:
         d = cls()
         effects = f.strings("effects", d.effects)
         _check_effects(effects, f"{source}: field '{prefix}.effects'")
-        seed = f.integer("seed", None, min=0)
+        seed = f.integer("seed", None, min=0, max=MAX_SEED)
         band = f.numbers("band_hz", list(d.band_hz), length=2)
         if not 0 <= band[0] < band[1]:
             raise f.error("band_hz", "[low, high] Hz with 0 <= low < high", list(band))
@@ -717,11 +723,15 @@ class PilotsConfig:
                   band_hz=band, km_fixed=km, start=f.string("start", d.start, choices=STARTS),
                   restarts=f.integer("restarts", d.restarts, min=1),
                   benchmark=f.boolean("benchmark", d.benchmark),
-                  figures=f.boolean("figures", d.figures))
+                  figures=f.boolean("figures", d.figures),
+                  columns=f.string("columns", d.columns), resample=f.boolean("resample", d.resample))
         f.reject_unknown()
-        if cfg.duration_s / cfg.dt_s < MIN_SAMPLES:
-            raise f.error("duration_s", f"at least {MIN_SAMPLES} samples (duration_s / dt_s) for the "
-                          "spectra", cfg.duration_s)
+        try:
+            _parse_columns(cfg.columns)
+            record_samples(cfg.duration_s, cfg.dt_s, min_samples=MIN_SAMPLES)
+        except HesspipeError as exc:
+            field = "columns" if str(exc).startswith("columns") else "duration_s"
+            raise HesspipeError(f"{source}: field '{prefix}.{field}': {exc}") from None
         return cfg
 
 
@@ -749,7 +759,7 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
                             scheduler=config.scheduler or None, seed=seed, optimizer=config.optimizer,
                             passes=config.passes, band=config.band_hz, km_fixed=config.km_fixed,
                             start=config.start, restarts=config.restarts, benchmark=config.benchmark,
-                            progress=progress)
+                            columns=config.columns or None, resample=config.resample, progress=progress)
     write_comparison(result, out_dir, figures=config.figures)
     return result
 

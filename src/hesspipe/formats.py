@@ -44,7 +44,7 @@ MAX_INTERVAL_S = 1.0
 MAX_MAGNITUDE = 1e100
 #: Most samples of one run: the simulator's padded FFT grid holds up to 16 times this in
 #: complex numbers per spectrum, so longer records exhaust memory before they are useful.
-MAX_SAMPLES = 1 << 19
+MAX_SAMPLES = 1 << 18
 
 
 @dataclass(frozen=True)
@@ -195,6 +195,41 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
                control=data["control"], reference=ref, id=path.stem,
                synthetic=any("synthetic" in c.lower() for c in comments),
                comments=comments, source=str(path), interval=dt)
+
+
+def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = 1024,
+                   max_dt_s: float = 0.1) -> int:
+    """Samples of a record of `duration_s` at `dt_s`, checked before anything is allocated.
+
+    Parameters
+    ----------
+    duration_s, dt_s : float
+        Record length and sample interval, s.
+    names : (str, str)
+        How the caller calls the two values (for messages).
+    min_samples : int
+        Fewest samples (one spectral segment by default).
+    max_dt_s : float
+        Longest sample interval, s.
+
+    Raises
+    ------
+    HesspipeError
+        Not finite, not positive, an interval above `max_dt_s`, or a sample count
+        outside ``min_samples..MAX_SAMPLES`` (a longer record would exhaust memory).
+    """
+    d, h = names
+    for name, v in ((d, duration_s), (h, dt_s)):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+            raise HesspipeError(f"{name}: expected a finite number > 0, got {v!r}")
+    if dt_s > max_dt_s:
+        raise HesspipeError(f"{h}: expected at most {max_dt_s:g} s, got {dt_s:g}")
+    n = duration_s / dt_s
+    if not min_samples <= n <= MAX_SAMPLES:
+        raise HesspipeError(f"{d} {duration_s:g} s at {h} {dt_s:g} s is {n:.6g} samples; expected "
+                            f"{min_samples} to {MAX_SAMPLES} samples (at most {MAX_SAMPLES * dt_s:g} s "
+                            f"at this interval)")
+    return int(n)
 
 
 def _check_plausible(path, column: str, dt: float) -> None:

@@ -26,12 +26,11 @@ def register(sub) -> None:
 
 def _run(args) -> int:
     from ..cohort import CohortSpec, synth_cohort
-    from ..errors import HesspipeError
     from ..formats import read_plants
 
-    if not (args.duration > 0 and 0 < args.dt <= 0.1):
-        raise HesspipeError(f"--duration/--dt: expected duration > 0 and 0 < dt <= 0.1 s, got "
-                            f"{args.duration:g} and {args.dt:g}")
+    from ..formats import record_samples
+
+    record_samples(args.duration, args.dt, names=("--duration", "--dt"))  # before any allocation
     plants = read_plants(args.plants)
     effects = [e for e in args.effects.split(",") if e.strip()]
     paths = synth_cohort(plants, args.n, args.seed, effects, args.out,
