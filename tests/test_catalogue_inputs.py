@@ -246,3 +246,23 @@ def test_catalogue_subprocess(inputs, argv, status, pattern):
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == status and "Traceback" not in proc.stderr
     assert re.search(pattern, proc.stdout if status == 0 else proc.stderr)
+
+
+def test_messages_name_only_options_the_reader_has():
+    """The library names settings; each command (or the configuration) spells them its way."""
+    import argparse
+
+    from hesspipe.commands._options import add_run_options, cli_message
+    from hesspipe.stages import _config_terms
+
+    msg = ("a.csv: column 'time': expected uniform sampling ...; set resample to interpolate onto a "
+           "uniform grid")
+    with_opts = argparse.ArgumentParser()
+    add_run_options(with_opts)
+    assert "pass --resample to interpolate" in cli_message(msg, with_opts.parse_args([]))
+    # A command without the option keeps the library's words (no flag it lacks is suggested).
+    assert cli_message(msg, argparse.ArgumentParser().parse_args([])) == msg
+    assert "set [pilots] resample = true to interpolate" in _config_terms(msg)
+    missing = "a.csv: column 'stick' missing (role control); found columns: t; map other names with columns control=NAME"
+    assert 'with [pilots] columns = "control=NAME"' in _config_terms(missing)
+    assert "with --columns control=NAME" in cli_message(missing, with_opts.parse_args([]))

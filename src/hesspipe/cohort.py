@@ -312,9 +312,9 @@ def _check_effects(effects: Sequence[str]) -> tuple[str, ...]:
     effects = tuple(e.strip() for e in effects if e.strip())
     for e in effects:
         if e not in EFFECTS:
-            raise HesspipeError(f"--effects: unknown effect {e!r}; expected one of {', '.join(EFFECTS)}")
+            raise HesspipeError(f"effects: unknown effect {e!r}; expected one of {', '.join(EFFECTS)}")
     if len(set(effects)) != len(effects):
-        raise HesspipeError(f"--effects: an effect is listed twice in {','.join(effects)}")
+        raise HesspipeError(f"effects: an effect is listed twice in {','.join(effects)}")
     return effects
 
 
@@ -349,7 +349,7 @@ def synth_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str] = ("m
         The run CSVs.
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise HesspipeError(f"--n: expected an integer >= 1, got {n!r}")
+        raise HesspipeError(f"n: expected an integer >= 1, got {n!r}")
     effects = _check_effects(effects)
     record_samples(spec.duration_s, spec.dt_s)  # bounded before anything is allocated
     seed = check_seed(seed)

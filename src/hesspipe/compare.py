@@ -538,7 +538,7 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
         No run files at all, bad settings, or an unreachable scheduler.
     """
     if start not in STARTS:
-        raise HesspipeError(f"--start: expected one of {', '.join(STARTS)}, got {start!r}")
+        raise HesspipeError(f"start: expected one of {', '.join(STARTS)}, got {start!r}")
     settings = CompareSettings(seed=check_seed(seed), optimizer=optimizer, passes=int(passes),
                                band=(float(band[0]), float(band[1])), k=int(k),
                                km_fixed=None if km_fixed is None else float(km_fixed), start=start,

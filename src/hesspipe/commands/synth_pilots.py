@@ -10,9 +10,10 @@ def register(sub) -> None:
                                    "in the measured-run format and <id>.truth.json beside each.")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants JSON (Yc, Yd)")
     p.add_argument("--n", required=True, type=int, metavar="N", help="number of pilots")
-    from ._options import add_seed
+    from ._options import add_seed, add_terms
 
     add_seed(p, 0, "base seed")
+    add_terms(p, {r"(^|: )effects: ": r"\1--effects: ", r"(^|: )n: ": r"\1--n: "})
     p.add_argument("--effects", default="motion_feedback", metavar="LIST",
                    help="comma-separated effects every pilot has, '' for none (remnant noise is "
                         "always added; default: %(default)s)")
