@@ -138,6 +138,8 @@ CASES = [
      r"argument --band: expected LOW,HIGH", None),
     ("all-zero control", ID + ["{d}/zero.csv", "--plants", "{d}/plants.json"], REFUSED,
      r"zero\.csv: column 'control' is 0 throughout: no control power, nothing to identify", None),
+    ("diagnose: all-zero control", ["diagnose", "{d}/zero.csv", "--plants", "{d}/plants.json"], REFUSED,
+     r"zero\.csv: column 'control' is 0 throughout", None),
     ("values x 1e300", ID + ["{d}/huge.csv", "--plants", "{d}/plants.json"], REFUSED,
      r"huge\.csv: column 'disturbance': values up to .*e\+300 overflow", None),
     ("fixed and free", ID + ["{d}/run.csv", "--plants", "{d}/plants.json", "--fix", "Ke=1", "--free", "Ke"],
