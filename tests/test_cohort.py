@@ -130,7 +130,7 @@ def test_cli_synth_pilots(tmp_path, capsys):
 @pytest.mark.parametrize("extra, words", [
     (["--effects", "motion,remnant"], "--effects: unknown effect 'motion'; expected one of"),
     (["--n", "0"], "--n: expected an integer >= 1, got 0"),
-    (["--duration", "10"], "fewer than 1024 samples"),
+    (["--duration", "10"], "--duration 10 s at --dt 0.02 s is 500 samples; expected 1024 to"),
 ])
 def test_cli_synth_pilots_errors(tmp_path, capsys, extra, words):
     plants = write_plants(tmp_path / "plants.json", paper_plants())

@@ -198,7 +198,13 @@ def test_pilots_config_defaults_and_errors():
                          ({"optimizer": "ga"}, "field 'pilots.optimizer'"),
                          ({"effects": "motion_feedback"}, "field 'pilots.effects': expected a list"),
                          ({"nn": 3}, "field 'pilots.nn': unknown field"),
-                         ({"duration_s": 5.0}, "field 'pilots.duration_s': expected at least 1024 samples")]:
+                         ({"duration_s": 5.0}, "field 'pilots.duration_s': duration_s 5 s at dt_s 0.02 s is "
+                                               "250 samples; expected 1024 to"),
+                         ({"duration_s": 1e9}, "field 'pilots.duration_s': duration_s 1e\\+09 s"),
+                         ({"seed": -1}, "field 'pilots.seed': expected an integer >= 0"),
+                         ({"seed": 2 ** 63}, "field 'pilots.seed': expected an integer >= 0 <= 9223372036854775807"),
+                         ({"resample": "yes"}, "field 'pilots.resample': expected true or false"),
+                         ({"columns": "stick"}, "field 'pilots.columns': columns: expected ROLE=NAME")]:
         with pytest.raises(HesspipeError, match=words.replace(".", r"\.").replace("(", r"\(")):
             PilotsConfig.from_table(table, "x.toml")
 

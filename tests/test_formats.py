@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import control as ct
 import numpy as np
@@ -64,7 +65,7 @@ def test_column_mapping(tmp_path):
 
 
 @pytest.mark.parametrize("spec, words", [
-    ("control", ["--columns", "ROLE=NAME", "'control'"]),
+    ("control", ["columns: expected ROLE=NAME", "'control'"]),
     ("stick=control", ["unknown role", "'stick'"]),
 ])
 def test_bad_column_mapping(tmp_path, spec, words):
@@ -80,7 +81,8 @@ def test_missing_column_names_file_column_and_hint(tmp_path):
     with pytest.raises(HesspipeError) as info:
         read_run(path)
     msg = str(info.value)
-    assert str(path) in msg and "'control'" in msg and "--columns control=NAME" in msg
+    assert str(path) in msg and "'control'" in msg and "columns control=NAME" in msg
+    assert "--" not in msg  # the library names its settings, never a command-line flag
     assert "\n" not in msg
 
 
@@ -101,7 +103,7 @@ def test_non_uniform_time_fails_unless_resampled(tmp_path):
     rows = _rows(n=101)
     del rows[40]  # one dropped sample: a 0.04 s gap
     path = _csv(tmp_path / "f.csv", ("time", "disturbance", "output", "control"), rows)
-    with pytest.raises(HesspipeError, match=r"column 'time': expected uniform sampling.*--resample"):
+    with pytest.raises(HesspipeError, match=r"column 'time': expected uniform sampling.*set resample"):
         read_run(path)
     run = read_run(path, resample=True)
     assert len(run) == 101
@@ -173,3 +175,109 @@ def test_bad_plants(tmp_path, obj, words):
     path.write_text(json.dumps(obj))
     with pytest.raises(HesspipeError, match=words):
         read_plants(path)
+
+
+# -- issue 10: real time columns, implausible values, plants dt, record length, seeds ---------
+
+def _time_csv(path, times, n=None):
+    n = len(times)
+    rows = [(t, 0.5 * i, 0.01 * i, -0.2 * i) for i, t in enumerate(times)]
+    return _csv(path, ("time", "disturbance", "output", "control"), rows)
+
+
+@pytest.mark.parametrize("fmt, dt, offset", [
+    ("{:.9g}", 1 / 60, 0.0),          # synth-pilots at 1/60 s: rounded at 1e-7 s once t >= 10 s
+    ("{:.6g}", 1 / 120, 0.0),         # 6 significant digits
+    ("{:.3f}", 1 / 60, 0.0),          # millisecond stamps
+    ("{:.6f}", 1 / 60, 1.7e9),        # Unix epoch, microseconds
+])
+def test_rounded_time_accepted_with_interval_from_whole_record(tmp_path, fmt, dt, offset):
+    n = 3000
+    times = [fmt.format(offset + i * dt) for i in range(n)]
+    run = read_run(_time_csv(tmp_path / "r.csv", times))
+    # The interval is estimated over the whole span, not one rounded difference.
+    assert run.dt == pytest.approx(dt, rel=1e-7)
+    assert np.max(np.abs(np.diff(run.time - run.time[0]) - run.dt)) < 1e-9 * max(1.0, offset)
+    assert abs(run.time[0] - offset) <= 1e-3
+
+
+def test_jitter_beyond_tolerance_refused_with_spread(tmp_path):
+    rng = np.random.default_rng(2)
+    t = 0.02 * np.arange(2000) + rng.uniform(-1e-5, 1e-5, 2000)   # 1e-3 of the interval
+    path = _time_csv(tmp_path / "j.csv", [f"{v:.9f}" for v in t])
+    with pytest.raises(HesspipeError, match=r"within 0\.0001 of .*up to [0-9.e-]+ of the interval off\); "
+                                            r"set resample"):
+        read_run(path)
+    ok = _time_csv(tmp_path / "k.csv", [f"{v:.9f}" for v in 0.02 * np.arange(2000)
+                                        + rng.uniform(-5e-7, 5e-7, 2000)])   # 5e-5 of it
+    assert read_run(ok).dt == pytest.approx(0.02, rel=1e-6)
+    assert len(read_run(path, resample=True)) >= 1999
+
+
+def test_implausible_interval_and_overflowing_values_refused(tmp_path):
+    ms = _time_csv(tmp_path / "ms.csv", [str(20 * i) for i in range(50)])
+    with pytest.raises(HesspipeError, match=r"sample interval 20 s .*implausible.*milliseconds"):
+        read_run(ms)
+    rows = [(0.02 * i, 1e300, 0.0, 1e300 * (i % 2)) for i in range(50)]
+    big = _csv(tmp_path / "big.csv", ("time", "disturbance", "output", "control"), rows)
+    with pytest.raises(HesspipeError, match=r"column 'disturbance': values up to 1e\+300 overflow"):
+        read_run(big)
+
+
+def test_bom_and_crlf(tmp_path):
+    text = "# synthetic run\r\ntime,disturbance,output,control\r\n" + "".join(
+        f"{0.02 * i:.9g},{i},{0.1 * i},{-i}\r\n" for i in range(40))
+    path = tmp_path / "b.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    run = read_run(path)
+    assert run.synthetic and run.comments == ("synthetic run",) and len(run) == 40
+
+
+def test_in_memory_run_dt_is_the_mean_interval():
+    t = 1.7e9 + np.arange(1000) / 120.0
+    run = Run(t, *(np.zeros(1000),) * 4)
+    assert run.dt == pytest.approx(1 / 120, rel=1e-8)   # t[1] - t[0] alone is off by 3e-5
+
+
+@pytest.mark.parametrize("dt, ok", [(None, True), (0, True), (0.0, True), (0.05, False), ("x", False),
+                                    (True, False)])
+def test_plants_dt_key(tmp_path, dt, ok):
+    obj = {"control_to_output": {"num": [2.0], "den": [1.0, 1.0], "dt": dt},
+           "disturbance_to_output": {"num": [1.0], "den": [1.0, 2.0]}}
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(obj))
+    if ok:
+        assert read_plants(path).control_to_output.dt == 0
+    else:
+        with pytest.raises(HesspipeError, match=r"field 'control_to_output\.dt'.*discrete-time"):
+            read_plants(path)
+
+
+def test_record_samples_bounds_before_allocating():
+    from hesspipe.formats import MAX_SAMPLES, record_samples
+
+    assert record_samples(70.0, 0.02) == 3500
+    for args, words in [((float("inf"), 0.02), "duration_s: expected a finite number > 0, got inf"),
+                        ((1e9, 0.02), "is 5e+10 samples; expected 1024 to"),
+                        ((70.0, 0.0), "dt_s: expected a finite number > 0"),
+                        ((70.0, 0.5), "dt_s: expected at most 0.1 s"),
+                        ((10.0, 0.02), "is 500 samples")]:
+        with pytest.raises(HesspipeError, match=re.escape(words)):
+            record_samples(*args)
+    with pytest.raises(HesspipeError, match=re.escape("--duration 1e+09 s at --dt")):
+        record_samples(1e9, 0.02, names=("--duration", "--dt"))
+    assert record_samples(MAX_SAMPLES * 0.02, 0.02) == MAX_SAMPLES
+
+
+def test_seed_rule_no_wrap_around():
+    from hesspipe.seeds import MAX_SEED, check_seed, derive_seed
+
+    assert check_seed(0) == 0 and check_seed(np.int64(5)) == 5 and check_seed(MAX_SEED) == MAX_SEED
+    for bad in (-1, MAX_SEED + 1, 2 ** 64, 1.0, True, "3", None):
+        with pytest.raises(HesspipeError, match=r"seed: expected an integer 0 <= seed < 2\*\*63"):
+            check_seed(bad)
+        with pytest.raises(HesspipeError):
+            derive_seed(bad, "pilot01")
+    # Before: base & 0xFFFFFFFF made 2**64 + 1 and 1 (and -1 and 2**64 - 1) the same streams.
+    assert derive_seed(1, "a") != derive_seed(2 ** 32 + 1, "a") != derive_seed(2 ** 33 + 1, "a")
+    assert len({derive_seed(s, "a") for s in (0, 1, 2 ** 32, 2 ** 62, MAX_SEED)}) == 5

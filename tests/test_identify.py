@@ -260,3 +260,44 @@ def test_psd_figure_is_reusable(data, tmp_path):
     assert "fitness" in a.get_legend().get_texts()[1].get_text()
     path = save_figure(fig, tmp_path / "two.png", synthetic=True)
     assert path.stat().st_size > 1000
+
+
+# -- issue 10: values the identification must refuse, and never NaN ---------------------------
+
+def test_refuses_what_would_identify_nothing_or_the_impossible(data):
+    pl, _, run = data
+    for kwargs, words in [
+        ({"free": ["Ke"], "fixed": {"Ke": 1.0}}, r"free: 'Ke' is also fixed"),
+        ({"fixed": {"Ke": -5.0}}, r"fixed: Ke = -5 is outside the parameter's range 0\.\.[0-9.]+"),
+        ({"fixed": {"tau0": 3.0}}, r"fixed: tau0 = 3 is outside the parameter's range 0\.\.1\.023"),
+        ({"seed": -1}, r"seed: expected an integer 0 <= seed < 2\*\*63, got -1"),
+        ({"band": (0.0, 1000.0)}, r"band: high edge 1000 Hz is above the data's Nyquist frequency 25 Hz"),
+    ]:
+        with pytest.raises(HesspipeError, match=words) as info:
+            identify(run, pl, "original", optimizer="scipy", passes=1, with_benchmark=False, **kwargs)
+        assert "--" not in str(info.value)  # library terms, never a command-line flag
+    flat = Run(run.time, run.disturbance, run.output, np.zeros(len(run)), run.reference, id="flat")
+    with pytest.raises(HesspipeError, match=r"flat: column 'control' is 0 throughout: no control power"):
+        identify(flat, pl, "original", with_benchmark=False)
+
+
+def test_fitness_is_finite_even_where_growth_rate_is_undefined(data, monkeypatch):
+    pl, _, run = data
+    model = PilotModel()
+    obj = SpectralObjective(run, pl, model, model.complete(TRUE))
+    monkeypatch.setattr(obj.sim, "growth_rate", lambda loop: float("nan"))
+    value = obj({"Ke": 12.0})
+    assert np.isfinite(value) and value >= UNSTABLE_FITNESS
+
+
+def test_unstable_optimum_reports_finite_fitness(data):
+    """README: unstable sets score a finite value >= 1e12, never NaN (a double integrator
+    with the k = 1 structure: no stable loop in the box)."""
+    import control as ct
+
+    from hesspipe.formats import Plants
+
+    pl, _, run = data
+    di = Plants(ct.tf([1.0], [1.0, 0.0, 0.0]), pl.disturbance_to_output)
+    res = identify(run, di, "original", free=["Ke"], optimizer="scipy", passes=1, with_benchmark=False)
+    assert not res.stable and np.isfinite(res.fitness) and res.fitness >= UNSTABLE_FITNESS

@@ -71,4 +71,8 @@ def test_fitness_is_rms_difference_over_band():
     with pytest.raises(HesspipeError, match="band"):
         fitness(a, b, f, band=(5.0, 1.0))
     with pytest.raises(HesspipeError, match="no frequency bin"):
+        fitness(a, b, f, band=(1.001, 1.02))
+    # Bins stop at the Nyquist frequency: a band reaching above it is refused, not clipped.
+    with pytest.raises(HesspipeError, match="band: high edge 40 Hz is above the data's Nyquist frequency 25 Hz"):
         fitness(a, b, f, band=(30.0, 40.0))
+    assert fitness(a, b, f, band=(0.0, 25.0)) == pytest.approx(0.5)

@@ -40,7 +40,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except HesspipeError as exc:
-        print(f"hesspipe: error: {exc}", file=sys.stderr)
+        from .commands._options import cli_message  # library setting names -> this command's options
+
+        print(f"hesspipe: error: {cli_message(str(exc), args)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("hesspipe: interrupted", file=sys.stderr)

@@ -66,10 +66,10 @@ from typing import Sequence
 import numpy as np
 
 from .errors import HesspipeError
-from .formats import Plants, tf_coefficients, write_run
+from .formats import Plants, record_samples, tf_coefficients, write_run
 from .io import staged_output, write_json
 from .provenance import versions
-from .seeds import derive_seed
+from .seeds import check_seed, derive_seed
 from .wind import Excitation, SideWind
 
 #: Remnant noise is part of every synthetic pilot: real pilots are never noise free.
@@ -312,9 +312,9 @@ def _check_effects(effects: Sequence[str]) -> tuple[str, ...]:
     effects = tuple(e.strip() for e in effects if e.strip())
     for e in effects:
         if e not in EFFECTS:
-            raise HesspipeError(f"--effects: unknown effect {e!r}; expected one of {', '.join(EFFECTS)}")
+            raise HesspipeError(f"effects: unknown effect {e!r}; expected one of {', '.join(EFFECTS)}")
     if len(set(effects)) != len(effects):
-        raise HesspipeError(f"--effects: an effect is listed twice in {','.join(effects)}")
+        raise HesspipeError(f"effects: an effect is listed twice in {','.join(effects)}")
     return effects
 
 
@@ -349,11 +349,10 @@ def synth_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str] = ("m
         The run CSVs.
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise HesspipeError(f"--n: expected an integer >= 1, got {n!r}")
+        raise HesspipeError(f"n: expected an integer >= 1, got {n!r}")
     effects = _check_effects(effects)
-    if spec.duration_s / spec.dt_s < 1024:
-        raise HesspipeError(f"duration {spec.duration_s:g} s at dt {spec.dt_s:g} s gives fewer than "
-                            "1024 samples; expected at least one spectral segment")
+    record_samples(spec.duration_s, spec.dt_s)  # bounded before anything is allocated
+    seed = check_seed(seed)
     out_dir = Path(out_dir)
     ids = pilot_ids(n)
     summary = []

@@ -35,9 +35,9 @@ import numpy as np
 from .batch import run_batch
 from .config import Fields
 from .errors import HesspipeError
-from .formats import Plants, Run, _parse_columns, read_run
+from .formats import Plants, Run, _parse_columns, read_run, record_samples
 from .io import write_json, write_text
-from .seeds import derive_seed
+from .seeds import MAX_SEED, check_seed, derive_seed
 
 CONFIGURATIONS = ("original", "expanded_fixed", "expanded")
 #: Parameters shown in the comparison table (Table 5's columns).
@@ -292,7 +292,7 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
     loop = model.loop(complete)
     sim_psd = obj.loop_psd(loop)
     fit = (float(np.sqrt(np.mean((obj.measured[obj.mask] - sim_psd[obj.mask]) ** 2)))
-           if sim_psd is not None else math.nan)
+           if sim_psd is not None else obj.unstable_fitness(loop))  # finite, never NaN
     bench_fit, bench_par = math.nan, {}
     if benchmark:
         bench = mcruer_benchmark(run, plants, band=band)
@@ -429,7 +429,9 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
         expanded_d = expanded.to_dict(spectra=False)
     expanded_d.update(evaluations_total=spent["expanded"], search=search)
     o_fit, e_fit = original_d["fitness"], expanded_d["fitness"]
-    improvement = 1.0 - e_fit / o_fit if o_fit and math.isfinite(o_fit) and o_fit > 0 else math.nan
+    # Undefined (NaN) when either optimum is unstable: their scores are penalties, not fits.
+    improvement = (1.0 - e_fit / o_fit if original_d.get("stable", True) and expanded_d.get("stable", True)
+                   and o_fit and math.isfinite(o_fit) and o_fit > 0 else math.nan)
     return PilotComparison(
         id=run.id, source=run.source, synthetic=run.synthetic,
         original=original_d, expanded_fixed=fixed, expanded=expanded_d, improvement=float(improvement),
@@ -536,8 +538,8 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
         No run files at all, bad settings, or an unreachable scheduler.
     """
     if start not in STARTS:
-        raise HesspipeError(f"--start: expected one of {', '.join(STARTS)}, got {start!r}")
-    settings = CompareSettings(seed=int(seed), optimizer=optimizer, passes=int(passes),
+        raise HesspipeError(f"start: expected one of {', '.join(STARTS)}, got {start!r}")
+    settings = CompareSettings(seed=check_seed(seed), optimizer=optimizer, passes=int(passes),
                                band=(float(band[0]), float(band[1])), k=int(k),
                                km_fixed=None if km_fixed is None else float(km_fixed), start=start,
                                restarts=int(restarts), benchmark=bool(benchmark))
@@ -674,6 +676,10 @@ class PilotsConfig:
         Also compute the McRuer benchmark score per pilot.
     figures : bool
         Write a PSD figure per pilot.
+    columns : str
+        Column names of the data's files, "ROLE=NAME,..." ("": the format's names).
+    resample : bool
+        Interpolate non-uniform time columns onto a uniform grid instead of refusing them.
     """
 
     data: str = ""
@@ -692,6 +698,8 @@ class PilotsConfig:
     restarts: int = 2
     benchmark: bool = False
     figures: bool = True
+    columns: str = ""
+    resample: bool = False
 
     @classmethod
     def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
@@ -699,7 +707,7 @@ class PilotsConfig:
         d = cls()
         effects = f.strings("effects", d.effects)
         _check_effects(effects, f"{source}: field '{prefix}.effects'")
-        seed = f.integer("seed", None, min=0)
+        seed = f.integer("seed", None, min=0, max=MAX_SEED)
         band = f.numbers("band_hz", list(d.band_hz), length=2)
         if not 0 <= band[0] < band[1]:
             raise f.error("band_hz", "[low, high] Hz with 0 <= low < high", list(band))
@@ -715,11 +723,15 @@ class PilotsConfig:
                   band_hz=band, km_fixed=km, start=f.string("start", d.start, choices=STARTS),
                   restarts=f.integer("restarts", d.restarts, min=1),
                   benchmark=f.boolean("benchmark", d.benchmark),
-                  figures=f.boolean("figures", d.figures))
+                  figures=f.boolean("figures", d.figures),
+                  columns=f.string("columns", d.columns), resample=f.boolean("resample", d.resample))
         f.reject_unknown()
-        if cfg.duration_s / cfg.dt_s < MIN_SAMPLES:
-            raise f.error("duration_s", f"at least {MIN_SAMPLES} samples (duration_s / dt_s) for the "
-                          "spectra", cfg.duration_s)
+        try:
+            _parse_columns(cfg.columns)
+            record_samples(cfg.duration_s, cfg.dt_s, min_samples=MIN_SAMPLES)
+        except HesspipeError as exc:
+            field = "columns" if str(exc).startswith("columns") else "duration_s"
+            raise HesspipeError(f"{source}: field '{prefix}.{field}': {exc}") from None
         return cfg
 
 
@@ -747,7 +759,7 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
                             scheduler=config.scheduler or None, seed=seed, optimizer=config.optimizer,
                             passes=config.passes, band=config.band_hz, km_fixed=config.km_fixed,
                             start=config.start, restarts=config.restarts, benchmark=config.benchmark,
-                            progress=progress)
+                            columns=config.columns or None, resample=config.resample, progress=progress)
     write_comparison(result, out_dir, figures=config.figures)
     return result
 

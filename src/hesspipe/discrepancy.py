@@ -1122,6 +1122,11 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     base = _resolve_model(model)
     cands = _resolve_candidates(base, candidates, cfg)
     cfg = replace(cfg, candidates=cands)  # what was actually tried, for the record
+    from .identify import check_control  # a control that never moves holds nothing to diagnose
+    from .seeds import check_seed
+
+    check_seed(seed)
+    check_control(run)
     _check_inputs(run, plants, cfg)
     check = plant_check(run, plants, max_lag=cfg.max_lag)
     if not math.isfinite(check.fit_percent) or check.fit_percent < cfg.min_plant_fit:

@@ -400,9 +400,9 @@ def _check_envelope(t, rec, vc_trim, config: FlightConfig, label: str) -> None:
 # --------------------------------------------------------------------------- public
 
 def _check_seed(seed) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise HesspipeError(f"seed: expected an integer >= 0, got {seed!r}")
-    return int(seed)
+    from .seeds import check_seed  # the one seed rule
+
+    return check_seed(seed)
 
 
 def record_seeds(seed: int) -> tuple[np.random.SeedSequence, np.random.SeedSequence]:

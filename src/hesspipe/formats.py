@@ -34,6 +34,18 @@ from .io import write_json, write_text
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
 OPTIONAL_COLUMNS = ("reference",)
 
+#: "Uniform" sampling (SPEC.md "Time"): every interval within this fraction of the
+#: interval, beyond what the precision the times are written with explains.
+UNIFORM_RTOL = 1e-4
+#: Longest sample interval of a plausible tracking run, s (a time column in
+#: milliseconds read as seconds gives 10-20 s intervals).
+MAX_INTERVAL_S = 1.0
+#: Largest magnitude of a signal whose power spectrum is finite in float64 with room to spare.
+MAX_MAGNITUDE = 1e100
+#: Most samples of one run: the simulator's padded FFT grid holds up to 16 times this in
+#: complex numbers per spectrum, so longer records exhaust memory before they are useful.
+MAX_SAMPLES = 1 << 18
+
 
 @dataclass(frozen=True)
 class Run:
@@ -65,11 +77,15 @@ class Run:
     synthetic: bool = False
     comments: tuple[str, ...] = ()
     source: str = ""
+    interval: float = 0.0
 
     @property
     def dt(self) -> float:
-        """Sample interval in s."""
-        return float(self.time[1] - self.time[0])
+        """Sample interval in s: `interval` if set (the reader's estimate over the whole
+        record), else the mean interval of `time` (never one rounded difference)."""
+        if self.interval > 0:
+            return float(self.interval)
+        return float((self.time[-1] - self.time[0]) / (len(self.time) - 1))
 
     @property
     def fs(self) -> float:
@@ -97,24 +113,32 @@ def _parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
             if not item.strip():
                 continue
             if "=" not in item:
-                raise HesspipeError(f"--columns: expected ROLE=NAME pairs separated by commas, got {item!r}")
+                raise HesspipeError(f"columns: expected ROLE=NAME pairs separated by commas, got {item!r}")
             role, name = (s.strip() for s in item.split("=", 1))
             pairs[role] = name
     for role in pairs:
         if role not in RUN_COLUMNS + OPTIONAL_COLUMNS:
-            raise HesspipeError(f"--columns: unknown role {role!r}; expected one of "
+            raise HesspipeError(f"columns: unknown role {role!r}; expected one of "
                                 f"{', '.join(RUN_COLUMNS + OPTIONAL_COLUMNS)}")
+        if not isinstance(pairs[role], str) or not pairs[role].strip():
+            raise HesspipeError(f"columns: role {role!r}: expected a column name, got {pairs[role]!r}")
     return pairs
 
 
 def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None,
-             resample: bool = False, min_samples: int = 2, rtol: float = 1e-6) -> Run:
+             resample: bool = False, min_samples: int = 2, rtol: float = UNIFORM_RTOL) -> Run:
     """Read and validate a measured run.
+
+    Times are accepted as written by real recorders: rounded to any number of
+    digits, with jitter up to `rtol` of the interval, offset by an epoch (Unix
+    time stamps). The run's time is then the uniform grid fitted to them and
+    :attr:`Run.dt` the interval estimated over the whole record.
 
     Parameters
     ----------
     path : path
-        CSV file in the measured-run format.
+        CSV file in the measured-run format (UTF-8 with or without a byte-order
+        mark, LF or CRLF line ends).
     columns : str or mapping, optional
         Role → column-name mapping for files with other names, e.g.
         ``"control=stick,output=p"``.
@@ -124,7 +148,8 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     min_samples : int
         Fewest samples accepted (callers pass what their spectra need).
     rtol : float
-        Relative tolerance on the sample interval for "uniform".
+        Relative tolerance on every interval for "uniform", beyond the rounding
+        of the written times (SPEC.md: 1e-4).
 
     Raises
     ------
@@ -135,30 +160,93 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     mapping = _parse_columns(columns)
     names = {role: mapping.get(role, role) for role in RUN_COLUMNS + OPTIONAL_COLUMNS}
     data, comments = read_csv_columns(path, names, optional=OPTIONAL_COLUMNS,
-                                      what="a measured-run CSV", hint="--columns")
+                                      what="a measured-run CSV", hint="columns")
     n = len(data["time"])
     if n < max(min_samples, 2):
         raise HesspipeError(f"{path}: {n} samples; expected at least {max(min_samples, 2)}")
+    if n > MAX_SAMPLES:
+        raise HesspipeError(f"{path}: {n} samples; expected at most {MAX_SAMPLES} per run "
+                            "(split the record)")
+    for role, values in data.items():
+        big = float(np.max(np.abs(values)))
+        if big > MAX_MAGNITUDE:
+            raise HesspipeError(f"{path}: column '{names[role]}': values up to {big:.3g} overflow a "
+                                f"power spectrum; expected magnitudes below {MAX_MAGNITUDE:g} "
+                                "(check the column's units)")
     t = data["time"]
-    dt, uniform = sample_interval(path, t, names["time"], rtol=rtol)
+    tcol = names["time"]
+    dt, uniform = sample_interval(path, t, tcol, rtol=rtol)
     if not uniform:
-        steps = np.diff(t)
+        steps = np.diff(t - t[0])
         if not resample:
-            raise HesspipeError(f"{path}: column '{names['time']}': expected uniform "
-                                f"sampling (interval {dt:g} s), found intervals from {steps.min():g} "
-                                f"to {steps.max():g} s; pass --resample to interpolate")
-        grid = t[0] + dt * np.arange(int(math.floor((t[-1] - t[0]) / dt + 1e-9)) + 1)
-        data = {k: (grid if k == "time" else np.interp(grid, t, v)) for k, v in data.items()}
+            spread = float(np.max(np.abs(steps - dt)) / dt)
+            raise HesspipeError(f"{path}: column '{tcol}': expected uniform sampling (every interval "
+                                f"within {rtol:g} of {dt:.9g} s), found intervals from {steps.min():.9g} "
+                                f"to {steps.max():.9g} s (up to {spread:.2g} of the interval off); "
+                                "set resample to interpolate onto a uniform grid")
+        t0, rel = t[0], t - t[0]
+        grid = dt * np.arange(int(math.floor(rel[-1] / dt + 1e-9)) + 1)
+        data = {k: (t0 + grid if k == "time" else np.interp(grid, rel, v)) for k, v in data.items()}
+    else:
+        data["time"] = t[0] + dt * np.arange(n, dtype=float) + _intercept(t, dt)
+    _check_plausible(path, tcol, dt)
     ref = data.get("reference", np.zeros_like(data["time"]))
     return Run(time=data["time"], disturbance=data["disturbance"], output=data["output"],
                control=data["control"], reference=ref, id=path.stem,
                synthetic=any("synthetic" in c.lower() for c in comments),
-               comments=comments, source=str(path))
+               comments=comments, source=str(path), interval=dt)
+
+
+def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = 1024,
+                   max_dt_s: float = 0.1) -> int:
+    """Samples of a record of `duration_s` at `dt_s`, checked before anything is allocated.
+
+    Parameters
+    ----------
+    duration_s, dt_s : float
+        Record length and sample interval, s.
+    names : (str, str)
+        How the caller calls the two values (for messages).
+    min_samples : int
+        Fewest samples (one spectral segment by default).
+    max_dt_s : float
+        Longest sample interval, s.
+
+    Raises
+    ------
+    HesspipeError
+        Not finite, not positive, an interval above `max_dt_s`, or a sample count
+        outside ``min_samples..MAX_SAMPLES`` (a longer record would exhaust memory).
+    """
+    d, h = names
+    for name, v in ((d, duration_s), (h, dt_s)):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+            raise HesspipeError(f"{name}: expected a finite number > 0, got {v!r}")
+    if dt_s > max_dt_s:
+        raise HesspipeError(f"{h}: expected at most {max_dt_s:g} s, got {dt_s:g}")
+    n = duration_s / dt_s
+    if not min_samples <= n <= MAX_SAMPLES:
+        raise HesspipeError(f"{d} {duration_s:g} s at {h} {dt_s:g} s is {n:.6g} samples; expected "
+                            f"{min_samples} to {MAX_SAMPLES} samples (at most {MAX_SAMPLES * dt_s:g} s "
+                            f"at this interval)")
+    return int(n)
+
+
+def _check_plausible(path, column: str, dt: float) -> None:
+    """Refuse sample intervals no tracking run has (usually times in milliseconds)."""
+    if dt > MAX_INTERVAL_S:
+        hint = (" (the time column looks like milliseconds: write it in seconds)"
+                if 1.0 < dt <= 100.0 else "")
+        raise HesspipeError(f"{path}: column '{column}': sample interval {dt:g} s "
+                            f"({1.0 / dt:.3g} Hz) is implausible for a tracking run; expected "
+                            f"seconds with an interval of at most {MAX_INTERVAL_S:g} s{hint}")
 
 
 def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
                      what: str = "a CSV", hint: str | None = None) -> tuple[dict, tuple[str, ...]]:
     """Read numeric columns of a CSV with ``#`` comment lines.
+
+    UTF-8 with or without a byte-order mark; LF or CRLF line ends.
 
     Parameters
     ----------
@@ -170,7 +258,8 @@ def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
     what : str
         What the file should be, for messages ("a measured-run CSV").
     hint : str, optional
-        Command-line option that maps other column names (named in the message).
+        Name of the setting that maps other column names (named in the message,
+        e.g. "columns": "map other names with columns control=NAME").
 
     Returns
     -------
@@ -186,13 +275,16 @@ def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        # utf-8-sig: a byte-order mark (Excel, Notepad) must not hide the first line.
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise HesspipeError(f"{path}: file not found; expected {what}") from None
     except IsADirectoryError:
         raise HesspipeError(f"{path}: is a folder, expected {what}") from None
     except UnicodeDecodeError:
         raise HesspipeError(f"{path}: not a UTF-8 text file, expected {what}") from None
+    except OSError as exc:
+        raise HesspipeError(f"{path}: cannot be read ({exc.strerror or exc}); expected {what}") from None
     comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
                      if line.lstrip().startswith("#"))
     try:
@@ -219,21 +311,59 @@ def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
     return data, comments
 
 
-def sample_interval(path, t: np.ndarray, column: str = "time", *, rtol: float = 1e-6) -> tuple[float, bool]:
-    """Median sample interval of `t` and whether it is uniform within `rtol`.
+def _written_resolution(t: np.ndarray) -> np.ndarray:
+    """Place value of the last digit each time was written with (from the shortest text
+    that reads back as the same float): 1e-7 for ``60.0166667``, 1e-3 for ms stamps."""
+    out = np.empty(t.size)
+    for i, v in enumerate(t.tolist()):
+        mant, _, exp = repr(float(v)).partition("e")
+        whole, _, frac = mant.partition(".")
+        digits = 0 if frac in ("", "0") else len(frac)
+        out[i] = 10.0 ** (int(exp or 0) - digits)
+    return out
+
+
+def _intercept(t: np.ndarray, dt: float) -> float:
+    """Offset from ``t[0]`` of the uniform grid with interval `dt` closest to `t`."""
+    rel = t - t[0]
+    return float(np.mean(rel - dt * np.arange(t.size)))
+
+
+def sample_interval(path, t: np.ndarray, column: str = "time", *,
+                    rtol: float = UNIFORM_RTOL) -> tuple[float, bool]:
+    """Sample interval of `t` and whether the sampling is uniform.
+
+    Times are taken relative to the first (Unix-epoch stamps keep their
+    precision). The interval is the least-squares slope of time against
+    sample number over the whole record (rounding averages out). Uniform
+    means every interval is within `rtol` of it plus what the rounding of the
+    two written times explains (SPEC.md "Time"). For non-uniform times the
+    median interval is returned (the grid of a resampling).
 
     Raises
     ------
     HesspipeError
         If `t` is not strictly increasing (naming the file, the column and the row).
     """
-    steps = np.diff(t)
+    t = np.asarray(t, dtype=float)
+    rel = t - t[0]
+    steps = np.diff(rel)
     if np.any(steps <= 0):
         row = int(np.argmax(steps <= 0)) + 1
         raise HesspipeError(f"{path}: column '{column}': expected strictly increasing time, "
                             f"not at data row {row + 1}")
-    dt = float(np.median(steps))
-    return dt, bool(np.max(np.abs(steps - dt)) <= rtol * dt + 1e-12)
+    # What writing the times to text explains: half a last digit on each end, plus the
+    # float64 spacing of the absolute times (epoch stamps) and of their difference.
+    res = _written_resolution(t)
+    rounding = 0.5 * (res[1:] + res[:-1]) + 2.0 * np.spacing(np.abs(t[1:]) + np.abs(t[:-1]))
+    # The interval over the whole record (rounded intervals are biased: with 6 digits most
+    # 1/60 s steps read 0.0167, so their median is not the interval).
+    i = np.arange(t.size, dtype=float)
+    i -= i.mean()
+    slope = float(np.dot(i, rel - rel.mean()) / np.dot(i, i))
+    if slope > 0 and np.all(np.abs(steps - slope) <= rtol * slope + rounding):
+        return slope, True
+    return float(np.median(steps)), False
 
 
 def write_run(path: str | Path, run: Run, comments: tuple[str, ...] | list[str] = ()) -> Path:
@@ -287,6 +417,13 @@ def tf_coefficients(sys: ct.TransferFunction) -> dict:
 def _read_tf(obj, path, key) -> ct.TransferFunction:
     if not isinstance(obj, Mapping):
         raise HesspipeError(f"{path}: field '{key}': expected an object with 'num' and 'den', got {obj!r}")
+    dt = obj.get("dt")
+    # python-control's convention: dt None or 0 is continuous time; anything else is a
+    # sampled system whose coefficients mean powers of z, not s.
+    if dt is not None and not (isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt == 0):
+        raise HesspipeError(f"{path}: field '{key}.dt': {dt!r} makes it a discrete-time transfer "
+                            "function; expected continuous time (dt null or 0, or no dt): convert "
+                            "it to continuous time first")
     coeffs = {}
     for part in ("num", "den"):
         value = obj.get(part)

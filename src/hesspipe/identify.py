@@ -29,8 +29,9 @@ from scipy.optimize import differential_evolution
 from .apid import ClimbResult, Field, bit_climb
 from .crossover import Crossover, CrossoverLimits, loop_crossover
 from .errors import HesspipeError
-from .hess import STRUCTURAL, UNSTABLE_FITNESS, PilotModel, Simulator, gain_scale, model_from_name
+from .hess import LOOP_GAINS, STRUCTURAL, UNSTABLE_FITNESS, PilotModel, Simulator, gain_scale, model_from_name
 from .mcruer import bounded_powell
+from .seeds import check_seed
 
 STABLE_CAP = UNSTABLE_FITNESS / 10
 from .spectra import PaperWelch, band_mask, psd
@@ -81,6 +82,10 @@ class SpectralObjective:
                              noise_seed=noise_seed)
         self.freq_hz, self.measured = psd(run.control, run.fs, method=psd_method)
         self.mask = band_mask(self.freq_hz, self.band)
+        if not np.all(np.isfinite(self.measured)):
+            raise HesspipeError(f"{run.source or run.id}: the control's power spectrum overflows "
+                                f"(control up to {np.max(np.abs(run.control)):.3g}); expected a "
+                                "control signal in its physical units")
         self.calls = 0
 
     def params(self, values: Mapping[str, float]) -> dict:
@@ -100,8 +105,7 @@ class SpectralObjective:
 
     def unstable_fitness(self, loop) -> float:
         """Graded worst fitness: >= UNSTABLE_FITNESS, growing with the loop's growth rate."""
-        rate = self.sim.growth_rate(loop)
-        return UNSTABLE_FITNESS * (1.0 + min(max(rate, 0.0), 1000.0))
+        return _graded(self.sim.growth_rate(loop))
 
     def score_loop(self, loop, threshold: float | None = None) -> float:
         """Fitness of a loop; unstable: at least UNSTABLE_FITNESS.
@@ -115,7 +119,7 @@ class SpectralObjective:
         if threshold is None:
             rate = self.sim.growth_rate(loop)
             if not rate < 0.0:
-                return UNSTABLE_FITNESS * (1.0 + min(max(rate, 0.0), 1000.0))
+                return _graded(rate)
         sim = self.loop_psd(loop, check_stability=False)
         if sim is None:
             return self.unstable_fitness(loop)
@@ -138,6 +142,12 @@ class SpectralObjective:
         return self.score_loop(self.model.loop(self.params(values)), threshold)
 
 
+def _graded(rate: float) -> float:
+    """Fitness of an unstable (or undecidable: NaN growth rate) loop: finite, >= UNSTABLE_FITNESS."""
+    rate = float(rate) if np.isfinite(rate) else 1000.0
+    return UNSTABLE_FITNESS * (1.0 + min(max(rate, 0.0), 1000.0))
+
+
 @dataclass(frozen=True)
 class Identification:
     """Result of :func:`identify`.
@@ -151,7 +161,9 @@ class Identification:
     free, fixed : tuple / dict
         Identified names; fixed name → value (user-fixed only).
     fitness : float
-        RMS PSD difference over the band at the optimum (lower is better).
+        RMS PSD difference over the band at the optimum (lower is better);
+        never NaN: an unstable optimum keeps its graded score >= UNSTABLE_FITNESS
+        (and ``stable`` is False).
     benchmark_fitness : float
         The same fitness for the McRuer precision model fitted to the data
         (NaN if not computed).
@@ -237,29 +249,41 @@ def _resolve(model, free, fixed, k, fields, plants):
     fixed = dict(fixed or {})
     for n, v in fixed.items():
         if n not in names:
-            raise HesspipeError(f"--fix: unknown parameter {n!r} for model {model.name}; expected one "
+            raise HesspipeError(f"fixed: unknown parameter {n!r} for model {model.name}; expected one "
                                 f"of {', '.join(names)}")
         try:
             fixed[n] = float(v)
         except (TypeError, ValueError):
-            raise HesspipeError(f"--fix {n}: expected a number, got {v!r}") from None
+            raise HesspipeError(f"fixed: {n}: expected a number, got {v!r}") from None
     if "k" in fixed:
         k = int(round(fixed["k"]))
-    free = tuple(default_free(model) if free is None else free)
-    free = tuple(n for n in free if n not in fixed) if free is not None else free
+    if free is None:
+        free = tuple(n for n in default_free(model) if n not in fixed)
+    else:
+        free = tuple(free)
+        both = [n for n in free if n in fixed]
+        if both:
+            raise HesspipeError(f"free: {both[0]!r} is also fixed; expected each parameter either "
+                                "free (identified) or fixed, not both")
     for n in free:
         if n not in names:
-            raise HesspipeError(f"--free: unknown parameter {n!r} for model {model.name}; expected "
+            raise HesspipeError(f"free: unknown parameter {n!r} for model {model.name}; expected "
                                 f"some of {', '.join(n2 for n2 in names if n2 not in STRUCTURAL)}")
         if n in STRUCTURAL:
-            raise HesspipeError(f"--free: {n!r} selects the model structure and cannot be "
-                                f"identified; fix it instead (--fix {n}=2)")
+            raise HesspipeError(f"free: {n!r} selects the model structure and cannot be "
+                                f"identified; hold it in fixed instead ({n}=2)")
     if len(set(free)) != len(free):
-        raise HesspipeError(f"--free: a parameter is listed twice in {','.join(free)}")
+        raise HesspipeError(f"free: a parameter is listed twice in {','.join(free)}")
     # Default gains, boxes and fields follow the plants' gain (see hesspipe.hess.gain_scale).
     gain = gain_scale(plants, k)
     base = model.complete(fixed, k, strict=True, gain=gain)
     bounds = model.bounds(gain)
+    for n, v in fixed.items():
+        lo, hi = bounds.get(n, (-np.inf, np.inf))
+        if not lo <= v <= hi:
+            scaled = " (Table 1's box times the plants' gain scale)" if n in LOOP_GAINS else ""
+            raise HesspipeError(f"fixed: {n} = {v:g} is outside the parameter's range "
+                                f"{lo:.4g}..{hi:.4g}{scaled}; expected a value in it")
     defaults = model.fields(gain)
     fields = dict(fields or {})
     for n in fields:
@@ -321,6 +345,20 @@ def _scipy_search(objective, fields, x0, *, optimizer, seed, passes):
     return values_of(u), fun
 
 
+def check_control(run) -> None:
+    """Refuse a run whose control never moves: it holds no control power to match.
+
+    Raises
+    ------
+    HesspipeError
+        Naming the run's file and the control column.
+    """
+    control = np.asarray(run.control, dtype=float)
+    if control.size and float(np.ptp(control)) == 0.0:
+        raise HesspipeError(f"{run.source or run.id}: column 'control' is {control[0]:g} throughout: "
+                            "no control power, nothing to identify; expected the pilot's control signal")
+
+
 def identify(run, plants, model="original", *, free: Sequence[str] | None = None,
              fixed: Mapping[str, float] | None = None, seed: int = 0, passes: int = 10,
              optimizer: str = "apid", band=(0.0, 5.0), k: int = 1,
@@ -376,12 +414,14 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     """
     model = model_from_name(model)
     if optimizer not in OPTIMIZERS:
-        raise HesspipeError(f"--optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
+        raise HesspipeError(f"optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
+    seed = check_seed(seed)
     where = run.source or run.id
     nper = PaperWelch().nperseg
     if len(run) < nper:
         raise HesspipeError(f"{where}: {len(run)} samples is shorter than one spectral segment "
                             f"({nper} samples); expected a longer record")
+    check_control(run)
     base, free, fixed, flds, gain = _resolve(model, free, fixed, k, fields, plants)
     obj = SpectralObjective(run, plants, model, base, band=band, psd_method=psd_method,
                             noise_seed=seed)
@@ -392,7 +432,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         values, best, optimizer = {}, obj({}), "none"
     elif optimizer == "apid":
         if int(restarts) < 1:
-            raise HesspipeError(f"--restarts: expected at least 1, got {restarts!r}")
+            raise HesspipeError(f"restarts: expected at least 1, got {restarts!r}")
         # Independent streams per climb: restarts of seed 0 and seed 1 share nothing.
         seeds = [int(c.generate_state(1)[0]) for c in np.random.SeedSequence(seed).spawn(int(restarts))]
         for i, climb_seed in enumerate(seeds):
@@ -419,7 +459,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         bench_fit, bench_par = b.fitness, b.parameters
     return Identification(
         model=model.name, parameters=params, free=free, fixed=fixed,
-        fitness=best if best < UNSTABLE_FITNESS else float("nan"), benchmark_fitness=bench_fit,
+        fitness=best if np.isfinite(best) else _graded(float("nan")), benchmark_fitness=bench_fit,
         crossover=cross, evaluations=evaluations, identifiability=ident,
         measured_psd=obj.measured, simulated_psd=sim_psd if stable else np.full_like(obj.measured, np.nan),
         freq_hz=obj.freq_hz, optimizer=optimizer, seed=seed, passes=passes,

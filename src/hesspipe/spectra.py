@@ -129,9 +129,16 @@ def band_mask(freq_hz, band=(0.0, 5.0)) -> np.ndarray:
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
         raise HesspipeError(f"band: expected 0 <= low < high in Hz, got {band!r}")
     freq_hz = np.asarray(freq_hz)
+    nyquist = float(freq_hz[-1])
+    if hi > nyquist * (1 + 1e-9):
+        # Bins stop at the Nyquist frequency: a wider band would be clipped silently.
+        raise HesspipeError(f"band: high edge {hi:g} Hz is above the data's Nyquist frequency "
+                            f"{nyquist:g} Hz (sample interval {0.5 / nyquist:g} s); expected a band "
+                            f"within 0-{nyquist:g} Hz (an implausibly low Nyquist frequency means the "
+                            "time column is not in seconds)")
     mask = (freq_hz >= lo) & (freq_hz <= hi + 1e-9)
     if not mask.any():
-        raise HesspipeError(f"band {lo:g}-{hi:g} Hz holds no frequency bin (bins every "
+        raise HesspipeError(f"band: {lo:g}-{hi:g} Hz holds no frequency bin (bins every "
                             f"{freq_hz[1] - freq_hz[0]:g} Hz up to {freq_hz[-1]:g} Hz)")
     return mask
 

@@ -43,7 +43,9 @@ def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
         config = merge(config, {"flight": {"aircraft": aircraft}})
     if seed is not None:
         config["seed"] = seed
-    Fields(config, source).integer("seed", 0, min=0)
+    from .seeds import MAX_SEED
+
+    Fields(config, source).integer("seed", 0, min=0, max=MAX_SEED)
     for name in SECTIONS:
         if not isinstance(config.get(name, {}), dict):
             raise HesspipeError(f"{source}: field '{name}': expected a table")
@@ -127,8 +129,16 @@ def pilots(ctx) -> None:
     result = run_study(config, read_plants(ctx.upstream["plants"] / "plants.json"), ctx.out_dir,
                        seed=ctx.seed, progress=False)
     if not result.ok:
-        failed = ", ".join(f"{f.id} ({f.error})" for f in result.failures)
+        failed = ", ".join(f"{f.id} ({_config_terms(f.error)})" for f in result.failures)
         raise HesspipeError(f"pilots: {len(result.failures)} run(s) failed: {failed}")
+
+
+def _config_terms(message: str) -> str:
+    """The library's setting names as the configuration spells them ([pilots] resample, columns)."""
+    import re
+
+    message = message.replace("set resample", "set [pilots] resample = true")
+    return re.sub(r"with columns (\S+)", r'with [pilots] columns = "\1"', message)
 
 
 # -- diagnose -----------------------------------------------------------------------------
@@ -154,7 +164,12 @@ def diagnose(ctx) -> None:
 
     table, (_, model) = _split(ctx.section, "run", "model")
     config = DiagnoseConfig.from_table(table, ctx.source)
-    run = read_run(_diagnose_run(ctx), min_samples=SEGMENT)
+    pilots_cfg = ctx.config.get("pilots", {})  # the runs' format settings ([pilots] columns, resample)
+    try:
+        run = read_run(_diagnose_run(ctx), min_samples=SEGMENT, columns=pilots_cfg.get("columns") or None,
+                       resample=bool(pilots_cfg.get("resample", False)))
+    except HesspipeError as exc:
+        raise HesspipeError(_config_terms(str(exc))) from None
     result = run_diagnose(run, read_plants(ctx.upstream["plants"] / "plants.json"),
                           model=model or "original", seed=ctx.seed, config=config)
     write_json(ctx.out_dir / "diagnosis.json", result.to_dict())

@@ -18,10 +18,10 @@ def register(sub) -> None:
                    help="Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 (needs hesspipe[dask])")
     p.add_argument("--json", metavar="OUT.json", help="write the comparison as JSON")
     p.add_argument("--figures", metavar="DIR", help="write a PSD figure per pilot into DIR")
-    p.add_argument("--columns", metavar="ROLE=NAME,...",
-                   help="map column names, e.g. control=stick,output=p")
-    p.add_argument("--resample", action="store_true", help="resample non-uniform time to uniform")
-    p.add_argument("--seed", type=int, default=0, help="base seed (default: %(default)s)")
+    from ._options import add_run_options, add_seed
+
+    add_run_options(p)
+    add_seed(p, 0, "base seed")
     p.add_argument("--optimizer", choices=("apid", "scipy", "differential_evolution"), default="apid",
                    help="identification optimizer (default: %(default)s, the paper's)")
     p.add_argument("--passes", type=int, default=10, help="APID pass budget (default: %(default)s)")
@@ -41,6 +41,7 @@ def _run(args) -> int:
     from ..errors import HesspipeError
     from ..formats import read_plants
     from ..io import write_json
+    from ._options import cli_message, run_options
 
     if args.workers is not None and args.workers < 1:
         raise HesspipeError(f"--workers: expected an integer >= 1, got {args.workers}")
@@ -52,7 +53,7 @@ def _run(args) -> int:
     result = compare_pilots(args.dir, plants, workers=args.workers, scheduler=args.scheduler,
                             seed=args.seed, optimizer=args.optimizer, passes=args.passes,
                             start=args.start, restarts=args.restarts, benchmark=args.benchmark,
-                            columns=args.columns, resample=args.resample)
+                            **run_options(args))
     print(result.table())
     if args.json:
         write_json(args.json, result.to_dict())
@@ -63,7 +64,7 @@ def _run(args) -> int:
         for p in result.pilots:
             plot_pilot(p, Path(args.figures) / f"{p.id}.png")
     for f in result.failures:
-        print(f"hesspipe: error: {f.error}", file=sys.stderr)
+        print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
     if result.failures:
         print(f"hesspipe: error: {len(result.failures)} of {len(result.failures) + len(result.pilots)} "
               "run(s) failed; the others are in the table", file=sys.stderr)

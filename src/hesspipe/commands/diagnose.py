@@ -19,10 +19,12 @@ def register(sub) -> None:
                    help="effect ids to try (default: every registered effect)")
     p.add_argument("--alpha", type=float, help="significance level per round (default 0.01)")
     p.add_argument("--max-effects", type=int, help="most effects to name (default 3)")
-    p.add_argument("--columns", metavar="ROLE=NAME,...", help="map other column names, e.g. control=stick")
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
-    p.add_argument("--seed", type=int, default=0, help="seed of the remnant draws (default: %(default)s)")
+    from ._options import add_run_options, add_seed
+
+    add_run_options(p)
+    add_seed(p, 0, "seed of the remnant draws")
     p.set_defaults(func=_diagnose)
 
 
@@ -47,7 +49,9 @@ def _diagnose(args) -> int:
         if not candidates:
             raise HesspipeError("--candidates: expected effect ids separated by commas, got nothing")
     plants = read_plants(args.plants)
-    run = read_run(args.run, columns=args.columns, min_samples=SEGMENT)
+    from ._options import run_options
+
+    run = read_run(args.run, min_samples=SEGMENT, **run_options(args))
     result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg)
     print(format_report(result))
     if args.json:

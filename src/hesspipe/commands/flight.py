@@ -17,7 +17,9 @@ def register(subparsers) -> None:
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder")
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="TOML file whose [flight] table overrides the defaults")
-    p.add_argument("--seed", type=int, default=0, help="seed of the excitation signals (default: 0)")
+    from ._options import add_seed
+
+    add_seed(p, 0, "seed of the excitation signals")
     p.set_defaults(func=_run)
 
 

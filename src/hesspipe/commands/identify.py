@@ -3,8 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from ..errors import HesspipeError
+from ._options import add_run_options, add_seed, add_terms, run_options
+
+#: The library's names of identify's settings → this command's options.
+TERMS = {r"(^|: )free: ": r"\1--free: ", r"(^|: )fixed: ": r"\1--fix: ",
+         r"\bhold it in fixed\b": "hold it with --fix", r"(^|: )band: ": r"\1--band: "}
 
 
 def _fix(text: str) -> tuple[str, float]:
@@ -12,9 +18,12 @@ def _fix(text: str) -> tuple[str, float]:
         raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got {text!r}")
     name, value = (s.strip() for s in text.split("=", 1))
     try:
-        return name, float(value)
+        number = float(value)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{name}: expected a number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise argparse.ArgumentTypeError(f"{name}: expected a finite number, got {value!r}")
+    return name, number
 
 
 def _band(text: str) -> tuple[float, float]:
@@ -22,6 +31,8 @@ def _band(text: str) -> tuple[float, float]:
         lo, hi = (float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected LOW,HIGH in Hz, got {text!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
+        raise argparse.ArgumentTypeError(f"expected LOW,HIGH in Hz with 0 <= LOW < HIGH, got {text!r}")
     return lo, hi
 
 
@@ -54,7 +65,9 @@ def register(subparsers) -> None:
                    help="hold a parameter at a value (repeatable)")
     p.add_argument("--free", metavar="NAME,...", help="parameters to identify "
                    "(default: Ke,K1,K2 and the effects' parameters, e.g. Km)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    add_seed(p, 0, "random seed")
+    add_run_options(p)
+    add_terms(p, TERMS)
     p.add_argument("--passes", type=int, default=10, help="APID pass budget (default 10)")
     p.add_argument("--restarts", type=int, default=4,
                    help="APID climbs from random chromosomes, best kept (default 4; paper: 1)")
@@ -85,14 +98,23 @@ def format_table(result) -> str:
         status = "identified" if name in result.free else (
             "fixed" if name in result.fixed else "default")
         lines.append(f"{name:<10} {value:>10.4g}  {status}")
-    lines.append(f"fitness            {result.fitness:.6g}   (RMS PSD difference, "
+    what = ("RMS PSD difference" if result.stable else
+            "unstable closed loop: the worst score, graded by its growth rate")
+    lines.append(f"fitness            {result.fitness:.6g}   ({what}, "
                  f"{result.band[0]:g}-{result.band[1]:g} Hz; lower is better)")
-    lines.append(f"benchmark fitness  {result.benchmark_fitness:.6g}   (McRuer precision model)")
+    bench = result.benchmark_fitness
+    lines.append(f"benchmark fitness  {bench:.6g}   (McRuer precision model)" if math.isfinite(bench)
+                 else "benchmark fitness  not computed")
     c = result.crossover
-    lines.append(f"crossover          {c.frequency_rad_s:.3f} rad/s, phase margin "
-                 f"{c.phase_margin_deg:.1f} deg, within limits: {'yes' if c.within_limits else 'no'} "
-                 f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
-                 f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
+    limits = (f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
+              f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
+    if math.isfinite(c.frequency_rad_s):
+        lines.append(f"crossover          {c.frequency_rad_s:.3f} rad/s, phase margin "
+                     f"{c.phase_margin_deg:.1f} deg, within limits: {'yes' if c.within_limits else 'no'} "
+                     + limits)
+    else:
+        lines.append("crossover          none found (the open loop's gain never crosses 1), within "
+                     "limits: no " + limits)
     lines.append(f"evaluations        {result.evaluations}")
     ident = result.identifiability
     lines.append(f"identifiability    {ident.get('summary', ident.get('method'))}")
@@ -110,13 +132,21 @@ def run(args) -> int:
     from ..spectra import PaperWelch
 
     plants = read_plants(args.plants)
-    rec = read_run(args.run, min_samples=PaperWelch().nperseg)
+    rec = read_run(args.run, min_samples=PaperWelch().nperseg, **run_options(args))
     free = None
     if args.free is not None:
         free = [n.strip() for n in args.free.split(",") if n.strip()]
         if not free:
             raise HesspipeError("--free: expected NAME,... with at least one parameter")
     fixed = dict(args.fix)
+    if free is None:
+        from ..hess import model_from_name
+        from ..identify import default_free
+
+        defaults = default_free(model_from_name(args.model))
+        if all(n in fixed for n in defaults):
+            raise HesspipeError(f"--fix: every parameter identified by default ({', '.join(defaults)}) "
+                                "is fixed: nothing to identify; name the parameters to identify with --free")
     result = identify(rec, plants, args.model, free=free, fixed=fixed, seed=args.seed,
                       passes=args.passes, optimizer=args.optimizer, band=args.band, k=args.k,
                       fields=dict(args.bits) or None, psd_method=args.psd,

@@ -16,7 +16,9 @@ def register(sub) -> None:
     p.add_argument("--from", dest="from_stage", metavar="STAGE",
                    help="re-run STAGE and everything downstream, e.g. --from flight to regenerate the wind model")
     p.add_argument("--aircraft", metavar="NAME", help="override flight.aircraft")
-    p.add_argument("--seed", type=int, help="override the pipeline seed")
+    from ._options import add_seed
+
+    add_seed(p, None, "override the pipeline seed")
     p.set_defaults(func=_run)
 
 

@@ -8,7 +8,9 @@ def register(sub) -> None:
     p.add_argument("--config", metavar="FILE", help="TOML configuration merged over pipeline/default.toml")
     p.add_argument("--out", metavar="DIR", default="hesspipe-out", help="output folder (default: %(default)s)")
     p.add_argument("--aircraft", metavar="NAME", help="override flight.aircraft")
-    p.add_argument("--seed", type=int, help="override the pipeline seed")
+    from ._options import add_seed
+
+    add_seed(p, None, "override the pipeline seed")
     p.set_defaults(func=_status)
 
 

@@ -10,7 +10,10 @@ def register(sub) -> None:
                                    "in the measured-run format and <id>.truth.json beside each.")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants JSON (Yc, Yd)")
     p.add_argument("--n", required=True, type=int, metavar="N", help="number of pilots")
-    p.add_argument("--seed", type=int, default=0, metavar="S", help="base seed (default: %(default)s)")
+    from ._options import add_seed, add_terms
+
+    add_seed(p, 0, "base seed")
+    add_terms(p, {r"(^|: )effects: ": r"\1--effects: ", r"(^|: )n: ": r"\1--n: "})
     p.add_argument("--effects", default="motion_feedback", metavar="LIST",
                    help="comma-separated effects every pilot has, '' for none (remnant noise is "
                         "always added; default: %(default)s)")
@@ -24,12 +27,11 @@ def register(sub) -> None:
 
 def _run(args) -> int:
     from ..cohort import CohortSpec, synth_cohort
-    from ..errors import HesspipeError
     from ..formats import read_plants
 
-    if not (args.duration > 0 and 0 < args.dt <= 0.1):
-        raise HesspipeError(f"--duration/--dt: expected duration > 0 and 0 < dt <= 0.1 s, got "
-                            f"{args.duration:g} and {args.dt:g}")
+    from ..formats import record_samples
+
+    record_samples(args.duration, args.dt, names=("--duration", "--dt"))  # before any allocation
     plants = read_plants(args.plants)
     effects = [e for e in args.effects.split(",") if e.strip()]
     paths = synth_cohort(plants, args.n, args.seed, effects, args.out,
