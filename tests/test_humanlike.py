@@ -181,8 +181,6 @@ def test_readable_by_hesspipe(tmp_path):
     assert np.allclose(run.control, tr.control, rtol=1e-5)
 
 
-@pytest.mark.xfail(strict=False, reason="read_run refuses 60 Hz times written with 9 significant "
-                   "digits (1e-7 s jitter); being fixed in issue 8")
 def test_readable_by_hesspipe_rounded_times(tmp_path):
     from hesspipe.formats import read_run
     tr = simulate_trial(draw_trial("1/s", 6, **SHORT))
