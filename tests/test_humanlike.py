@@ -181,11 +181,17 @@ def test_readable_by_hesspipe(tmp_path):
     assert np.allclose(run.control, tr.control, rtol=1e-5)
 
 
-def test_readable_by_hesspipe_rounded_times(tmp_path):
+@pytest.mark.parametrize("time_style", ["g9", "ms", "epoch_ms", "epoch_us"])
+def test_readable_by_hesspipe_rounded_times(tmp_path, time_style):
+    # Every logger style the generator draws must be accepted as it is written.
     from hesspipe.formats import read_run
     tr = simulate_trial(draw_trial("1/s", 6, **SHORT))
-    path = write_trial(tmp_path, tr, style={"time": "g9", "bom": True, "newline": "\r\n"})
-    assert len(read_run(path).time) == len(tr.time)
+    path = write_trial(tmp_path, tr, style={"time": time_style, "bom": True, "newline": "\r\n",
+                                            "epoch0": 1.7e9})
+    run = read_run(path)
+    assert len(run.time) == len(tr.time) and run.synthetic
+    # ms stamps jitter by +-0.5 ms; the whole-record interval is still good to ~1e-7.
+    assert abs(run.dt / (tr.time[1] - tr.time[0]) - 1) < 1e-6
 
 
 @pytest.mark.parametrize("output", ["rate", "angle"])
