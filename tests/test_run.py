@@ -120,7 +120,7 @@ def test_killed_run_resumes_to_the_same_outputs(reference, tmp_path):
         assert not (out / "report.md").exists()
         assert main(["run", "--config", str(cfg), "--out", str(out)]) == 0
         assert _outputs(out) == files
-        assert not [p for p in out.rglob(".staging-*")]
+        assert not [p for p in out.rglob(".hesspipe-staging-*")]
     finally:
         if out.exists():
             shutil.move(out, work)

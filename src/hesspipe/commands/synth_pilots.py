@@ -26,7 +26,9 @@ def _run(args) -> int:
     from ..cohort import CohortSpec, synth_cohort
     from ..errors import HesspipeError
     from ..formats import read_plants
+    from ..io import check_output_dir
 
+    check_output_dir(args.out, "cohort")  # before any work: a bad folder loses nothing
     if not (args.duration > 0 and 0 < args.dt <= 0.1):
         raise HesspipeError(f"--duration/--dt: expected duration > 0 and 0 < dt <= 0.1 s, got "
                             f"{args.duration:g} and {args.dt:g}")
