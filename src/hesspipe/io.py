@@ -157,9 +157,11 @@ def _legacy_manifest(folder: Path) -> tuple[str, set[str]] | None:
         listed = data.get("outputs") if isinstance(data.get("outputs"), dict) else {}
         files = data.get("files") if isinstance(data.get("files"), list) else []
         return data["stage"], {r for r in {"manifest.json", *listed, *files} if _safe_rel(r)}
-    report = _read_json(folder / "report" / "manifest.json")  # a pipeline run's root
-    if isinstance(report, dict) and report.get("stage") == "report":
-        return "run", {"report.md", "report/manifest.json"}
+    # A pipeline run's root: stage folders whose manifests name them.
+    for sub in sorted(p for p in folder.iterdir() if p.is_dir()) if folder.is_dir() else []:
+        data = _read_json(sub / "manifest.json")
+        if isinstance(data, dict) and data.get("stage") == sub.name:
+            return "run", {"report.md", "report/manifest.json"}
     return None
 
 
