@@ -242,6 +242,22 @@ def test_every_command_refuses_a_file_as_output_folder(name, inputs, tmp_path):
     assert blocker.read_text() == "mine\n" and sorted(tmp_path.iterdir()) == [blocker]
 
 
+#: The other output options, into a read-only folder (the property above uses --json/--out).
+OTHER_OUTPUTS = {
+    "identify --figure": lambda i, ro: BUILDERS["identify"](i, ro)[:-2] + ["--figure", str(ro / "x.png")],
+    "diagnose --figure": lambda i, ro: BUILDERS["diagnose"](i, ro)[:-2] + ["--figure", str(ro / "x.png")],
+    "compare-pilots --figures": lambda i, ro: BUILDERS["compare-pilots"](i, ro)[:-2] + ["--figures", str(ro)],
+    "plants --analytic": lambda i, ro: ["plants", "--analytic", "roskam", "--out", str(ro / "a")],
+}
+
+
+@pytest.mark.parametrize("name", sorted(OTHER_OUTPUTS))
+def test_other_outputs_refuse_a_read_only_folder(name, inputs, ro_folder):
+    code, out, err = _call_unprivileged(OTHER_OUTPUTS[name](inputs, ro_folder), ro_folder)
+    _one_line_error(code, err, pattern=r"cannot write \((Permission denied|Read-only file system)\)")
+    assert list(ro_folder.iterdir()) == []
+
+
 def test_read_only_folder_really_refuses_writes(ro_folder):
     """The mechanism of the property tests: the child cannot write into `ro_folder`."""
     code, out, err = _call_unprivileged(["synth-pilots", "--plants", "/nonexistent.json", "--n", "1",
