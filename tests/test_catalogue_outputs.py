@@ -643,3 +643,39 @@ def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
     assert code == 128 + signal.SIGTERM, err
     assert err.strip().splitlines()[-1] == "hesspipe: terminated" and "Traceback" not in err, err
     assert not (tmp_path / "c.json").exists()
+
+
+@pytest.mark.parametrize("where", ["read-only", "file"])
+def test_a_write_without_a_prior_check_is_still_one_line(where, ro_folder, tmp_path):
+    """The root of every write (hesspipe.io.atomic_path) turns the file system's refusal
+    into one line naming the file, for writers that do not check up front."""
+    from hesspipe.io import write_json
+
+    if where == "file":
+        blocker = tmp_path / "a-file"
+        blocker.write_text("mine\n")
+        with pytest.raises(HesspipeError, match=r"x.json: cannot create it: .*a-file is a file, not a folder"):
+            write_json(blocker / "x.json", {})
+        assert blocker.read_text() == "mine\n"
+        return
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        msg = "no error"
+        try:
+            if os.geteuid() == 0:
+                _drop_write_override()
+            write_json(ro_folder / "x.json", {})
+        except HesspipeError as exc:
+            msg = str(exc)
+        except BaseException as exc:  # noqa: BLE001
+            msg = f"{type(exc).__name__}: {exc}"
+        os.write(write, msg.encode())
+        os._exit(0)
+    os.close(write)
+    with os.fdopen(read) as fh:
+        msg = fh.read()
+    os.waitpid(pid, 0)
+    assert re.fullmatch(r".*x.json: cannot write \((Permission denied|Read-only file system)\); choose a "
+                        r"location you can write to", msg), msg
+    assert list(ro_folder.iterdir()) == []

@@ -57,6 +57,9 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{os.getpid()}-", suffix=f"-{path.name}",
                                    dir=path.parent)
     except OSError as exc:
+        base = _existing_ancestor(path.parent)
+        if not base.is_dir():
+            raise HesspipeError(f"{path}: cannot create it: {base} is a file, not a folder") from None
         raise _cannot_write(path, exc) from None
     os.close(fd)
     tmp = Path(tmp)
