@@ -27,7 +27,6 @@ import re
 import signal
 import socket
 import shutil
-import stat
 import subprocess
 import sys
 import tempfile
@@ -49,6 +48,7 @@ from hesspipe.formats import Run, write_plants, write_run
 from hesspipe.io import MARKER, STAGING_PREFIX, TMP_PREFIX
 
 from pilot_data import plants as paper_plants
+from proc_helpers import alive, descendants, drop_write_override
 
 
 # -- inputs ------------------------------------------------------------------------------------
@@ -125,29 +125,6 @@ def _call(argv) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
-def _drop_write_override() -> None:
-    """Drop CAP_DAC_OVERRIDE from this (forked, root) process: it stays root and reads
-    everything root owns, but permission bits now stop its writes, as for any user."""
-    import ctypes
-
-    class Header(ctypes.Structure):
-        _fields_ = [("version", ctypes.c_uint32), ("pid", ctypes.c_int)]
-
-    class Data(ctypes.Structure):
-        _fields_ = [("effective", ctypes.c_uint32), ("permitted", ctypes.c_uint32),
-                    ("inheritable", ctypes.c_uint32)]
-
-    libc = ctypes.CDLL(None, use_errno=True)
-    header, data = Header(0x20080522, 0), (Data * 2)()  # _LINUX_CAPABILITY_VERSION_3
-    if libc.capget(ctypes.byref(header), data) != 0:
-        raise OSError(ctypes.get_errno(), "capget failed")
-    cap_dac_override = 1 << 1
-    data[0].effective &= ~cap_dac_override & 0xFFFFFFFF
-    data[0].permitted &= ~cap_dac_override & 0xFFFFFFFF
-    if libc.capset(ctypes.byref(header), data) != 0:
-        raise OSError(ctypes.get_errno(), "capset failed")
-
-
 def _call_unprivileged(argv, ro: Path) -> tuple[int, str, str]:
     """`main(argv)` in a forked child for which `ro` (mode 555) is really read-only.
 
@@ -159,7 +136,7 @@ def _call_unprivileged(argv, ro: Path) -> tuple[int, str, str]:
         try:
             os.close(read)
             if os.geteuid() == 0:
-                _drop_write_override()
+                drop_write_override()
             try:
                 (ro / "probe").write_text("x")
                 result = (98, "", "the folder stayed writable")
@@ -579,32 +556,6 @@ def test_scheduler_that_is_not_dask_times_out(monkeypatch):
 
 # -- item 7: SIGTERM leaves no worker behind ---------------------------------------------------
 
-def _children(pid: int) -> set[int]:
-    """Every live descendant of `pid` (from /proc)."""
-    parent = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if fields[0] != "Z":
-                parent[int(entry.name)] = int(fields[1])
-    found, frontier = set(), {pid}
-    while frontier:
-        frontier = {c for c, p in parent.items() if p in frontier} - found
-        found |= frontier
-    return found
-
-
-def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
-
-
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc to list child processes")
 def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
     runs = tmp_path / "runs"
@@ -623,20 +574,20 @@ def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
             assert proc.poll() is None, err_file.read_text()
             assert time.monotonic() < deadline, "no worker processes appeared"
             time.sleep(0.05)
-            workers = _children(proc.pid)
+            workers = descendants(proc.pid)
         time.sleep(0.3)
-        workers = _children(proc.pid)
+        workers = descendants(proc.pid)
         proc.send_signal(signal.SIGTERM)
         code = proc.wait(timeout=30)
         deadline = time.monotonic() + 5
-        while any(_alive(p) for p in workers) and time.monotonic() < deadline:
+        while any(alive(p) for p in workers) and time.monotonic() < deadline:
             time.sleep(0.05)
-        orphans = [p for p in workers if _alive(p)]
+        orphans = [p for p in workers if alive(p)]
     finally:
         if proc.poll() is None:
             proc.kill()
         for pid in workers:  # only the processes this test started
-            if _alive(pid):
+            if alive(pid):
                 os.kill(pid, signal.SIGKILL)
     err = err_file.read_text()
     assert not orphans, "worker processes outlived the command"
@@ -664,7 +615,7 @@ def test_a_write_without_a_prior_check_is_still_one_line(where, ro_folder, tmp_p
         msg = "no error"
         try:
             if os.geteuid() == 0:
-                _drop_write_override()
+                drop_write_override()
             write_json(ro_folder / "x.json", {})
         except HesspipeError as exc:
             msg = str(exc)

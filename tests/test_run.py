@@ -166,7 +166,7 @@ def test_a_csv_put_beside_the_cohort_is_not_diagnosed(reference, tmp_path, capsy
 
 
 def test_sigterm_during_the_pilots_stage_leaves_no_worker_and_no_half_stage(tmp_path):
-    from test_catalogue_outputs import _alive, _children
+    from proc_helpers import alive, descendants
 
     cfg = tmp_path / "two.toml"
     cfg.write_text(SMALL.replace("workers = 1", "workers = 2").replace("passes = 4", "passes = 10"))
@@ -181,18 +181,18 @@ def test_sigterm_during_the_pilots_stage_leaves_no_worker_and_no_half_stage(tmp_
             assert proc.poll() is None, err_file.read_text()
             assert time.monotonic() < deadline, "the pilots stage's workers did not appear"
             time.sleep(0.05)
-            workers = _children(proc.pid)
+            workers = descendants(proc.pid)
         proc.send_signal(signal.SIGTERM)
         code = proc.wait(timeout=30)
         deadline = time.monotonic() + 5
-        while any(_alive(p) for p in workers) and time.monotonic() < deadline:
+        while any(alive(p) for p in workers) and time.monotonic() < deadline:
             time.sleep(0.05)
-        orphans = [p for p in workers if _alive(p)]
+        orphans = [p for p in workers if alive(p)]
     finally:
         if proc.poll() is None:
             proc.kill()
         for pid in workers:  # only processes this test started
-            if _alive(pid):
+            if alive(pid):
                 os.kill(pid, signal.SIGKILL)
     err = err_file.read_text()
     assert not orphans and code == 128 + signal.SIGTERM, err
