@@ -630,3 +630,22 @@ def test_a_write_without_a_prior_check_is_still_one_line(where, ro_folder, tmp_p
     assert re.fullmatch(r".*x.json: cannot write \((Permission denied|Read-only file system)\); choose a "
                         r"location you can write to", msg), msg
     assert list(ro_folder.iterdir()) == []
+
+
+def test_an_output_folder_of_an_older_hesspipe_is_still_recognised(tmp_path):
+    """Folders written before markers existed are known by their manifests naming the stage."""
+    from hesspipe.pipeline import Pipeline, Stage
+
+    def write(ctx):
+        (ctx.out_dir / "out.txt").write_text(str(ctx.section))
+
+    stages = [Stage("a", (), write), Stage("report", ("a",), write, folder=".")]
+    Pipeline(stages, {}, tmp_path).run()
+    for marker in tmp_path.rglob(MARKER):
+        marker.unlink()
+    (tmp_path / "a" / "mine.txt").write_text("user")
+    outcomes = Pipeline(stages, {"a": {"v": 2}}, tmp_path).run()
+    assert [o.action for o in outcomes] == ["ran", "ran"]
+    assert (tmp_path / "a" / "out.txt").read_text() == "{'v': 2}"
+    assert (tmp_path / "a" / "mine.txt").read_text() == "user"
+    assert (tmp_path / MARKER).exists() and (tmp_path / "a" / MARKER).exists()

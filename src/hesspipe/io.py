@@ -160,11 +160,15 @@ def _legacy_manifest(folder: Path) -> tuple[str, set[str]] | None:
         listed = data.get("outputs") if isinstance(data.get("outputs"), dict) else {}
         files = data.get("files") if isinstance(data.get("files"), list) else []
         return data["stage"], {r for r in {"manifest.json", *listed, *files} if _safe_rel(r)}
-    # A pipeline run's root: stage folders whose manifests name them.
+    # A pipeline run's root: stage folders whose manifests name them; the report stage
+    # publishes into the root, its manifest lists what it wrote there.
     for sub in sorted(p for p in folder.iterdir() if p.is_dir()) if folder.is_dir() else []:
         data = _read_json(sub / "manifest.json")
         if isinstance(data, dict) and data.get("stage") == sub.name:
-            return "run", {"report.md", "report/manifest.json"}
+            report = _read_json(folder / "report" / "manifest.json")
+            listed = report.get("outputs") if isinstance(report, dict) else None
+            owned = {"report/manifest.json", *(listed if isinstance(listed, dict) else ["report.md"])}
+            return "run", {r for r in owned if _safe_rel(r)}
     return None
 
 

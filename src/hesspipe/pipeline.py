@@ -354,6 +354,10 @@ class Pipeline:
         for stage in self.stages:
             target = self.output_folder(stage.name)
             check_output_dir(target, self._kind(stage))
+            if target.is_dir():
+                # Marked now: a folder an older hesspipe wrote is recognised by its manifest,
+                # which the stage removes when it starts.
+                mark_output_dir(target, self._kind(stage))
             if self.folder(stage.name).resolve() != target:
                 check_output_dir(self.folder(stage.name), stage.name)
 
