@@ -29,7 +29,7 @@ def test_cohort_files_truth_and_labels(tmp_path):
     paths = synth_cohort(paper_plants(), 3, 11, ["motion_feedback"], out, spec=SHORT)
     assert [p.name for p in paths] == ["pilot01.csv", "pilot02.csv", "pilot03.csv"]
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        ["cohort.json"] + [f"pilot0{i}.{ext}" for i in (1, 2, 3) for ext in ("csv", "truth.json")])
+        [".hesspipe-output", "cohort.json"] + [f"pilot0{i}.{ext}" for i in (1, 2, 3) for ext in ("csv", "truth.json")])
     for path in paths:
         run = read_run(path, min_samples=1024)
         assert run.synthetic and len(run) == 1200 and run.dt == pytest.approx(0.02)

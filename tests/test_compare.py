@@ -316,7 +316,7 @@ def test_run_study_writes_the_pilots_stage_outputs(tmp_path):
     result = run_study(config, paper_plants(), tmp_path, seed=4, progress=False)
     assert result.ok and result.synthetic and [p.id for p in result.pilots] == ["pilot01", "pilot02"]
     names = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
-    assert names == ["cohort/cohort.json", "cohort/pilot01.csv", "cohort/pilot01.truth.json",
+    assert names == ["cohort/.hesspipe-output", "cohort/cohort.json", "cohort/pilot01.csv", "cohort/pilot01.truth.json",
                      "cohort/pilot02.csv", "cohort/pilot02.truth.json", "comparison.json", "comparison.md",
                      "figures/pilot01.png", "figures/pilot02.png"]
     d = json.loads((tmp_path / "comparison.json").read_text())

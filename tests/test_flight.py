@@ -58,7 +58,7 @@ def test_trim_meets_the_approach_condition(flown):
 
 def test_outputs_columns_and_comments(flown):
     result, out = flown
-    assert {p.name for p in out.iterdir()} == OUTPUTS
+    assert {p.name for p in out.iterdir()} == OUTPUTS | {".hesspipe-output"}  # + hesspipe's marker
     for name in ("wind.csv", "aileron.csv"):
         text = (out / name).read_text()
         comments = [ln for ln in text.splitlines() if ln.startswith("#")]
@@ -208,7 +208,7 @@ def test_nothing_written_outside_out_dir(name, tmp_path, monkeypatch):
     wheel_before = listing(wheel / "aircraft" / name)
     assert main(["flight", "--aircraft", name, "--out", "out", "--config",
                  str(_config(tmp_path, "[flight]\nduration_s = 5.0\n"))]) == 0
-    assert listing(cwd) == sorted(["out"] + [f"out/{n}" for n in OUTPUTS])
+    assert listing(cwd) == sorted(["out", "out/.hesspipe-output"] + [f"out/{n}" for n in OUTPUTS])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cfg.toml", "cwd"]
     assert listing(wheel / "aircraft" / name) == wheel_before
 
@@ -279,11 +279,10 @@ def test_missing_config_file(tmp_path, capsys):
 
 def test_ground_contact_fails_without_output(tmp_path, capsys):
     out = tmp_path / "out"
-    out.mkdir()
-    (out / "keep.txt").write_text("x")  # an existing folder is left as it was
+    out.mkdir()  # an existing (empty) folder is left as it was
     cfg = _config(tmp_path, "[flight]\nrecord_terrain_ft = 1000.0\n")  # 300 ft AGL at the start
     _fails(capsys, ["flight", "--out", str(out), "--config", str(cfg)], "ground contact", "wind record")
-    assert [p.name for p in out.iterdir()] == ["keep.txt"]
+    assert [p.name for p in out.iterdir()] == []
 
 
 def test_speed_excursion_fails(tmp_path, capsys):

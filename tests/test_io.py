@@ -31,8 +31,9 @@ def test_staged_output_publishes_all_or_nothing(tmp_path):
         (stage / "sub").mkdir()
         (stage / "sub" / "b.txt").write_text("b")
         (stage / "manifest.json").write_text("{}")
-    assert sorted(p.name for p in out.rglob("*") if p.is_file()) == ["b.txt", "manifest.json"]
-    assert not [p for p in out.iterdir() if p.name.startswith(".staging")]
+    assert sorted(p.name for p in out.rglob("*") if p.is_file()) == [".hesspipe-output", "b.txt",
+                                                                      "manifest.json"]
+    assert not [p for p in out.iterdir() if p.name.startswith(".hesspipe-staging")]
 
 
 def test_json_handles_numpy_and_nonfinite(tmp_path):

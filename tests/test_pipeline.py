@@ -106,7 +106,7 @@ def test_failed_stage_publishes_nothing_and_next_run_resumes(tmp_path):
     # The old output is untouched, no half file, and the stage is no longer fresh.
     assert (tmp_path / "b" / "out.txt").read_text() == before
     assert not (tmp_path / "b" / "manifest.json").exists()
-    assert not [p for p in (tmp_path / "b").iterdir() if p.name.startswith(".staging")]
+    assert not [p for p in (tmp_path / "b").iterdir() if p.name.startswith(".hesspipe-staging")]
     CALLS.clear()
     assert ran(Pipeline(stages(), {"b": {"v": 1}}, tmp_path).run()) == ["b"]
 

@@ -120,7 +120,7 @@ def test_killed_run_resumes_to_the_same_outputs(reference, tmp_path):
         assert not (out / "report.md").exists()
         assert main(["run", "--config", str(cfg), "--out", str(out)]) == 0
         assert _outputs(out) == files
-        assert not [p for p in out.rglob(".staging-*")]
+        assert not [p for p in out.rglob(".hesspipe-staging-*")]
     finally:
         if out.exists():
             shutil.move(out, work)
@@ -141,3 +141,61 @@ def test_unknown_stage_and_bad_config_are_one_line_errors(reference, tmp_path, c
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.toml: field 'diagnose.alpha'" in err[0], err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_csv_put_beside_the_cohort_is_not_diagnosed(reference, tmp_path, capsys):
+    """The diagnose stage reads the run the pilots stage declared, by id, not the first
+    *.csv of the folder; the file put there by hand changes nothing."""
+    import json
+
+    cfg, out, files = reference
+    work = tmp_path / "out"
+    shutil.copytree(out, work)
+    cohort = work / "pilots" / "cohort"
+    shutil.copy(cohort / "pilot02.csv", cohort / "a_by_hand.csv")  # sorts first, valid run
+    capsys.readouterr()
+    assert main(["run", "--config", str(cfg), "--out", str(work), "--force", "diagnose"]) == 0
+    assert json.loads((work / "diagnose" / "diagnosis.json").read_text())["run"] == "pilot01"
+    # Same diagnosis as the reference's (paths differ only by the root folder).
+    again = (work / "diagnose" / "diagnosis.json").read_bytes().replace(str(work).encode(), str(out).encode())
+    assert again == files["diagnose/diagnosis.json"]
+    assert "a_by_hand" not in (work / "report.md").read_text()
+    capsys.readouterr()
+    assert main(["status", "--config", str(cfg), "--out", str(work)]) == 0
+    assert [line.split()[1] for line in capsys.readouterr().out.splitlines()] == ["fresh"] * len(STAGES)
+
+
+def test_sigterm_during_the_pilots_stage_leaves_no_worker_and_no_half_stage(tmp_path):
+    from proc_helpers import alive, descendants
+
+    cfg = tmp_path / "two.toml"
+    cfg.write_text(SMALL.replace("workers = 1", "workers = 2").replace("passes = 4", "passes = 10"))
+    out, err_file = tmp_path / "out", tmp_path / "stderr.txt"
+    workers: set[int] = set()
+    with open(err_file, "w") as err_fh:  # a file, not a pipe: orphans must not block the test
+        proc = subprocess.Popen([sys.executable, "-m", "hesspipe.cli", "run", "--config", str(cfg), "--out",
+                                 str(out)], stdout=subprocess.DEVNULL, stderr=err_fh)
+    try:
+        deadline = time.monotonic() + 120
+        while len(workers) < 2 or "pilots: running" not in err_file.read_text():
+            assert proc.poll() is None, err_file.read_text()
+            assert time.monotonic() < deadline, "the pilots stage's workers did not appear"
+            time.sleep(0.05)
+            workers = descendants(proc.pid)
+        proc.send_signal(signal.SIGTERM)
+        code = proc.wait(timeout=30)
+        deadline = time.monotonic() + 5
+        while any(alive(p) for p in workers) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        orphans = [p for p in workers if alive(p)]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        for pid in workers:  # only processes this test started
+            if alive(pid):
+                os.kill(pid, signal.SIGKILL)
+    err = err_file.read_text()
+    assert not orphans and code == 128 + signal.SIGTERM, err
+    assert err.strip().splitlines()[-1] == "hesspipe: terminated" and "Traceback" not in err
+    assert not (out / "pilots" / MANIFEST).exists() and (out / "plants" / MANIFEST).exists()
+    assert not [p for p in out.rglob(".hesspipe-staging-*")] + [p for p in out.rglob(".hesspipe-tmp-*")]

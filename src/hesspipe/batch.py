@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import re
+import signal
 import threading
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Sequence
@@ -89,26 +91,99 @@ def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
                 results[i] = func(item)
                 bar.update(1)
             return results
-        with ProcessPoolExecutor(max_workers=workers, mp_context=_mp_context()) as pool:
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=_mp_context(),
+                                   initializer=_worker_init)
+        try:
             futures = {pool.submit(func, item): i for i, item in enumerate(items)}
             for future in as_completed(futures):
                 results[futures[future]] = future.result()
                 bar.update(1)
+        except BaseException:
+            # Interrupted (Ctrl-C, SIGTERM via hesspipe.cli) or an item failed: stop the
+            # workers now rather than wait for their items, and leave no process behind.
+            _terminate(pool)
+            raise
+        pool.shutdown(wait=True)
     return results
 
 
+def _worker_init() -> None:
+    """Worker processes die quietly on SIGTERM (a forked worker inherits the CLI's
+    handler, which would print a traceback)."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _terminate(pool: ProcessPoolExecutor) -> None:
+    """Shut `pool` down without waiting for running items: terminate and reap its workers."""
+    # ProcessPoolExecutor has no public way to stop running items before Python 3.14
+    # (terminate_workers); its process table is the documented-in-source fallback.
+    processes = list(getattr(pool, "_processes", {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in processes:
+        proc.join(timeout=5)
+        if proc.is_alive():
+            proc.kill()
+            proc.join(timeout=5)
+
+
+#: A Dask scheduler address: optional protocol, host (name, IPv4 or [IPv6]) and port;
+#: or an in-process cluster's inproc:// address.
+_ADDRESS = re.compile(r"^(?:(?:tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9.-]+):(\d{1,5})$")
+
+
+def check_scheduler_address(address: str, name: str = "scheduler") -> str:
+    """Return `address` if it reads like ``tcp://HOST:PORT``; raise at once otherwise.
+
+    `name` is how the caller calls the setting, for the message.
+    """
+    text = address.strip() if isinstance(address, str) else ""
+    if text.startswith("inproc://") and len(text) > len("inproc://"):
+        return text
+    m = _ADDRESS.match(text)
+    if m is None or not 1 <= int(m.group(2)) <= 65535:
+        raise HesspipeError(f"{name}: expected a Dask scheduler address like tcp://HOST:PORT "
+                            f"(port 1-65535), got {address!r}")
+    return text
+
+
+def _connect(address: str, timeout: float):
+    """A Dask Client for `address`, or HesspipeError after `timeout` s.
+
+    distributed's own timeout covers the TCP connection but not its handshake: a port
+    where something other than a Dask scheduler listens accepts the connection and never
+    answers. The client is made in a daemon thread so the wait is bounded either way.
+    """
+    from distributed import Client
+
+    box: dict = {}
+
+    def make():
+        try:
+            box["client"] = Client(address, timeout=f"{timeout}s", set_as_default=False)
+        except BaseException as exc:  # noqa: BLE001 - reported below, in the caller's thread
+            box["error"] = exc
+
+    thread = threading.Thread(target=make, name="hesspipe-dask-connect", daemon=True)
+    thread.start()
+    thread.join(timeout + 2.0)
+    if "client" in box:
+        return box["client"]
+    why = (f"{type(box['error']).__name__}: {box['error']}" if "error" in box
+           else f"no Dask answer within {timeout:g} s; is a Dask scheduler listening there?")
+    raise HesspipeError(f"--scheduler {address}: cannot connect to a Dask scheduler ({why})")
+
+
 def _run_dask(func, items, address, desc, unit, progress, timeout) -> list:
+    address = check_scheduler_address(address, "--scheduler")
     try:
-        from distributed import Client
         from distributed import as_completed as dask_completed
     except ImportError:
         raise HesspipeError(f"--scheduler {address}: Dask distributed is not installed; "
                             "install it with pip install 'hesspipe[dask]'") from None
-    try:
-        client = Client(address, timeout=f"{timeout}s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise HesspipeError(f"--scheduler {address}: cannot connect to a Dask scheduler "
-                            f"({type(exc).__name__}: {exc})") from None
+    client = _connect(address, timeout)
     with client, progress_bar(len(items), desc, enable=progress, unit=unit) as bar:
         # pure=False: identical items (two copies of a file) are still two tasks.
         futures = client.map(func, items, pure=False)

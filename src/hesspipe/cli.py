@@ -9,7 +9,9 @@ stderr and exit status 1; argparse usage errors exit with status 2.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 
 from . import __version__
 from .commands import COMMANDS
@@ -34,9 +36,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so it unwinds like Ctrl-C: worker pools are
+    stopped, staging folders removed, nothing half-published."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
     try:
         return int(args.func(args) or 0)
     except HesspipeError as exc:
@@ -44,9 +57,21 @@ def main(argv: list[str] | None = None) -> int:
 
         print(f"hesspipe: error: {cli_message(str(exc), args)}", file=sys.stderr)
         return 1
+    except Terminated:
+        print("hesspipe: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         print("hesspipe: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:
+        # Last resort: the file system refused something no check foresaw (a disk that
+        # filled up, a folder made read-only mid-run). One line naming the path.
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"hesspipe: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 1
+    finally:
+        if in_main_thread and previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -356,7 +356,7 @@ def synth_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str] = ("m
     out_dir = Path(out_dir)
     ids = pilot_ids(n)
     summary = []
-    with staged_output(out_dir) as stage:
+    with staged_output(out_dir, kind="cohort") as stage:
         for pid in ids:
             pseed = derive_seed(seed, pid)
             run, truth = synth_pilot(plants, pid, pseed, effects, spec)

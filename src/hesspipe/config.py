@@ -41,12 +41,22 @@ def load_toml(path: str | Path) -> dict:
     """Load a TOML file, turning I/O and syntax errors into one-line errors."""
     path = Path(path)
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        data = path.read_bytes()
     except FileNotFoundError:
         raise HesspipeError(f"{path}: file not found") from None
     except IsADirectoryError:
         raise HesspipeError(f"{path}: is a folder, expected a TOML file") from None
+    except OSError as exc:
+        raise HesspipeError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    # Editors on Windows start UTF-8 files with a byte-order mark; TOML itself has none.
+    data = data.removeprefix(b"\xef\xbb\xbf")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise HesspipeError(f"{path}: not a TOML text file (not UTF-8 at byte {exc.start}); "
+                            "expected a TOML configuration") from None
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise HesspipeError(f"{path}: not valid TOML ({exc})") from None
 

@@ -486,7 +486,7 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise HesspipeError(f"{out_dir}: exists and is not a folder; expected an output folder")
-    with staged_output(out_dir) as stage:
+    with staged_output(out_dir, kind="flight") as stage:
         with tempfile.TemporaryDirectory(prefix=".jsbsim-", dir=stage) as work:
             trim, wind, aileron = fly_records(ac, config, seed, Path(work).resolve())
         common = [f"aircraft: {ac.name} (JSBSim model {ac.model}), trimmed at {trim['vc_kts']:.2f} KCAS, "

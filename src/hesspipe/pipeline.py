@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,10 +32,13 @@ from typing import Callable, Mapping, Sequence
 
 from . import __version__
 from .errors import HesspipeError
-from .io import staged_output, write_json
+from .io import STAGING_PREFIX, check_output_dir, mark_output_dir, staged_output, write_json
 from .provenance import file_hash, versions
 
 MANIFEST = "manifest.json"
+
+#: Kind of output (see hesspipe.io) of a pipeline run's root folder.
+ROOT_KIND = "run"
 
 
 @dataclass(frozen=True)
@@ -135,7 +139,7 @@ def _output_hashes(folder: Path) -> dict[str, str]:
     out = {}
     for path in sorted(folder.rglob("*")):
         rel = path.relative_to(folder)
-        if path.is_file() and rel.name != MANIFEST and not rel.parts[0].startswith(".staging-"):
+        if path.is_file() and rel.name != MANIFEST and not rel.parts[0].startswith(STAGING_PREFIX):
             out[str(rel)] = file_hash(path)
     return out
 
@@ -161,24 +165,16 @@ def _external_hashes(paths: Sequence) -> dict[str, str]:
     return out
 
 
-def _remove_leftovers(folder: Path) -> None:
-    """Remove staging folders and temporary files a killed run left in `folder`."""
-    import shutil
-
-    if not folder.is_dir():
-        return
-    for path in folder.iterdir():
-        if path.name.startswith(".staging-") and path.is_dir():
-            shutil.rmtree(path, ignore_errors=True)
-        elif path.name.startswith(".") and ".tmp" in path.name and path.is_file():
-            path.unlink(missing_ok=True)
-
-
 def _read_manifest(folder: Path) -> dict | None:
+    """The manifest in `folder`, or None if there is none or it is not a manifest
+    (unreadable, not JSON, not an object, or with outputs that are not a mapping)."""
     try:
-        return json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
-    except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+        data = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
         return None
+    if not isinstance(data, dict) or not isinstance(data.get("outputs", {}), dict):
+        return None
+    return data
 
 
 def _order(stages: Sequence[Stage]) -> list[Stage]:
@@ -288,6 +284,7 @@ class Pipeline:
 
     def status(self) -> list[StageStatus]:
         """Freshness of every stage, as it would be decided by :meth:`run`."""
+        check_output_dir(self.out_root, ROOT_KIND, write=False)
         out, stale = [], set()
         for stage in self.stages:
             upstream_stale = [n for n in stage.needs if n in stale]
@@ -320,7 +317,9 @@ class Pipeline:
         forced = {self._stage(n).name for n in force}
         if from_stage is not None:
             forced |= set(self.downstream(from_stage))
+        check_output_dir(self.out_root, ROOT_KIND, write=False)
         outcomes = []
+        claimed = False
         for stage in self.stages:
             parts = self._fingerprint_parts(stage)
             reason = self._why_stale(stage, parts)
@@ -334,6 +333,9 @@ class Pipeline:
             if before is not None:
                 before()
                 before = None
+            if not claimed:
+                self._claim()
+                claimed = True
             if progress:
                 progress(f"{stage.name}: running ({reason})")
             wall = self._execute(stage, parts)
@@ -342,16 +344,42 @@ class Pipeline:
                 progress(f"{stage.name}: done in {wall:.1f} s")
         return outcomes
 
+    def _claim(self) -> None:
+        """Check every folder the stages write before the first one runs, and mark the root.
+
+        A non-empty folder that is not hesspipe's, another kind of hesspipe output, a
+        file in the way or a folder that cannot be written fails here, before any work.
+        """
+        mark_output_dir(self.out_root, ROOT_KIND)
+        for stage in self.stages:
+            target = self.output_folder(stage.name)
+            check_output_dir(target, self._kind(stage))
+            if target.is_dir():
+                # Marked now: a folder an older hesspipe wrote is recognised by its manifest,
+                # which the stage removes when it starts.
+                mark_output_dir(target, self._kind(stage))
+            if self.folder(stage.name).resolve() != target:
+                check_output_dir(self.folder(stage.name), stage.name)
+
+    def _kind(self, stage: Stage) -> str:
+        """The kind of output a stage's folder holds: its name, or "run" for the root."""
+        return ROOT_KIND if self.output_folder(stage.name) == self.out_root.resolve() else stage.name
+
     def _execute(self, stage: Stage, parts: dict) -> float:
         folder = self.folder(stage.name)
         target = self.output_folder(stage.name)
-        previous = (_read_manifest(folder) or {}).get("outputs", {})
+        # The manifest is published with the outputs (last), at its place relative to them.
+        manifest_rel = Path(os.path.relpath(folder.resolve(), target)) / MANIFEST
+        if ".." in manifest_rel.parts:
+            raise HesspipeError(f"pipeline: stage '{stage.name}': its folder must be inside the "
+                                "output folder")
         # Invalidate first: from here until the new manifest lands the stage is not fresh.
         (folder / MANIFEST).unlink(missing_ok=True)
-        _remove_leftovers(target)
         start = time.perf_counter()
         section = self.config.get(stage.name, {})
-        with staged_output(target) as staging:
+        # staged_output publishes the folder whole: outputs of an earlier run that this
+        # run did not produce are removed, so they are never mistaken for new ones.
+        with staged_output(target, kind=self._kind(stage)) as staging:
             ctx = StageContext(name=stage.name, section=dict(section), config=self.config,
                                seed=self.seed, out_dir=staging,
                                upstream={n: self.output_folder(n) for n in stage.needs},
@@ -359,28 +387,25 @@ class Pipeline:
             stage.run(ctx)
             inner = _read_manifest(staging)
             outputs = _output_hashes(staging)
-            # Outputs of an earlier run that this run did not produce would
-            # otherwise linger beside the new ones and be mistaken for them.
-            for rel in set(previous) - set(outputs):
-                (target / rel).unlink(missing_ok=True)
-        wall = time.perf_counter() - start
-        record = {
-            "stage": stage.name,
-            "description": stage.description,
-            "fingerprint": hashlib.sha256(_canonical(parts).encode()).hexdigest(),
-            "fingerprint_parts": parts,
-            "config": section,
-            "seed": self.seed,
-            "config_file": self.source,
-            "versions": versions(),
-            "wall_time_s": round(wall, 3),
-            "output_folder": str(target),
-            "outputs": outputs,
-            # A stage's own manifest.json, if it writes one, is folded in here.
-            "stage_manifest": inner,
-        }
-        write_json(folder / MANIFEST, record)
+            wall = time.perf_counter() - start
+            record = {
+                "stage": stage.name,
+                "description": stage.description,
+                "fingerprint": hashlib.sha256(_canonical(parts).encode()).hexdigest(),
+                "fingerprint_parts": parts,
+                "config": section,
+                "seed": self.seed,
+                "config_file": self.source,
+                "versions": versions(),
+                "wall_time_s": round(wall, 3),
+                "output_folder": str(target),
+                "outputs": outputs,
+                # A stage's own manifest.json, if it writes one, is folded in here.
+                "stage_manifest": inner,
+            }
+            write_json(staging / manifest_rel, record)
         return wall
+
 
 def _resolve(ref: str, source: str, field: str) -> Callable:
     from importlib import import_module

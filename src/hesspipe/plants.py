@@ -566,7 +566,7 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
     plants = Plants(fits["control_to_output"].continuous, fits["disturbance_to_output"].continuous)
     out_dir = Path(out_dir)
     names = ["plants.json", "plants_report.md", "plants_report.json", "manifest.json"]
-    with staged_output(out_dir) as stage:
+    with staged_output(out_dir, kind="plants") as stage:
         write_plants(stage / "plants.json", plants, units=UNITS,
                      orders={k: report["channels"][k]["orders"] | {"dt_s": f.model.dt}
                              for k, f in fits.items()},
@@ -688,7 +688,7 @@ def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
     plants = Plants(yc, yd)
     path = aircraft_file(name_or_path)
     names = ["plants.json", "plants_report.md", "plants_report.json", "manifest.json"]
-    with staged_output(out_dir) as stage:
+    with staged_output(out_dir, kind="analytic") as stage:
         write_plants(stage / "plants.json", plants, units=report["units"],
                      orders={key: {"model": choice, "n_poles": len(describe_tf(tf)["den"]) - 1,
                                    "n_zeros": len(np.trim_zeros(describe_tf(tf)["num"], "f")) - 1}

@@ -9,6 +9,7 @@ start quickly.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from .config import Fields, aircraft_file, data_dir, load_toml, merge
@@ -49,22 +50,57 @@ def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
     for name in SECTIONS:
         if not isinstance(config.get(name, {}), dict):
             raise HesspipeError(f"{source}: field '{name}': expected a table")
+    # The pipeline-level names and paths are read before any stage's own check (for the
+    # fingerprints, also by `status`), so their types are checked here.
+    for section, key in PATH_FIELDS:
+        value = config[section].get(key) if section in config else None
+        if value is not None and not isinstance(value, str):
+            raise Fields(config[section], source, section).error(key, "a string", value)
     return config, source
+
+
+#: (table, field) of the names and paths the pipeline itself reads.
+PATH_FIELDS = (("flight", "aircraft"), ("analytic", "model"), ("pilots", "data"),
+               ("diagnose", "run"), ("diagnose", "model"))
+
+
+def _in_field(source: str, field: str, check, value) -> None:
+    """Run ``check(value)``; re-raise its error as one naming `source` and `field`."""
+    try:
+        check(value)
+    except HesspipeError as exc:
+        raise HesspipeError(f"{source}: field '{field}': {exc}") from None
 
 
 def validate(config: dict, source: str) -> None:
     """Check every stage's table before anything runs, so a typo in the last stage's
     table fails in a second, not after the first stages have run."""
+    from .aircraft import load_aircraft
+    from .analytic import load_analytic
+    from .batch import check_scheduler_address
     from .compare import PilotsConfig
-    from .discrepancy import DiagnoseConfig
+    from .discrepancy import DiagnoseConfig, _resolve_candidates
     from .flight import FlightConfig
+    from .hess import model_from_name
     from .plants import AnalyticConfig, PlantsConfig
 
-    FlightConfig.from_table(_split(config.get("flight", {}), "aircraft")[0], source)
+    flight, (aircraft,) = _split(config.get("flight", {}), "aircraft")
+    FlightConfig.from_table(flight, source)
+    _in_field(source, "flight.aircraft", load_aircraft, aircraft or "737")
     PlantsConfig.from_table(config.get("plants", {}), source)
-    AnalyticConfig.from_table(config.get("analytic", {}), source)
-    PilotsConfig.from_table(config.get("pilots", {}), source)
-    DiagnoseConfig.from_table(_split(config.get("diagnose", {}), "run", "model")[0], source)
+    analytic = AnalyticConfig.from_table(config.get("analytic", {}), source)
+    _in_field(source, "analytic.model", load_analytic, analytic.model)
+    pilots = PilotsConfig.from_table(config.get("pilots", {}), source)
+    if pilots.scheduler:
+        check_scheduler_address(pilots.scheduler, f"{source}: field 'pilots.scheduler'")
+    table, (run, model) = _split(config.get("diagnose", {}), "run", "model")
+    diagnose = DiagnoseConfig.from_table(table, source)
+    _in_field(source, "diagnose.model", model_from_name, model or "original")
+    _in_field(source, "diagnose.candidates",
+              lambda c: _resolve_candidates(model_from_name(model or "original"), c, diagnose),
+              diagnose.candidates)
+    if run and not Path(run).is_file():
+        raise HesspipeError(f"{source}: field 'diagnose.run': expected a run CSV file, {run} not found")
     Fields(config.get("report", {}), source, "report").reject_unknown()
 
 
@@ -144,16 +180,26 @@ def _config_terms(message: str) -> str:
 # -- diagnose -----------------------------------------------------------------------------
 
 def _diagnose_run(ctx) -> Path:
-    """The run to diagnose: ``[diagnose] run`` or the first run of the pilots stage."""
+    """The run to diagnose: ``[diagnose] run``, or the first run the pilots stage compared.
+
+    The run is taken by id from the pilots stage's ``comparison.json`` (one of its
+    outputs, so in this stage's fingerprint), never by listing a folder: a file put
+    beside the cohort by hand is not a pilot of the study.
+    """
     chosen = ctx.section.get("run", "")
     if chosen:
         return Path(chosen)
-    pilots_cfg = ctx.config.get("pilots", {})
-    folder = Path(pilots_cfg["data"]) if pilots_cfg.get("data") else ctx.upstream["pilots"] / "cohort"
-    runs = sorted(p for p in folder.glob("*.csv"))
-    if not runs:
-        raise HesspipeError(f"{folder}: no *.csv runs to diagnose; set [diagnose] run = \"FILE\"")
-    return runs[0]
+    folder = ctx.upstream["pilots"]
+    try:
+        record = json.loads((folder / "comparison.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        record = None
+    pilots = record.get("pilots") if isinstance(record, dict) else None
+    if not pilots:
+        raise HesspipeError(f"{folder / 'comparison.json'}: the pilots stage compared no runs; "
+                            "set [diagnose] run = \"FILE\"")
+    source = Path(pilots[0]["source"])
+    return source if source.is_absolute() else folder / source
 
 
 def diagnose(ctx) -> None:

@@ -40,9 +40,17 @@ def _run(args) -> int:
     from ..compare import compare_pilots
     from ..errors import HesspipeError
     from ..formats import read_plants
-    from ..io import write_json
+    from ..batch import check_scheduler_address
+    from ..io import check_output_dir, check_output_file, staged_output, write_json
     from ._options import cli_message, run_options
 
+    # Every output and the scheduler address are checked before any work.
+    if args.json:
+        check_output_file(args.json)
+    if args.figures:
+        check_output_dir(args.figures, "figures")
+    if args.scheduler is not None:
+        check_scheduler_address(args.scheduler, "--scheduler")
     if args.workers is not None and args.workers < 1:
         raise HesspipeError(f"--workers: expected an integer >= 1, got {args.workers}")
     if args.passes < 1:
@@ -59,10 +67,10 @@ def _run(args) -> int:
         write_json(args.json, result.to_dict())
     if args.figures:
         from ..viz.compare import plot_pilot
-        from pathlib import Path
 
-        for p in result.pilots:
-            plot_pilot(p, Path(args.figures) / f"{p.id}.png")
+        with staged_output(args.figures, kind="figures") as stage:
+            for p in result.pilots:
+                plot_pilot(p, stage / f"{p.id}.png")
     for f in result.failures:
         print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
     if result.failures:

@@ -33,7 +33,9 @@ def _diagnose(args) -> int:
     from ..errors import HesspipeError
     from ..formats import read_plants, read_run
     from ..io import write_json
+    from ._outputs import check_file_outputs
 
+    check_file_outputs(json=args.json, figure=args.figure)  # before any work
     cfg = DiagnoseConfig()
     if args.alpha is not None:
         if not 0 < args.alpha <= 0.5:

@@ -26,7 +26,9 @@ def register(subparsers) -> None:
 def _run(args) -> int:
     from ..config import load_toml
     from ..flight import FlightConfig, fly
+    from ..io import check_output_dir
 
+    check_output_dir(args.out, "flight")  # before any work: a bad folder loses nothing
     if args.config is not None:
         config = FlightConfig.from_table(load_toml(args.config).get("flight", {}), args.config)
     else:

@@ -130,7 +130,9 @@ def run(args) -> int:
     from ..identify import identify
     from ..io import write_json
     from ..spectra import PaperWelch
+    from ._outputs import check_file_outputs
 
+    check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
     rec = read_run(args.run, min_samples=PaperWelch().nperseg, **run_options(args))
     free = None

@@ -23,8 +23,10 @@ def register(subparsers) -> None:
 
 def _run(args) -> int:
     from ..config import load_toml
+    from ..io import check_output_dir
     from ..plants import AnalyticConfig, PlantsConfig, analytic_plants, describe_tf, fit_plants
 
+    check_output_dir(args.out, "analytic" if args.analytic else "plants")  # before any work
     table = load_toml(args.config) if args.config is not None else {}
     if args.analytic:
         cfg = AnalyticConfig.from_table(table.get("analytic", {}), args.config or "<defaults>")

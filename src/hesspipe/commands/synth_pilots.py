@@ -27,11 +27,11 @@ def register(sub) -> None:
 
 def _run(args) -> int:
     from ..cohort import CohortSpec, synth_cohort
-    from ..formats import read_plants
-
-    from ..formats import record_samples
+    from ..formats import read_plants, record_samples
+    from ..io import check_output_dir
 
     record_samples(args.duration, args.dt, names=("--duration", "--dt"))  # before any allocation
+    check_output_dir(args.out, "cohort")  # before any work: a bad folder loses nothing
     plants = read_plants(args.plants)
     effects = [e for e in args.effects.split(",") if e.strip()]
     paths = synth_cohort(plants, args.n, args.seed, effects, args.out,

@@ -18,6 +18,23 @@ from ..io import atomic_path  # noqa: E402
 SYNTHETIC_LABEL = "SYNTHETIC DATA"
 
 
+def check_figure_path(path: str | Path) -> Path:
+    """Raise unless `path` names an image format matplotlib writes and can be written
+    (checked before computing); no suffix means PNG."""
+    from ..errors import HesspipeError
+    from ..io import check_output_file
+
+    path = Path(path)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    formats = FigureCanvasAgg.get_supported_filetypes()
+    suffix = path.suffix.lstrip(".").lower()
+    if suffix and suffix not in formats:
+        raise HesspipeError(f"{path}: unknown image format '.{suffix}'; expected one of "
+                            f"{', '.join('.' + f for f in sorted(formats))}")
+    return check_output_file(path)
+
+
 def save_figure(fig, path: str | Path, *, synthetic: bool = False, dpi: int = 110) -> Path:
     """Save `fig` to `path` atomically and close it.
 
@@ -28,6 +45,6 @@ def save_figure(fig, path: str | Path, *, synthetic: bool = False, dpi: int = 11
         fig.text(0.995, 0.005, SYNTHETIC_LABEL, ha="right", va="bottom", color="crimson",
                  fontsize=9, fontweight="bold")
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=Path(path).suffix.lstrip(".") or "png")
+        fig.savefig(tmp, dpi=dpi, format=Path(path).suffix.lstrip(".").lower() or "png")
     plt.close(fig)
     return Path(path)

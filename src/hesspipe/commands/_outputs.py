@@ -1,0 +1,15 @@
+"""Output paths of the commands, checked before any work so a bad path loses no result."""
+
+from __future__ import annotations
+
+
+def check_file_outputs(*, json: str | None = None, figure: str | None = None) -> None:
+    """Raise HesspipeError unless `json` (a file) and `figure` (an image file) can be written."""
+    from ..io import check_output_file
+
+    if json:
+        check_output_file(json)
+    if figure:
+        from ..viz import check_figure_path
+
+        check_figure_path(figure)
