@@ -222,6 +222,11 @@ class Loop:
     noise : Block
         Shapes a unit-variance white sequence into remnant added to delta
         (zero block: no remnant).
+    sensation : Block
+        The pilot's part of :attr:`vestibular`: cab angular velocity (rad/s) →
+        u_v. ``vestibular`` is this times the simulator's motion path
+        (default: the paper's platform × washout); :mod:`hesspipe.motion`
+        rebuilds it for a plants file's ``motion_path``.
     """
 
     visual: Block
@@ -230,6 +235,7 @@ class Loop:
     proprioceptive: Block
     plant: Block = field(default=ONE)
     noise: Block = field(default=ZERO)
+    sensation: Block = field(default=ZERO)
 
     def replace(self, **changes) -> "Loop":
         return replace(self, **changes)

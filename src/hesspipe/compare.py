@@ -289,7 +289,7 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
     model = model_from_name(model)
     complete = model.complete(params, k, strict=True)
     obj = SpectralObjective(run, plants, model, complete, band=band)
-    loop = model.loop(complete)
+    loop = obj.sim.prepare(model.loop(complete))
     sim_psd = obj.loop_psd(loop)
     fit = (float(np.sqrt(np.mean((obj.measured[obj.mask] - sim_psd[obj.mask]) ** 2)))
            if sim_psd is not None else obj.unstable_fitness(loop))  # finite, never NaN

@@ -106,7 +106,9 @@ def crossover(model, params: Mapping[str, float] | None, plants, *,
     limits : CrossoverLimits
     """
     from .hess import model_from_name
+    from .motion import motion_block, with_motion_path
 
     model = model_from_name(model)
     p = model.complete(params, k)
-    return loop_crossover(model.loop(p), _plant_block(plants), limits)
+    return loop_crossover(with_motion_path(model.loop(p), motion_block(plants)),
+                          _plant_block(plants), limits)

@@ -69,14 +69,20 @@ class Effect:
     apply: Callable[[Loop, Mapping[str, float]], Loop] = field(repr=False)
 
 
+# Each vestibular effect records its pilot-side part (from the cab's angular velocity) in
+# Loop.sensation, so that hesspipe.motion can put another simulator's motion path behind it;
+# the vestibular block itself is built with the paper's path, exactly as before.
 def _motion(loop: Loop, p) -> Loop:
     path = gain(p["Km"]) * MOTION
-    return loop.replace(vestibular=loop.vestibular + path)
+    return loop.replace(vestibular=loop.vestibular + path,
+                        sensation=loop.sensation + gain(p["Km"]) * CANALS)
 
 
 def _otoliths(loop: Loop, p) -> Loop:
     path = gain(p["Ko"]) * OTOLITH_PATH
-    return loop.replace(vestibular=loop.vestibular + path)
+    # Tilt angle = integral of the cab's angular velocity.
+    return loop.replace(vestibular=loop.vestibular + path,
+                        sensation=loop.sensation + gain(p["Ko"]) * OTOLITHS * tf([1.0], [1.0, 0.0]))
 
 
 def _extra_delay(loop: Loop, p) -> Loop:

@@ -392,11 +392,17 @@ class Plants:
         Yd: lateral wind (ft/s) → roll rate (rad/s).
     meta : dict
         Extra keys of the JSON file (units, orders, fit, source...).
+    motion_path : control.TransferFunction or None
+        Controlled output → angular velocity (rad/s) the simulator cab imposes on the
+        pilot, platform and motion filter included (SPEC.md "Data formats"). None: the
+        paper's platform × washout acting on the output (a rate task). The vestibular
+        part (canals, Km; otoliths) belongs to the pilot model, not to this path.
     """
 
     control_to_output: ct.TransferFunction
     disturbance_to_output: ct.TransferFunction
     meta: dict = field(default_factory=dict)
+    motion_path: ct.TransferFunction | None = None
 
     @property
     def Yc(self) -> ct.TransferFunction:
@@ -462,15 +468,20 @@ def read_plants(path: str | Path) -> Plants:
         if key not in obj:
             raise HesspipeError(f"{path}: field '{key}' missing; expected "
                                 "{\"num\": [...], \"den\": [...]}")
-    meta = {k: v for k, v in obj.items() if k not in ("control_to_output", "disturbance_to_output")}
+    tfs = ("control_to_output", "disturbance_to_output", "motion_path")
+    meta = {k: v for k, v in obj.items() if k not in tfs}
+    motion = obj.get("motion_path")
     return Plants(_read_tf(obj["control_to_output"], path, "control_to_output"),
-                  _read_tf(obj["disturbance_to_output"], path, "disturbance_to_output"), meta)
+                  _read_tf(obj["disturbance_to_output"], path, "disturbance_to_output"), meta,
+                  None if motion is None else _read_tf(motion, path, "motion_path"))
 
 
 def write_plants(path: str | Path, plants: Plants, **extra) -> Path:
     """Write `plants` in the SPEC.md JSON format, atomically; `extra` keys are added."""
     obj = {"control_to_output": tf_coefficients(plants.control_to_output),
            "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}
+    if plants.motion_path is not None:
+        obj["motion_path"] = tf_coefficients(plants.motion_path)
     obj.update(plants.meta)
     obj.update(extra)
     return write_json(path, obj)

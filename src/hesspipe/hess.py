@@ -37,6 +37,7 @@ from .blocks import (Block, Loop, ONE, Term, from_tf, max_delay, max_real_root, 
                      stable_poly)
 from .effects import EFFECTS, get_effect
 from .errors import HesspipeError
+from .motion import motion_block, with_motion_path
 
 PARAMETERS: tuple[str, ...] = ("Ke", "K1", "K2", "1/T1", "1/T2", "k", "tau0", "zn", "wn")
 """Core parameter names, as in the paper's Table 1 (Km belongs to ``motion_feedback``)."""
@@ -399,6 +400,11 @@ class Simulator:
         self.rf = None if self.r is None else sfft.rfft(self.r, self.nfft)
         self.noise_seed = int(noise_seed)
         self._noise = None
+        self.cab = motion_block(plants)   # None: the paper's platform x washout
+
+    def prepare(self, loop: Loop) -> Loop:
+        """`loop` with its vestibular feedback through the plants' ``motion_path``."""
+        return with_motion_path(loop, self.cab)
 
     def _trim_cache(self):
         if len(self._cache) > 96:  # each entry is one complex spectrum (~100 kB)
@@ -419,6 +425,7 @@ class Simulator:
 
         The remnant shaping filter's poles count too (it feeds the loop).
         """
+        loop = self.prepare(loop)
         order = pade_order_for(max_delay((loop.visual, loop.vestibular, loop.neuromuscular,
                                           loop.proprioceptive, loop.plant)))
         rate = max_real_root(loop.characteristic(self.yc_block, order))
@@ -437,6 +444,7 @@ class Simulator:
         ``delta = (NM vis R - NM (vis + ves) Yd W + N n) / (1 + NM PF + NM (vis + ves) Yc')``
         """
         self._trim_cache()
+        loop = self.prepare(loop)
         yc = self.yc_block if loop.plant.terms == ONE.terms else self.yc_block * loop.plant
         nm, pf, vis, ves = loop.neuromuscular, loop.proprioceptive, loop.visual, loop.vestibular
         paths = [vis] if ves.is_zero else [vis, ves]

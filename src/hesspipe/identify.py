@@ -447,7 +447,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         values, best = _scipy_search(obj, flds, x0, optimizer=optimizer, seed=seed, passes=passes)
     evaluations = obj.calls
     params = obj.params(values)
-    loop = model.loop(params)
+    loop = obj.sim.prepare(model.loop(params))
     sim_psd = obj.loop_psd(loop)
     stable = sim_psd is not None
     cross = loop_crossover(loop, obj.sim.yc_block, limits)

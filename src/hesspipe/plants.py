@@ -65,6 +65,7 @@ from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
 from .errors import HesspipeError
 from .formats import Plants, read_csv_columns, sample_interval, tf_coefficients, write_plants
 from .io import staged_output, write_json, write_text
+from .motion import paper_motion_path
 from .provenance import file_hash, versions
 
 #: The paper's Eq. 16: lateral wind → roll rate of its Boeing 757 (ARX, units as printed).
@@ -563,7 +564,10 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
         "channels": {k: _channel_report(f, config) for k, f in fits.items()},
         "paper_eq16": _eq16_report(),
     }
-    plants = Plants(fits["control_to_output"].continuous, fits["disturbance_to_output"].continuous)
+    # The output is roll rate on the paper's simulator: its platform x washout is the motion
+    # path, written explicitly so the file says what the cab did (SPEC "Data formats").
+    plants = Plants(fits["control_to_output"].continuous, fits["disturbance_to_output"].continuous,
+                    motion_path=paper_motion_path())
     out_dir = Path(out_dir)
     names = ["plants.json", "plants_report.md", "plants_report.json", "manifest.json"]
     with staged_output(out_dir, kind="plants") as stage:
@@ -685,7 +689,7 @@ def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
     report = _analytic_report(ap, config)
     yc = ap.rolling_control if config.control == "rolling" else ap.full_control
     yd = ap.full_disturbance if config.disturbance == "full" else ap.rolling_disturbance
-    plants = Plants(yc, yd)
+    plants = Plants(yc, yd, motion_path=paper_motion_path())   # roll rate, the paper's cab
     path = aircraft_file(name_or_path)
     names = ["plants.json", "plants_report.md", "plants_report.json", "manifest.json"]
     with staged_output(out_dir, kind="analytic") as stage:
