@@ -189,6 +189,17 @@ def _diagnose(folder: Path, root: Path) -> list[str]:
     return out
 
 
+def _answer(folder: Path) -> list[str]:
+    """The compare-pilots motion verdict (hesspipe.verdict), for the top of the report."""
+    comp = _load(folder / "comparison.json")
+    v = (comp or {}).get("motion_verdict")
+    if not v:
+        return []
+    note = " (SYNTHETIC DATA)" if comp.get("synthetic") else ""
+    return [f"**Does the pilot need motion?{note}** {v['sentence'][0].upper()}{v['sentence'][1:]}.",
+            "", f"Method: {v['method']}.", ""]
+
+
 def build_report(folders: Mapping[str, Path], root: Path, *, config_file: str, seed: int) -> str:
     """Markdown for ``report.md``.
 
@@ -205,6 +216,8 @@ def build_report(folders: Mapping[str, Path], root: Path, *, config_file: str, s
              "Reproduces and extends AIAA 2009-6032 (Zaychik, Cardullo, George, Kelly).", "",
              f"Configuration `{config_file}`, seed {seed}. Versions: " +
              ", ".join(f"{k} {v}" for k, v in versions().items()) + ".", ""]
+    if "pilots" in folders:   # the answer to the project's question comes first
+        parts += _answer(Path(folders["pilots"]))
     builders = [("flight", _flight), ("plants", _plants), ("analytic", _analytic),
                 ("pilots", _pilots), ("diagnose", _diagnose)]
     for name, fn in builders:

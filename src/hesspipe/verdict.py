@@ -179,6 +179,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     cab = motion_block(plants)
     base = original.complete({key: v for key, v in start.items() if key in original.parameter_names()}, k)
     base["k"] = float(k)
+    # Only K1 K2 is identifiable: K2 held at its default, the start's product carried by K1.
+    k2 = original.defaults(k)["K2"]
+    base["K1"], base["K2"] = float(np.clip(base["K1"] * base["K2"] / k2, 1e-3, 100.0)), k2
     free = ["Ke", "K1", "1/T1", "tau0", "wn", "zn"] + (["1/T2"] if k == 2 else [])
     sign = 1.0 if base["Ke"] >= 0 else -1.0
     big = 1e3 * max(abs(base["Ke"]), 1.0)
@@ -290,3 +293,28 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA) -> dic
                                 if t.get("available") else {"available": False,
                                                             "reason": t.get("reason", "")})
                           for pid, t in tests.items()}}
+
+
+def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
+                     band_hz: tuple[float, float] = (0.0, 5.0)) -> dict:
+    """:func:`motion_test`, with a failure of the test reported in the result, not raised
+    (a pilot's identification stays valid when its describing function cannot be tested)."""
+    try:
+        return motion_test(run, plants, start, k=k, band_hz=band_hz)
+    except (HesspipeError, ValueError, np.linalg.LinAlgError) as exc:
+        return {"available": False, "reason": f"motion test failed: {exc}"}
+
+
+def verdict_lines(verdict: Mapping) -> list[str]:
+    """Plain-text lines of a :func:`cohort_verdict`: the sentence, then one line per pilot."""
+    out = [f"MOTION VERDICT: {verdict['sentence']}"]
+    for pid, t in verdict.get("per_pilot", {}).items():
+        if t.get("available", True) is False:
+            out.append(f"  {pid}: not tested ({t.get('reason', 'no forcing lines')})")
+            continue
+        se = t.get("Km_se")
+        km = f"Km {t['Km']:.3g}" + (f" +/- {se:.2g}" if se is not None and math.isfinite(se) else "")
+        out.append(f"  {pid}: misfit removed {100 * t['gain']:.1f} %, F = {t['lr']:.3g}, "
+                   f"p = {t['p_value']:.2g}{' *' if t['significant'] else ''}, {km}")
+    out.append(f"  ({verdict['method']})")
+    return out
