@@ -1,0 +1,101 @@
+"""Motion verdict (hesspipe.verdict) and target tracking, on SYNTHETIC data from the
+independent generator hesspipe.humanlike (fine-step time-domain, no hesspipe pilot code)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from hesspipe.formats import read_plants, read_run
+from hesspipe.hess import PilotModel, gain_scale
+from hesspipe.humanlike import make_trials
+from hesspipe.verdict import cohort_verdict, forcing_lines, motion_test
+
+FAST = dict(T_m=30.0, fs=50.0, style="plain")
+
+
+def _tests(folder, effects, n, seed, **kw):
+    paths = make_trials(folder, "roll", n, seed, pilot="hess", effects=effects, **FAST, **kw)
+    plants = read_plants(folder / "plants.json")
+    start = PilotModel().complete({}, 1, gain=gain_scale(plants, 1))
+    return {p.stem: motion_test(read_run(p), plants, start) for p in paths}, plants, paths
+
+
+def test_verdict_yes_for_motion_cohort_no_without(tmp_path):
+    yes, _, _ = _tests(tmp_path / "m", ("motion_feedback",), 3, 1, km_ratio=(0.6, 1.0))
+    no, _, _ = _tests(tmp_path / "n", (), 3, 1)
+    v_yes, v_no = cohort_verdict(yes), cohort_verdict(no)
+    assert all(t["available"] and t["n_lines"] >= 10 for t in {**yes, **no}.values())
+    assert v_yes["answer"] == "yes" and v_yes["sentence"].startswith("yes: motion feedback")
+    assert v_no["answer"] == "no" and v_no["sentence"].startswith("no: ")
+    assert v_yes["n_significant"] >= 2 and v_no["n_significant"] <= 1
+    assert v_yes["median_gain"] > v_no["median_gain"] + 0.1
+
+
+def test_random_forcing_has_no_lines_and_an_undetermined_verdict(tmp_path):
+    (folder := tmp_path / "m").mkdir()
+    paths = make_trials(folder, "roll", 1, 3, pilot="hess", **FAST)
+    run = read_run(paths[0])
+    rng = np.random.default_rng(0)
+    noisy = dataclasses.replace(run, disturbance=rng.standard_normal(len(run.control)))
+    assert forcing_lines(noisy).size == 0
+    t = motion_test(noisy, read_plants(folder / "plants.json"), PilotModel().complete({}))
+    assert t["available"] is False and "forcing lines" in t["reason"]
+    v = cohort_verdict({"a": t})
+    assert v["answer"] == "undetermined" and "no pilot" in v["sentence"]
+
+
+def test_cohort_counts_and_binomial():
+    t = lambda p: {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": 1.0,  # noqa: E731
+                   "Km_se": 0.1, "significant": p < 0.05}
+    v = cohort_verdict({"a": t(0.001), "b": t(0.01), "c": t(0.5), "d": {"available": False}})
+    assert v["n_tested"] == 3 and v["n_significant"] == 2
+    assert v["binomial_p"] == pytest.approx(3 * 0.05 ** 2 * 0.95 + 0.05 ** 3)
+    assert "2 of 3 pilots" in v["sentence"] and "1 pilot(s) without forcing lines" in v["sentence"]
+    assert cohort_verdict({"a": t(0.01), "b": t(0.6)})["answer"] == "no"
+
+
+def test_tracking_target_lines_drive_the_motion_test(tmp_path):
+    """Task "both": target and disturbance on interleaved lines; e = r - y enters the test."""
+    tests, plants, paths = _tests(tmp_path, ("motion_feedback",), 1, 4, task="both",
+                                  km_ratio=(0.6, 1.0))
+    (t,) = tests.values()
+    truth = json.loads(paths[0].with_suffix(".truth.json").read_text())["pilot"]["Km"]
+    assert t["available"] and t["n_lines"] >= 20 and t["p_value"] < 0.05
+    assert 0.5 * truth < t["Km"] < 2.0 * truth
+    run = read_run(paths[0])
+    start = PilotModel().complete({}, 1, gain=gain_scale(plants, 1))
+    blind = motion_test(dataclasses.replace(run, reference=np.zeros_like(run.reference)), plants, start)
+    # Without the reference (e = -y, wrong at the target lines) the motion path is not found.
+    assert blind["p_value"] > 0.05 and not 0.5 * truth < blind["Km"] < 2.0 * truth
+
+
+def test_identify_uses_the_reference_of_a_tracking_trial(tmp_path):
+    from hesspipe.identify import identify
+
+    paths = make_trials(tmp_path, "roll", 1, 5, task="tracking", pilot="hess", **FAST)
+    run, plants = read_run(paths[0]), read_plants(tmp_path / "plants.json")
+    kw = dict(optimizer="scipy", passes=3, with_benchmark=False, with_identifiability=False)
+    with_r = identify(run, plants, "original", **kw)
+    without = identify(dataclasses.replace(run, reference=np.zeros_like(run.reference)), plants,
+                       "original", **kw)
+    # Tracking only: without the reference nothing drives the simulated loop (control 0);
+    # with it the target response is fitted.
+    assert np.nanmax(without.simulated_psd) < 1e-6 * np.nanmax(with_r.simulated_psd)
+    assert with_r.fitness < 0.75 * without.fitness
+
+
+def test_report_carries_the_verdict_at_the_top(tmp_path):
+    from hesspipe.report import build_report
+
+    v = cohort_verdict({"a": {"available": True, "p_value": 0.001, "lr": 9.0, "gain": 0.6,
+                              "Km": 1.0, "Km_se": 0.1, "significant": True}})
+    (tmp_path / "pilots").mkdir()
+    (tmp_path / "pilots" / "comparison.json").write_text(json.dumps(
+        {"motion_verdict": v, "synthetic": True, "pilots": [], "failures": []}))
+    md = build_report({"pilots": tmp_path / "pilots"}, tmp_path, config_file="x.toml", seed=0)
+    head = md.split("## ")[0]
+    assert "Does the pilot need motion?" in head and "1 of 1 pilots" in head
