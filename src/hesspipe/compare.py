@@ -638,6 +638,10 @@ def write_comparison(comparison: Comparison, out_dir: str | Path, *, figures: bo
 
 # -- pipeline configuration --------------------------------------------------------------------
 
+#: How the pipeline's synthetic cohort is simulated (``[pilots] simulator``).
+SIMULATORS = ("jsbsim", "fft")
+
+
 @dataclass(frozen=True)
 class PilotsConfig:
     """The ``[pilots]`` table of the pipeline configuration.
@@ -674,6 +678,10 @@ class PilotsConfig:
         Also compute the McRuer benchmark score per pilot.
     figures : bool
         Write a PSD figure per pilot.
+    simulator : str
+        How the synthetic cohort is made: "jsbsim" (the pilots fly the JSBSim
+        aircraft in closed loop, :func:`hesspipe.pilotflight.fly_cohort`) or "fft"
+        (the linear frequency-domain model around the fitted plants).
     """
 
     data: str = ""
@@ -692,6 +700,7 @@ class PilotsConfig:
     restarts: int = 2
     benchmark: bool = False
     figures: bool = True
+    simulator: str = "jsbsim"
 
     @classmethod
     def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
@@ -715,7 +724,8 @@ class PilotsConfig:
                   band_hz=band, km_fixed=km, start=f.string("start", d.start, choices=STARTS),
                   restarts=f.integer("restarts", d.restarts, min=1),
                   benchmark=f.boolean("benchmark", d.benchmark),
-                  figures=f.boolean("figures", d.figures))
+                  figures=f.boolean("figures", d.figures),
+                  simulator=f.string("simulator", d.simulator, choices=SIMULATORS))
         f.reject_unknown()
         if cfg.duration_s / cfg.dt_s < MIN_SAMPLES:
             raise f.error("duration_s", f"at least {MIN_SAMPLES} samples (duration_s / dt_s) for the "

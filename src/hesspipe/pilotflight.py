@@ -69,6 +69,10 @@ from .wind import heading_to_ned, ned_to_heading
 MAX_BANK_DEG = 15.0
 #: Pilot-side effects a flown pilot can have (aircraft effects are the aircraft's own business).
 PILOT_EFFECTS = ("motion_feedback", "otoliths", "extra_delay", "remnant")
+#: The pilot at step k reads the state JSBSim reached at the end of step k - 1, which the
+#: record (like stage one's, from which the plants are fitted) files as row k - 1: one
+#: sample of the loop's delay is the sampling's, taken off the pilot's visual buffer.
+SAMPLE_LAG = 1
 #: Default remnant share of the pilot's control variance when Kn is not given.
 DEFAULT_REMNANT_SHARE = 0.1
 
@@ -330,7 +334,7 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
                 raise HesspipeError(f"remnant_share: expected a share in (0, 1), got {share!r}")
             p["Kn"] = _remnant_gain(model, p, plants, lateral, r, dt, remnant_seed, share,
                                     config.duration_s)
-    pilot = DiscretePilot(pilot_loop(model, p, plants), dt)
+    pilot = DiscretePilot(pilot_loop(model, p, plants), dt, sample_lag=SAMPLE_LAG)
 
     jsbsim = _jsbsim()
     logger = _quiet_logger()
@@ -557,3 +561,25 @@ def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_di
                        "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)},
             "pilots": summary, "versions": versions()})
     return [out_dir / f"{pid}.csv" for pid in ids]
+
+
+def fly_pipeline_cohort(config, plants: Plants, ctx):
+    """The pilots stage's JSBSim cohort: fly it into ``ctx.out_dir/cohort``.
+
+    `config` is the stage's :class:`hesspipe.compare.PilotsConfig`; the aircraft and
+    the flight settings are the ``[flight]`` table's (the aircraft the plants were
+    fitted on, unless the user changes it). Returns `config` pointing at the cohort.
+    """
+    from dataclasses import replace
+
+    from .compare import PilotsConfig  # noqa: F401  (type of `config`)
+
+    table = dict(ctx.config.get("flight", {}))
+    aircraft = table.pop("aircraft", "737")
+    flight_config = FlightConfig.from_table(table, ctx.source)
+    flight_config = replace(flight_config, duration_s=config.duration_s)
+    seed = config.seed if config.seed is not None else int(ctx.seed)
+    folder = Path(ctx.out_dir) / "cohort"
+    fly_cohort(plants, config.n, seed, config.effects, folder, aircraft=aircraft, config=flight_config,
+               record_dt_s=config.dt_s)
+    return replace(config, data=str(folder))
