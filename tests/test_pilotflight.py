@@ -212,3 +212,22 @@ def test_bad_params_file_is_one_line(tmp_path, plants_file, capsys):
                  "--params", str(params)])
     err = capsys.readouterr().err
     assert code == 1 and "'Ke'" in err and err.count("\n") == 1
+
+
+def test_cohort_is_the_synthetic_cohorts_draw_flown_in_jsbsim(tmp_path):
+    from hesspipe.cohort import CohortSpec, synth_pilot
+    from hesspipe.pilotflight import fly_cohort
+    from hesspipe.seeds import derive_seed
+
+    paths = fly_cohort(PLANTS, 2, 11, ["motion_feedback"], tmp_path / "cohort", config=SHORT)
+    cohort = json.loads((tmp_path / "cohort" / "cohort.json").read_text())
+    assert cohort["simulator"] == "jsbsim" and cohort["synthetic"] and cohort["dt_s"] == pytest.approx(0.025)
+    for path in paths:
+        pid = path.stem
+        truth = json.loads(path.with_suffix(".truth.json").read_text())
+        _, drawn = synth_pilot(PLANTS, pid, derive_seed(11, pid), ("motion_feedback",),
+                               CohortSpec(duration_s=SHORT.duration_s))
+        same = {k: v for k, v in drawn["parameters"].items() if k != "Kn"}  # Kn: per 120 Hz step
+        assert {k: truth["parameters"][k] for k in same} == same
+        run = read_run(path)
+        assert run.synthetic and run.dt == pytest.approx(0.025) and len(run) == 800
