@@ -75,6 +75,15 @@ def _run(args) -> int:
     from ..hess import model_from_name
     from ..pilotflight import AircraftEffects, fly_pilot
 
+    from ..errors import HesspipeError
+
+    for flag, value, ok, want in (
+            ("--actuator-lag", args.actuator_lag, lambda v: v >= 0, "a time constant >= 0 s"),
+            ("--rate-limit", args.rate_limit, lambda v: v > 0, "a rate > 0 (normalised command per s)"),
+            ("--max-bank", args.max_bank, lambda v: v > 0, "a bank limit > 0 deg"),
+            ("--remnant-share", args.remnant_share, lambda v: 0 < v < 1, "a share in (0, 1)")):
+        if value is not None and not (value == value and ok(value)):
+            raise HesspipeError(f"{flag}: expected {want}, got {value:g}")
     plants = read_plants(args.plants)
     config = (FlightConfig.from_table(load_toml(args.config).get("flight", {}), args.config)
               if args.config is not None else FlightConfig())
