@@ -737,8 +737,10 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
               progress: bool | None = None) -> Comparison:
     """The pipeline's pilots stage: cohort (or data folder) → comparison files in `out_dir`.
 
-    Without ``config.data`` a synthetic cohort of ``config.n`` pilots is written
-    to ``out_dir/cohort``; then every run is compared and ``comparison.json``,
+    Without ``config.data`` a synthetic frequency-domain cohort of ``config.n`` pilots
+    is written to ``out_dir/cohort`` (with ``simulator = "jsbsim"`` the pipeline's
+    pilots stage has flown the cohort in JSBSim before and passes its folder as
+    ``data``: :func:`hesspipe.pilotflight.fly_pipeline_cohort`); then every run is compared and ``comparison.json``,
     ``comparison.md`` and ``figures/<pilot>.png`` are written. Failed pilots
     are listed in the outputs; the caller decides whether ``not result.ok``
     fails the stage.
