@@ -280,11 +280,10 @@ def main(argv=None) -> int:
     ap.add_argument("--diag-seeds", type=int, default=4)
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--skip", default="", help="comma list of sections to skip: speed,ident,diagnose")
-    ap.add_argument("--restarts", type=int, default=RESTARTS)
-    ap.add_argument("--passes", type=int, default=PASSES)
+    ap.add_argument("--restarts", type=int, default=2)
+    ap.add_argument("--passes", type=int, default=10)
     args = ap.parse_args(argv)
-    global RESTARTS, PASSES
-    RESTARTS, PASSES = args.restarts, args.passes
+    globals().update(RESTARTS=args.restarts, PASSES=args.passes)
     skip = set(args.skip.split(","))
     print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737 (hesspipe.pilotflight)")
     with tempfile.TemporaryDirectory() as tmp:
