@@ -14,6 +14,7 @@ from hesspipe.errors import HesspipeError
 from hesspipe.flight import FlightConfig
 from hesspipe.formats import Plants, read_run, write_plants
 from hesspipe.hess import PilotModel, gain_scale
+from hesspipe.io import MARKER
 from hesspipe.pilotdiscrete import DiscretePilot, continuous_paths
 from hesspipe.pilotflight import AircraftEffects, fly_pilot_record, pilot_loop
 
@@ -180,7 +181,7 @@ def test_cli_writes_synthetic_run_truth_and_figure_reproducibly(tmp_path, plants
         assert main(["fly-pilot", "--plants", str(plants_file), "--out", str(out), "--seed", str(seed),
                      "--aircraft", "B747"]) == 0
         outs.append(out)
-    assert sorted(p.name for p in outs[0].iterdir()) == ["pilot.csv", "pilot.png", "pilot.truth.json"]
+    assert sorted(p.name for p in outs[0].iterdir()) == [MARKER, "pilot.csv", "pilot.png", "pilot.truth.json"]
     # 1/120 s written to 9 digits jitters by ~1e-5 of the interval: SPEC.md's uniformity is 1e-4
     run = read_run(outs[0] / "pilot.csv", rtol=1e-4)
     assert run.synthetic and len(run) == 8400 and run.dt == pytest.approx(DT)

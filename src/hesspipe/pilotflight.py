@@ -59,7 +59,7 @@ from .effects import CANALS, EFFECTS, MOTION
 from .errors import HesspipeError
 from .flight import FlightConfig, _check_seed, _jsbsim, _load, _quiet_logger, _sanitised_aircraft, _trim
 from .formats import Plants, Run, tf_coefficients, write_run
-from .io import staged_output, write_json
+from .io import check_output_dir, staged_output, write_json
 from .pilotdiscrete import DiscretePilot
 from .provenance import versions
 from .seeds import derive_seed
@@ -492,10 +492,9 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
 
     All files or none (staged output); see :func:`fly_pilot_record` for the arguments.
     """
-    out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise HesspipeError(f"{out_dir}: exists and is not a folder; expected an output folder")
-    with staged_output(out_dir) as stage:
+    # Checked before the flight: a folder that cannot take the output loses no result.
+    out_dir = check_output_dir(out_dir, "fly-pilot")
+    with staged_output(out_dir, kind="fly-pilot") as stage:
         with tempfile.TemporaryDirectory(prefix=".jsbsim-", dir=stage) as work:
             flight = fly_pilot_record(aircraft, plants, model, params or {}, seed=seed, workdir=Path(work),
                                       config=config, aircraft_effects=aircraft_effects,
@@ -535,7 +534,7 @@ def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_di
     ids = pilot_ids(n)
     out_dir = Path(out_dir)
     summary = []
-    with staged_output(out_dir) as stage:
+    with staged_output(out_dir, kind="cohort") as stage:
         with tempfile.TemporaryDirectory(prefix=".jsbsim-", dir=stage) as work:
             for pid in ids:
                 pseed = derive_seed(seed, pid)
