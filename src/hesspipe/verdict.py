@@ -33,9 +33,13 @@ significant pilots is tested against Binomial(n, alpha) (one-sided); Fisher's
 combination of the per-pilot p-values is reported beside it. The verdict is "yes" when
 the binomial test is significant at alpha.
 
-Records without multisine lines (random wind, as in the JSBSim pipeline) have
-no describing function to test: the pilot's test is "not available" and the
-verdict says so instead of guessing from spectra.
+Records without separated multisine lines (random wind or gusts, as in the
+JSBSim pipeline's cohort) have no describing function to test: the pilot's
+test is "not available" and the verdict says so instead of guessing from
+spectra. (Tried and dropped: the same equation error over every forced bin of
+a broadband record. There the remnant drives E and Y too, the regression is
+biased by the closed loop, and on hesspipe's own cohort with Km = 2-8 it found
+motion in 0 of 4 pilots.)
 """
 
 from __future__ import annotations
