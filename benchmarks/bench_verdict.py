@@ -1,7 +1,8 @@
 """The compare-pilots motion verdict on cohorts from the INDEPENDENT generator.
 
 For each plant and seed, two SYNTHETIC cohorts of hess-structured human-like pilots are
-drawn by :func:`hesspipe.humanlike.make_trials` (fine-step time-domain simulation that
+drawn by :func:`hesspipe.humanlike.draw_trial` (a draw whose pilot misses the
+generator's crossover ranges is redrawn with the next sub-seed) (fine-step time-domain simulation that
 shares no modelling code with hesspipe's pilot model; multisine disturbance lines,
 remnant 10-40 %, tau 0.15-0.35 s): one with motion feedback in every pilot (Km = 0.2-1.0
 times Ke), one without. Each cohort goes through ``compare_pilots`` (APID, 2 restarts);
@@ -24,7 +25,27 @@ import numpy as np
 
 from hesspipe.compare import compare_pilots
 from hesspipe.formats import read_plants
-from hesspipe.humanlike import make_trials
+from hesspipe.errors import HesspipeError
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.seeds import derive_seed
+
+
+def cohort(folder: Path, plant: str, n: int, seed: int, effects, task: str, T: float, fs: float) -> int:
+    """Write `n` trials; a draw with no pilot meeting the generator's crossover/phase-margin
+    ranges is redrawn with the next sub-seed. Returns the number of redraws."""
+    redraws = 0
+    for i in range(n):
+        for attempt in range(50):
+            s = derive_seed(seed, "bench_verdict", plant, task, ",".join(effects), str(i), str(attempt))
+            try:
+                spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, T_m=T, fs=fs,
+                                  name=f"pilot{i + 1:02d}")
+            except HesspipeError:
+                redraws += 1
+                continue
+            write_trial(folder, simulate_trial(spec))
+            break
+    return redraws
 
 
 def main(argv=None) -> None:
@@ -45,8 +66,7 @@ def main(argv=None) -> None:
             for label, effects in (("motion", ("motion_feedback",)), ("none", ())):
                 with tempfile.TemporaryDirectory() as tmp:
                     folder = Path(tmp) / "runs"
-                    make_trials(folder, plant, args.n, seed, pilot="hess", effects=effects,
-                                task=args.task, T_m=args.T, fs=args.fs)
+                    cohort(folder, plant, args.n, seed, effects, args.task, args.T, args.fs)
                     t0 = time.perf_counter()
                     comp = compare_pilots(folder, read_plants(folder / "plants.json"), workers=1,
                                           seed=seed, progress=False)
