@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 
 import numpy as np
 import pytest
@@ -31,6 +32,7 @@ def test_verdict_yes_for_motion_cohort_no_without(tmp_path):
     assert all(t["available"] and t["n_lines"] >= 10 for t in {**yes, **no}.values())
     assert v_yes["answer"] == "yes" and v_yes["sentence"].startswith("yes: motion feedback")
     assert v_no["answer"] == "no" and v_no["sentence"].startswith("no: ")
+    assert v_yes["fisher_p"] < 0.05 < v_no["fisher_p"]
     assert v_yes["n_significant"] >= 2 and v_no["n_significant"] <= 1
     assert v_yes["median_gain"] > v_no["median_gain"] + 0.1
 
@@ -55,7 +57,11 @@ def test_cohort_counts_and_binomial():
     assert v["n_tested"] == 3 and v["n_significant"] == 2
     assert v["binomial_p"] == pytest.approx(3 * 0.05 ** 2 * 0.95 + 0.05 ** 3)
     assert "2 of 3 pilots" in v["sentence"] and "1 pilot(s) without forcing lines" in v["sentence"]
-    assert cohort_verdict({"a": t(0.01), "b": t(0.6)})["answer"] == "no"
+    chi = -2 * np.log([0.001, 0.01, 0.5]).sum()
+    assert v["fisher_p"] == pytest.approx(np.exp(-chi / 2) * sum((chi / 2) ** j / math.factorial(j)
+                                                                 for j in range(3)))
+    assert v["answer"] == "yes"
+    assert cohort_verdict({"a": t(0.04), "b": t(0.6), "c": t(0.9)})["answer"] == "no"
 
 
 def test_tracking_target_lines_drive_the_motion_test(tmp_path):
