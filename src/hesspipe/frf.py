@@ -1,0 +1,426 @@
+"""The pilot's nonparametric describing function, from a measured run.
+
+Multisine experiments (SPEC.md "Describing functions"): the disturbance d and
+the reference r each excite their own set of lines. At the lines of a set the
+pilot's describing function from displayed error e = r - y to control u is::
+
+    H(j w_k) = U(w_k) / E(w_k)
+
+with U, E the discrete Fourier coefficients over a window that holds an
+integer number of the forcing's periods. The disturbance lines give the
+feedback (error) response; reference lines give their own response (equal
+to it for a purely compensatory pilot). The remnant n is everything else in
+u: its share of the control power is the power at non-excited bins.
+
+Uncertainty per line: with ``U = H E + N`` near a line, ``U_j - H_k E_j`` at
+the non-excited neighbours j of line k samples the remnant, so
+``sigma_k^2 = mean_j |U_j - H_k E_j|^2 / |E_k|^2`` is the variance of the
+complex error of H_k (circular Gaussian to first order).
+
+Broadband inputs (the paper's side wind plus gusts) have no lines: then
+``H = S_du / S_de`` from Welch cross-spectra with the disturbance as
+instrument (unbiased by the remnant, which is uncorrelated with d), at the
+Welch bins where d explains e and u (coherence), with the coherence-based
+error ``sigma/|H| = sqrt((1 - g_du)/(2 n g_du) + (1 - g_de)/(2 n g_de))``.
+
+Crossover of ``L = H Yc``: the highest line pair where |L| falls through 1,
+log|L| interpolated linearly in log w and the unwrapped phase linearly in w;
+its uncertainty is the spread over seeded draws of H from its error model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage, signal
+
+from .blocks import from_tf
+from .errors import HesspipeError
+from .seeds import derive_seed
+
+LINE_RATIO = 1.0e3
+"""A bin is a line when its power exceeds LINE_RATIO times the local noise floor
+(the 25th percentile of the surrounding bins): a random broadband spectrum
+crosses that with probability ~e^-700, so broadband inputs never give lines."""
+FLOOR_HALF_WIDTH = 25
+NEIGHBOURS = 4
+"""Non-excited bins each side of a line used for its remnant variance."""
+MIN_COHERENCE = 0.3
+"""Welch fallback: bins kept where d explains both e and u at least this much."""
+DRAWS = 400
+
+
+@dataclass(frozen=True)
+class Response:
+    """A describing function at a set of frequencies.
+
+    Attributes
+    ----------
+    freq_rad_s : ndarray
+    H : ndarray, complex
+        U/E (control units per unit of displayed error).
+    sigma : ndarray
+        Standard deviation of the complex error of H (same units; ``E|dH|^2``).
+    bins : ndarray
+        FFT bin of each line in the analysis window (Welch bins for "welch").
+    """
+
+    freq_rad_s: np.ndarray
+    H: np.ndarray
+    sigma: np.ndarray
+    bins: np.ndarray
+
+    def to_dict(self) -> dict:
+        mag = np.abs(self.H)
+        rel = np.where(mag > 0, self.sigma / np.maximum(mag, 1e-300), np.inf)
+        return {"frequency_rad_s": self.freq_rad_s.tolist(),
+                "magnitude": mag.tolist(), "magnitude_db": (20 * np.log10(mag)).tolist(),
+                "phase_deg": np.degrees(np.unwrap(np.angle(self.H))).tolist(),
+                "real": self.H.real.tolist(), "imag": self.H.imag.tolist(),
+                "sigma": self.sigma.tolist(),
+                "magnitude_db_std": (20 / np.log(10) * rel).tolist(),
+                "phase_deg_std": np.degrees(np.arcsin(np.clip(rel, 0, 1))).tolist()}
+
+
+@dataclass(frozen=True)
+class FrfCrossover:
+    """Nonparametric crossover of ``L = H Yc`` (NaN if |L| does not fall through 1 between lines)."""
+
+    frequency_rad_s: float
+    phase_margin_deg: float
+    frequency_std: float
+    phase_margin_std_deg: float
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
+                "frequency_std_rad_s": self.frequency_std,
+                "phase_margin_std_deg": self.phase_margin_std_deg, "note": self.note,
+                "method": "|L| interpolated log-log between the bracketing lines, phase linear in w; "
+                          f"std over {DRAWS} seeded draws of H from its error model"}
+
+
+@dataclass(frozen=True)
+class Frf:
+    """Result of :func:`estimate_frf`.
+
+    Attributes
+    ----------
+    method : {"multisine", "welch"}
+    feedback : Response
+        At the disturbance lines (or Welch bins): the pilot's error response.
+    reference : Response or None
+        At the reference lines, when the reference has its own lines.
+    remnant_share : float
+        Share of the control power (mean removed) at non-excited bins, 0..1;
+        for "welch", the share the disturbance does not explain,
+        ``sum((1 - coh_du) S_uu) / sum(S_uu)``.
+    crossover : FrfCrossover
+    window : (start, length)
+        Samples of the run analysed.
+    """
+
+    method: str
+    feedback: Response
+    reference: Response | None
+    remnant_share: float
+    crossover: FrfCrossover
+    window: tuple
+    dt: float
+    run_id: str = ""
+    synthetic: bool = False
+    notes: tuple = field(default=())
+
+    def to_dict(self) -> dict:
+        return {"run_id": self.run_id, "synthetic": self.synthetic, "method": self.method,
+                "definition": "H = U/E, E = reference - output; feedback response at the "
+                              "disturbance's lines",
+                "feedback": self.feedback.to_dict(),
+                "reference": None if self.reference is None else self.reference.to_dict(),
+                "remnant_share_of_control_power": self.remnant_share,
+                "crossover": self.crossover.to_dict(),
+                "window": {"start_sample": int(self.window[0]), "samples": int(self.window[1]),
+                           "duration_s": self.window[1] * self.dt},
+                "notes": list(self.notes)}
+
+
+def _check_run(run, where: str):
+    t = np.asarray(run.time, dtype=float)
+    for name in ("time", "disturbance", "output", "control", "reference"):
+        x = np.asarray(getattr(run, name), dtype=float)
+        if x.shape != t.shape:
+            raise HesspipeError(f"{where}: {name}: expected {t.size} samples like time, got {x.size}")
+        bad = ~np.isfinite(x)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise HesspipeError(f"{where}: {name}: a gap (non-finite value) at t = {t[i]:.6g} s; "
+                                "expected a continuous record")
+    if t.size < 8:
+        raise HesspipeError(f"{where}: {t.size} samples; expected a record of at least 8")
+    steps = np.diff(t)
+    dt = float(np.median(steps))
+    if not dt > 0:
+        raise HesspipeError(f"{where}: time: expected increasing sample times")
+    jump = np.abs(steps - dt) > 0.01 * dt + 1e-6
+    if jump.any():
+        i = int(np.argmax(jump))
+        raise HesspipeError(f"{where}: time: a gap of {steps[i]:.6g} s after t = {t[i]:.6g} s; "
+                            f"expected uniform samples every {dt:.6g} s")
+    return dt
+
+
+def _lines(power: np.ndarray) -> np.ndarray:
+    """Bins (>= 1) whose power stands LINE_RATIO above the local noise floor."""
+    p = power.copy()
+    p[0] = 0.0
+    floor = ndimage.percentile_filter(p, 25, size=2 * FLOOR_HALF_WIDTH + 1, mode="nearest")
+    top = p.max()
+    if not top > 0:
+        return np.zeros(0, dtype=int)
+    floor = np.maximum(floor, 1e-12 * top)  # exact multisines have a zero floor
+    ok = p > LINE_RATIO * floor
+    ok[0] = False
+    return np.nonzero(ok)[0]
+
+
+def _purity(x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    X = np.fft.rfft(x - x.mean())
+    p = np.abs(X) ** 2
+    lines = _lines(p)
+    total = p[1:].sum()
+    return (float(p[lines].sum() / total) if total > 0 else 0.0), lines, X
+
+
+def _period_by_lag(x: np.ndarray) -> int | None:
+    """Smallest lag L <= n/2 with x[t+L] ~ x[t] (a periodic forcing), or None."""
+    n = x.size
+    x = x - x.mean()
+    nf = 1 << int(np.ceil(np.log2(2 * n)))
+    F = np.fft.rfft(x, nf)
+    r = np.fft.irfft(np.abs(F) ** 2, nf)[: n // 2 + 1]
+    c = np.concatenate(([0.0], np.cumsum(x * x)))
+    lags = np.arange(n // 2 + 1)
+    # sum_t (x[t+L] - x[t])^2 over the overlap, relative to the overlap's power.
+    s_head = c[n - lags]            # sum x[0:n-L]^2
+    s_tail = c[n] - c[lags]         # sum x[L:n]^2
+    err = (s_head + s_tail - 2 * r) / np.maximum(s_head + s_tail, 1e-300)
+    cand = np.nonzero(err[1:] < 1e-3)[0] + 1
+    if cand.size == 0:
+        return None
+    L = int(cand[0])
+    # the first lag under the threshold: walk to its local minimum
+    while L + 1 < err.size and err[L + 1] < err[L]:
+        L += 1
+    return L if L >= 4 else None
+
+
+def _window(d: np.ndarray, r: np.ndarray | None):
+    """Analysis window (start, length) with the forcing's lines on exact bins."""
+    n = d.size
+    x = d if r is None else d + r
+    best = None
+    # The record as it is, or less its last sample (loggers often write both ends).
+    for length in (n, n - 1):
+        pur, _, _ = _purity(x[n - length:] if length < n else x)
+        if best is None or pur > best[0] + 1e-9:
+            best = (pur, n - length, length)
+    if best[0] < 0.99:
+        period = _period_by_lag(x)
+        if period is not None:
+            m = n // period
+            length = m * period
+            pur, _, _ = _purity(x[n - length:])
+            if pur > best[0]:
+                best = (pur, n - length, length)
+    return best[1], best[2], best[0]
+
+
+def _response(U, E, lines, all_lines, omega) -> Response:
+    H = U[lines] / E[lines]
+    excited = np.zeros(U.size, dtype=bool)
+    excited[all_lines] = True
+    excited[0] = True
+    sig = np.empty(lines.size)
+    for i, k in enumerate(lines):
+        nb = []
+        step = 1
+        while len(nb) < 2 * NEIGHBOURS and step < 4 * NEIGHBOURS + 20:
+            for j in (k - step, k + step):
+                if 0 < j < U.size and not excited[j]:
+                    nb.append(j)
+            step += 1
+        nb = np.array(nb[: 2 * NEIGHBOURS], dtype=int)
+        resid = U[nb] - H[i] * E[nb]
+        sig[i] = np.sqrt(np.mean(np.abs(resid) ** 2)) / max(abs(E[k]), 1e-300)
+    return Response(omega[lines], H, sig, np.asarray(lines))
+
+
+def _welch(d, e, u, dt, where) -> Response:
+    n = d.size
+    nper = int(min(n // 4, 2 ** int(np.floor(np.log2(max(n // 4, 16))))))
+    nper = max(nper, 64)
+    if n < 2 * nper:
+        raise HesspipeError(f"{where}: {n} samples is too short for the broadband (Welch) "
+                            "estimate; expected at least 4 segments of 64 samples")
+    kw = dict(fs=1.0 / dt, nperseg=nper, noverlap=nper // 2, window="hann", detrend="constant")
+    f, sdd = signal.welch(d, **kw)
+    _, see = signal.welch(e, **kw)
+    _, suu = signal.welch(u, **kw)
+    _, sdu = signal.csd(d, u, **kw)
+    _, sde = signal.csd(d, e, **kw)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g_du = np.abs(sdu) ** 2 / (sdd * suu)
+        g_de = np.abs(sde) ** 2 / (sdd * see)
+        H = sdu / sde
+    segments = 1 + (n - nper) // (nper // 2)
+    keep = (f > 0) & (g_du >= MIN_COHERENCE) & (g_de >= MIN_COHERENCE) & np.isfinite(H)
+    keep &= f <= 5.0  # the pilot-vehicle band (SPEC: 0-5 Hz)
+    if not keep.any():
+        raise HesspipeError(f"{where}: disturbance: no power at any detectable multisine line, and "
+                            f"its broadband coherence with the error and the control stays below "
+                            f"{MIN_COHERENCE}; expected a disturbance that drives the loop")
+    rel = np.sqrt((1 - g_du[keep]) / (2 * segments * g_du[keep])
+                  + (1 - g_de[keep]) / (2 * segments * g_de[keep]))
+    # Remnant: the part of the control power the disturbance does not explain.
+    g = np.nan_to_num(g_du[1:], nan=0.0)
+    share = float(np.sum((1 - g) * suu[1:]) / np.sum(suu[1:])) if np.sum(suu[1:]) > 0 else float("nan")
+    return Response(2 * np.pi * f[keep], H[keep], rel * np.abs(H[keep]), np.nonzero(keep)[0]), share
+
+
+def nonparametric_crossover(resp: Response, yc, *, seed: int = 0) -> FrfCrossover:
+    """Crossover of ``L = H Yc`` at the response's frequencies, with a draw-based std.
+
+    Parameters
+    ----------
+    resp : Response
+    yc : control.TransferFunction or Block
+        The control plant (input of Yc: the pilot's control).
+    seed : int
+        Seed of the draws (the estimate itself does not depend on it).
+    """
+    block = yc if hasattr(yc, "response") else from_tf(yc)
+    w = resp.freq_rad_s
+    if w.size < 2:
+        nan = float("nan")
+        return FrfCrossover(nan, nan, nan, nan, "fewer than two lines")
+    order = np.argsort(w)
+    w = w[order]
+    G = block.response(1j * w)
+    H0 = resp.H[order]
+    sig = resp.sigma[order]
+    wc, pm = _cross(w, H0 * G)
+    if not np.isfinite(wc):
+        mag = np.abs(H0 * G)
+        note = ("|L| > 1 at every line: crossover above the highest line" if np.all(mag > 1) else
+                "|L| < 1 at every line: crossover below the lowest line" if np.all(mag < 1) else
+                "|L| does not fall through 1 between lines")
+        nan = float("nan")
+        return FrfCrossover(nan, nan, nan, nan, note)
+    rng = np.random.default_rng(derive_seed(seed, "frf-crossover"))
+    noise = (rng.standard_normal((DRAWS, w.size)) + 1j * rng.standard_normal((DRAWS, w.size))) / np.sqrt(2)
+    draws = [_cross(w, (H0 + sig * z) * G) for z in noise]
+    arr = np.array(draws)
+    ok = np.isfinite(arr[:, 0])
+    if ok.sum() < DRAWS // 2:
+        return FrfCrossover(wc, pm, float("inf"), float("inf"),
+                            "crossover not found in most draws: very uncertain")
+    return FrfCrossover(wc, pm, float(np.std(arr[ok, 0])), float(np.std(arr[ok, 1])))
+
+
+def _cross(w: np.ndarray, L: np.ndarray) -> tuple[float, float]:
+    lm = np.log(np.abs(L))
+    down = np.nonzero((lm[:-1] > 0) & (lm[1:] <= 0))[0]
+    if down.size == 0:
+        return float("nan"), float("nan")
+    i = down[-1]
+    t = lm[i] / (lm[i] - lm[i + 1])
+    wc = float(np.exp(np.log(w[i]) + t * (np.log(w[i + 1]) - np.log(w[i]))))
+    ph = np.unwrap(np.angle(L))
+    # Anchor the unwrapped phase near the crossover's own branch.
+    phase = ph[i] + (ph[i + 1] - ph[i]) * (wc - w[i]) / (w[i + 1] - w[i])
+    pm = (np.degrees(phase) + 180.0 + 180.0) % 360.0 - 180.0
+    return wc, float(180.0 if pm == -180.0 else pm)
+
+
+def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
+    """The pilot's nonparametric describing function H = U/E from a run.
+
+    Parameters
+    ----------
+    run : hesspipe.formats.Run
+        Time (s, uniform), disturbance, output, control, reference.
+    plants : Plants or control.TransferFunction, optional
+        The control plant Yc, for the crossover of ``L = H Yc`` (NaN without).
+    seed : int
+        Seed of the crossover's uncertainty draws.
+
+    Returns
+    -------
+    Frf
+
+    Raises
+    ------
+    HesspipeError
+        Gaps or non-finite values; a disturbance with no detectable line and
+        no broadband coherence; a record holding fewer than two periods of
+        its lowest line.
+    """
+    where = getattr(run, "source", "") or getattr(run, "id", "run")
+    dt = _check_run(run, where)
+    d = np.asarray(run.disturbance, dtype=float)
+    r = np.asarray(run.reference, dtype=float)
+    y = np.asarray(run.output, dtype=float)
+    u = np.asarray(run.control, dtype=float)
+    if not np.ptp(d) > 0 and not np.ptp(r) > 0:
+        raise HesspipeError(f"{where}: disturbance: constant (no power at any frequency) and no "
+                            "reference; expected a forcing function that excites the loop")
+    has_r = np.ptp(r) > 0
+    start, length, _ = _window(d, r if has_r else None)
+    sl = slice(start, start + length)
+    D = np.fft.rfft(d[sl] - d[sl].mean())
+    R = np.fft.rfft(r[sl] - r[sl].mean()) if has_r else np.zeros_like(D)
+    pd_, pr_ = np.abs(D) ** 2, np.abs(R) ** 2
+    d_lines = _lines(pd_) if np.ptp(d) > 0 else np.zeros(0, int)
+    r_lines = _lines(pr_) if has_r else np.zeros(0, int)
+    # A bin belongs to the set that dominates it (interleaved sets share none).
+    d_lines = np.array([k for k in d_lines if pd_[k] >= pr_[k]], dtype=int)
+    r_lines = np.array([k for k in r_lines if pr_[k] > pd_[k]], dtype=int)
+    e = r - y
+    yc = None if plants is None else getattr(plants, "control_to_output", plants)
+    notes = []
+    if d_lines.size == 0 and r_lines.size == 0:
+        fb, share = _welch(d - d.mean(), e - e.mean(), u - u.mean(), dt, where)
+        notes.append("no multisine lines: Welch cross-spectra S_du/S_de (broadband disturbance)")
+        cross = (nonparametric_crossover(fb, yc, seed=seed) if yc is not None else
+                 FrfCrossover(*(float("nan"),) * 4, "no plants given"))
+        return Frf("welch", fb, None, share, cross, (0, d.size), dt,
+                   getattr(run, "id", ""), bool(getattr(run, "synthetic", False)), tuple(notes))
+    lowest = min(int(x.min()) for x in (d_lines, r_lines) if x.size)
+    if lowest < 2:
+        f0 = lowest / (length * dt)
+        raise HesspipeError(f"{where}: the record ({length * dt:.4g} s analysed) holds fewer than two "
+                            f"periods of its lowest excited line ({f0:.4g} Hz, period "
+                            f"{1 / f0:.4g} s); expected at least {2 / f0:.4g} s")
+    U = np.fft.rfft(u[sl] - u[sl].mean())
+    E = np.fft.rfft(e[sl] - e[sl].mean())
+    omega = 2 * np.pi * np.fft.rfftfreq(length, dt)
+    all_lines = np.union1d(d_lines, r_lines)
+    source = d_lines if d_lines.size else r_lines
+    if not d_lines.size:
+        notes.append("the disturbance has no lines: the feedback response is taken at the "
+                     "reference's lines")
+    fb = _response(U, E, source, all_lines, omega)
+    ref = _response(U, E, r_lines, all_lines, omega) if (d_lines.size and r_lines.size) else None
+    pu = np.abs(U) ** 2
+    quiet = np.ones(pu.size, dtype=bool)
+    quiet[0] = False
+    quiet[all_lines] = False
+    total = pu[1:].sum()
+    share = float(pu[quiet].sum() / total) if total > 0 else float("nan")
+    cross = (nonparametric_crossover(fb, yc, seed=seed) if yc is not None else
+             FrfCrossover(*(float("nan"),) * 4, "no plants given"))
+    if start:
+        notes.append(f"first {start} sample(s) left out so that the window holds whole periods")
+    return Frf("multisine", fb, ref, share, cross, (start, length), dt,
+               getattr(run, "id", ""), bool(getattr(run, "synthetic", False)), tuple(notes))
