@@ -181,7 +181,22 @@ def _lines(power: np.ndarray) -> np.ndarray:
     floor = np.maximum(floor, 1e-12 * top)  # exact multisines have a zero floor
     ok = p > LINE_RATIO * floor
     ok[0] = False
-    return np.nonzero(ok)[0]
+    cand = np.nonzero(ok)[0]
+    if cand.size < 2:
+        return cand
+    # Leakage (a window that is not a whole number of periods) puts sidebands beside
+    # each line that decay like 1/distance^2: a candidate weaker than a neighbour's
+    # 1/(10 distance^2) is one of those, not a line of its own.
+    keep = np.ones(cand.size, dtype=bool)
+    pc = p[cand]
+    order = np.argsort(-pc)
+    for i in order:
+        if not keep[i]:
+            continue
+        dist = np.abs(cand - cand[i]).astype(float)
+        weak = (pc * 10 * np.maximum(dist, 1) ** 2 < pc[i]) & (dist > 0)
+        keep &= ~weak
+    return cand[keep]
 
 
 def _purity(x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -215,24 +230,53 @@ def _period_by_lag(x: np.ndarray) -> int | None:
     return L if L >= 4 else None
 
 
+def _topk_purity(x: np.ndarray, k: int) -> float:
+    p = np.abs(np.fft.rfft(x - x.mean()))[1:] ** 2
+    total = p.sum()
+    if not total > 0:
+        return 0.0
+    k = min(k, p.size)
+    return float(np.partition(p, p.size - k)[p.size - k:].sum() / total)
+
+
 def _window(d: np.ndarray, r: np.ndarray | None):
-    """Analysis window (start, length) with the forcing's lines on exact bins."""
+    """Analysis window (start, length) with the forcing's lines on exact bins.
+
+    The record as written (or less its last sample: loggers often write both
+    ends); else a whole number of periods found by lag (two or more periods);
+    else the length between half the record and all of it whose spectrum
+    concentrates most power in as many bins as there are lines (one period
+    of a forcing whose period is not the record's length). The window ends
+    at the record's end, so a start-up transient falls outside it.
+    """
     n = d.size
     x = d if r is None else d + r
     best = None
-    # The record as it is, or less its last sample (loggers often write both ends).
+    lines = np.zeros(0, dtype=int)
     for length in (n, n - 1):
-        pur, _, _ = _purity(x[n - length:] if length < n else x)
+        pur, found, _ = _purity(x[n - length:])
         if best is None or pur > best[0] + 1e-9:
+            best, lines = (pur, n - length, length), found
+    if best[0] >= 0.999 or lines.size == 0:
+        return best[1], best[2], best[0]
+    period = _period_by_lag(x)
+    if period is not None:
+        length = (n // period) * period
+        pur, _, _ = _purity(x[n - length:])
+        if pur > best[0]:
             best = (pur, n - length, length)
-    if best[0] < 0.99:
-        period = _period_by_lag(x)
-        if period is not None:
-            m = n // period
-            length = m * period
-            pur, _, _ = _purity(x[n - length:])
-            if pur > best[0]:
-                best = (pur, n - length, length)
+        if best[0] >= 0.999:
+            return best[1], best[2], best[0]
+    k = int(min(lines.size, 400))
+    coarse = np.arange(n, n // 2, -4)
+    scores = np.array([_topk_purity(x[n - m:], k) for m in coarse])
+    m0 = int(coarse[int(np.argmax(scores))])
+    fine = np.arange(min(n, m0 + 4), max(n // 2, m0 - 4) - 1, -1)
+    fs = np.array([_topk_purity(x[n - m:], k) for m in fine])
+    m = int(fine[int(np.argmax(fs))])
+    pur, _, _ = _purity(x[n - m:])
+    if pur > best[0]:
+        best = (pur, n - m, m)
     return best[1], best[2], best[0]
 
 
