@@ -33,17 +33,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage, signal
+from scipy import signal
 
 from .blocks import from_tf
 from .errors import HesspipeError
 from .seeds import derive_seed
 
-LINE_RATIO = 1.0e3
-"""A bin is a line when its power exceeds LINE_RATIO times the local noise floor
-(the 25th percentile of the surrounding bins): a random broadband spectrum
-crosses that with probability ~e^-700, so broadband inputs never give lines."""
-FLOOR_HALF_WIDTH = 25
+LINE_RATIO = 100.0
+"""A bin is a line when its power exceeds LINE_RATIO times the median of its NEAR
+neighbours each side: a random broadband spectrum does so with probability ~e^-70."""
+NEAR = 6
 NEIGHBOURS = 4
 """Non-excited bins each side of a line used for its remnant variance."""
 MIN_COHERENCE = 0.3
@@ -171,15 +170,27 @@ def _check_run(run, where: str):
 
 
 def _lines(power: np.ndarray) -> np.ndarray:
-    """Bins (>= 1) whose power stands LINE_RATIO above the local noise floor."""
+    """Bins (>= 1) whose power stands LINE_RATIO above their nearest neighbours.
+
+    The reference is the median of the NEAR bins each side: the lines of a sparse
+    multisine in a whole-period window sit on an empty floor, while a random
+    spectrum (gusts) fluctuates bin to bin like chi-square(2) variates and a
+    smooth one (a slow drift) cannot fall by LINE_RATIO within a few bins. A
+    multisine exciting every bin of a band has no such contrast and is taken as
+    broadband (the Welch estimate serves it).
+    """
     p = power.copy()
     p[0] = 0.0
-    floor = ndimage.percentile_filter(p, 25, size=2 * FLOOR_HALF_WIDTH + 1, mode="nearest")
     top = p.max()
     if not top > 0:
         return np.zeros(0, dtype=int)
-    floor = np.maximum(floor, 1e-12 * top)  # exact multisines have a zero floor
-    ok = p > LINE_RATIO * floor
+    n = p.size
+    idx = np.arange(n)
+    offsets = np.concatenate((np.arange(-NEAR, 0), np.arange(1, NEAR + 1)))
+    nb = np.clip(idx[:, None] + offsets[None, :], 1, n - 1)
+    ref = np.median(p[nb], axis=1)
+    ref = np.maximum(ref, 1e-13 * top)  # exact multisines have an empty floor
+    ok = p > LINE_RATIO * ref
     ok[0] = False
     cand = np.nonzero(ok)[0]
     if cand.size < 2:
@@ -200,7 +211,7 @@ def _lines(power: np.ndarray) -> np.ndarray:
 
 
 def _purity(x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-    X = np.fft.rfft(x - x.mean())
+    X = np.fft.rfft(signal.detrend(x))
     p = np.abs(X) ** 2
     lines = _lines(p)
     total = p[1:].sum()
@@ -422,8 +433,8 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
     has_r = np.ptp(r) > 0
     start, length, _ = _window(d, r if has_r else None)
     sl = slice(start, start + length)
-    D = np.fft.rfft(d[sl] - d[sl].mean())
-    R = np.fft.rfft(r[sl] - r[sl].mean()) if has_r else np.zeros_like(D)
+    D = np.fft.rfft(signal.detrend(d[sl]))
+    R = np.fft.rfft(signal.detrend(r[sl])) if has_r else np.zeros_like(D)
     pd_, pr_ = np.abs(D) ** 2, np.abs(R) ** 2
     d_lines = _lines(pd_) if np.ptp(d) > 0 else np.zeros(0, int)
     r_lines = _lines(pr_) if has_r else np.zeros(0, int)

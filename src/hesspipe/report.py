@@ -159,6 +159,8 @@ def _pilots(folder: Path, root: Path) -> list[str]:
         out += ["Failed runs: " + "; ".join(f"{f['id']}: {f['error']}" for f in comp["failures"]), ""]
     for p in comp["pilots"]:
         out += _figure(folder / "figures" / f"{p['id']}.png", root, f"control PSD, pilot {p['id']}")
+        out += _figure(folder / "figures" / f"{p['id']}_df.png", root,
+                       f"describing function, pilot {p['id']}: identified models over the measured points")
     return out
 
 

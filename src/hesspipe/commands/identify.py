@@ -88,8 +88,8 @@ def format_table(result) -> str:
     """Readable summary of an :class:`~hesspipe.identify.Identification`."""
     lines = []
     tag = "  [SYNTHETIC DATA]" if result.synthetic else ""
-    lines.append(f"run {result.run_id}: model {result.model}, optimizer {result.optimizer}, "
-                 f"seed {result.seed}{tag}")
+    lines.append(f"run {result.run_id}: model {result.model}, criterion {result.criterion}, "
+                 f"optimizer {result.optimizer}, seed {result.seed}{tag}")
     if result.k_rule:
         lines.append(result.k_rule)
     lines.append(f"{'parameter':<10} {'value':>10}  status")
@@ -146,7 +146,8 @@ def run(args) -> int:
     result = identify(rec, plants, args.model, free=free, fixed=fixed, seed=args.seed,
                       passes=args.passes, optimizer=args.optimizer, band=args.band, k=args.k,
                       fields=dict(args.bits) or None, psd_method=args.psd,
-                      with_benchmark=not args.no_benchmark, restarts=args.restarts, coding=args.coding)
+                      with_benchmark=not args.no_benchmark, restarts=args.restarts, coding=args.coding,
+                      criterion=args.criterion)
     print(format_table(result))
     if args.json:
         obj = result.to_dict()
