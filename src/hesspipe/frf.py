@@ -187,7 +187,10 @@ def _lines(power: np.ndarray) -> np.ndarray:
     n = p.size
     idx = np.arange(n)
     offsets = np.concatenate((np.arange(-NEAR, 0), np.arange(1, NEAR + 1)))
-    nb = np.clip(idx[:, None] + offsets[None, :], 1, n - 1)
+    nb = idx[:, None] + offsets[None, :]
+    # Near the ends, take the missing neighbours from further along the other side.
+    nb = np.where(nb < 1, nb + 2 * NEAR + 1, nb)
+    nb = np.clip(np.where(nb > n - 1, nb - 2 * NEAR - 1, nb), 1, n - 1)
     ref = np.median(p[nb], axis=1)
     ref = np.maximum(ref, 1e-13 * top)  # exact multisines have an empty floor
     ok = p > LINE_RATIO * ref
@@ -211,7 +214,7 @@ def _lines(power: np.ndarray) -> np.ndarray:
 
 
 def _purity(x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-    X = np.fft.rfft(signal.detrend(x))
+    X = np.fft.rfft(x - x.mean())
     p = np.abs(X) ** 2
     lines = _lines(p)
     total = p[1:].sum()
@@ -266,7 +269,7 @@ def _window(d: np.ndarray, r: np.ndarray | None):
     lines = np.zeros(0, dtype=int)
     for length in (n, n - 1):
         pur, found, _ = _purity(x[n - length:])
-        if best is None or pur > best[0] + 1e-9:
+        if best is None or pur > best[0] + 1e-3:
             best, lines = (pur, n - length, length), found
     if best[0] >= 0.999 or lines.size == 0:
         return best[1], best[2], best[0]
@@ -433,8 +436,8 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
     has_r = np.ptp(r) > 0
     start, length, _ = _window(d, r if has_r else None)
     sl = slice(start, start + length)
-    D = np.fft.rfft(signal.detrend(d[sl]))
-    R = np.fft.rfft(signal.detrend(r[sl])) if has_r else np.zeros_like(D)
+    D = np.fft.rfft(d[sl] - d[sl].mean())
+    R = np.fft.rfft(r[sl] - r[sl].mean()) if has_r else np.zeros_like(D)
     pd_, pr_ = np.abs(D) ** 2, np.abs(R) ** 2
     d_lines = _lines(pd_) if np.ptp(d) > 0 else np.zeros(0, int)
     r_lines = _lines(pr_) if has_r else np.zeros(0, int)
