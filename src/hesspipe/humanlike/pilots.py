@@ -1,0 +1,218 @@
+"""Human-like pilots of the independent generator: structures, frequency responses, draws.
+
+Two structures, both written from their equations (SPEC "Stage three",
+McRuer's precision model), not from hesspipe's pilot code:
+
+``precision``
+    ``u = Kp (1 + TL s)/(1 + TI s) e^(-tau s) Y_NM e`` with
+    ``Y_NM = wn^2 / (s^2 + 2 zn wn s + wn^2)``.
+``hess``
+    ``delta = Y_NM (u_e - u_p - u_v)``, ``u_e = Ke e^(-tau s) e``,
+    ``u_p = Y_PF delta`` with ``Y_PF = K1 K2 s / ((s + 1/T1)(s + 1/T2)^(k-1))``,
+    and the optional vestibular path ``u_v = Km Y_SCC M y`` (M: output -> cab
+    angular velocity, ``Y_SCC = 80*5.73 s^2 / ((1 + 80 s)(1 + 5.73 s))``).
+
+With ``G = Y_NM / (1 + Y_NM Y_PF)`` (inner loop closed):
+
+* visual part ``A = Ke e^(-tau s) G`` (precision: the whole pilot),
+* vestibular part ``B = Km Y_SCC M G`` (zero without motion).
+
+On a disturbance line (r = 0 there, so y = -e) the control is
+``u = (A + B) e``: the describing function a U/E estimate measures is
+``H_pe = A + B``. On a target line ``U/E = A / (1 + B Yc)``. All angles here
+are in degrees; frequencies in rad/s; delays in s.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .lti import freqresp, series
+
+SCC = ([80 * 5.73, 0.0, 0.0], [80 * 5.73, 80 + 5.73, 1.0])
+
+
+def nm_tf(wn: float, zn: float) -> tuple:
+    """Neuromuscular system ``wn^2 / (s^2 + 2 zn wn s + wn^2)``."""
+    return [wn * wn], [1.0, 2 * zn * wn, wn * wn]
+
+
+def pf_tf(p: dict) -> tuple:
+    """Proprioceptive feedback ``K1 K2 s / ((s + 1/T1)(s + 1/T2)^(k-1))``."""
+    num = [p["K1"] * p["K2"], 0.0]
+    den = [1.0, p["inv_T1"]]
+    if p["k"] == 2:
+        den = np.polymul(den, [1.0, p["inv_T2"]]).tolist()
+    return num, den
+
+
+def equaliser_nm_tf(p: dict) -> tuple:
+    """Precision pilot without delay: ``Kp (1 + TL s)/(1 + TI s) Y_NM`` (one block)."""
+    return series(([p["Kp"] * p["TL"], p["Kp"]], [p["TI"], 1.0]), nm_tf(p["wn"], p["zn"]))
+
+
+def inner_loop(p: dict, w) -> np.ndarray:
+    """``G = Y_NM / (1 + Y_NM Y_PF)`` of the hess pilot at `w`."""
+    nm = freqresp(*nm_tf(p["wn"], p["zn"]), w)
+    return nm / (1.0 + nm * freqresp(*pf_tf(p), w))
+
+
+def parts(p: dict, w, motion_tf=None) -> tuple[np.ndarray, np.ndarray]:
+    """Visual part A(jw) and vestibular part B(jw) of a pilot (see module doc).
+
+    `p["tau"]` is the total visual delay (pilot plus any display delay).
+    """
+    w = np.asarray(w, dtype=float)
+    delay = np.exp(-1j * w * p["tau"])
+    if p["structure"] == "precision":
+        n, d = equaliser_nm_tf(p)
+        return freqresp(n, d, w) * delay, np.zeros(w.shape, dtype=complex)
+    g = inner_loop(p, w)
+    a = p["Ke"] * delay * g
+    if p.get("Km", 0.0) and motion_tf is not None:
+        b = p["Km"] * freqresp(*SCC, w) * freqresp(*motion_tf, w) \
+            * np.exp(-1j * w * p.get("tau_m", 0.0)) * g
+    else:
+        b = np.zeros(w.shape, dtype=complex)
+    return a, b
+
+
+def loop_metrics(L, w_lo: float = 0.02, w_hi: float = 200.0) -> dict:
+    """Crossover and margins of an open loop given as a callable ``L(w)``.
+
+    The crossover is the first frequency (scanning up) where |L| falls through 1;
+    the phase margin ``180 + angle L(j wc)`` wrapped into (-180, 180] degrees.
+
+    Returns
+    -------
+    dict
+        ``frequency_rad_s``, ``phase_margin_deg``, ``n_crossings`` (downward
+        crossings of |L| = 1 in the scan), ``gain_margin`` (1/|L| at the first
+        phase crossover of -180 deg above wc; inf if none).
+    """
+    w = np.geomspace(w_lo, w_hi, 3000)
+    mag = np.log(np.abs(L(w)))
+    down = np.nonzero((mag[:-1] >= 0) & (mag[1:] < 0))[0]
+    if not down.size:
+        return {"frequency_rad_s": float("nan"), "phase_margin_deg": float("nan"),
+                "n_crossings": 0, "gain_margin": float("nan")}
+    i = down[0]
+    wc = brentq(lambda x: np.log(np.abs(L(np.array([x]))[0])), w[i], w[i + 1], xtol=1e-10)
+    pm = 180.0 + np.degrees(np.angle(L(np.array([wc]))[0]))
+    pm = pm - 360.0 if pm > 180.0 else pm
+    ph = np.unwrap(np.angle(L(w)))
+    ph = ph - 2 * np.pi * np.round((ph[i] - np.angle(L(np.array([wc]))[0])) / (2 * np.pi))
+    above = w > wc
+    cross = np.nonzero(above[:-1] & (np.floor((ph[:-1] + np.pi) / (2 * np.pi))
+                                      != np.floor((ph[1:] + np.pi) / (2 * np.pi))))[0]
+    gm = float(np.exp(-mag[cross[0]])) if cross.size else float("inf")
+    return {"frequency_rad_s": float(wc), "phase_margin_deg": float(pm),
+            "n_crossings": int(down.size), "gain_margin": gm}
+
+
+def _wrap180(x):
+    return (x + 180.0) % 360.0 - 180.0
+
+
+def _common(rng, ranges) -> dict:
+    return {"tau_v": float(rng.uniform(*ranges["tau"])), "wn": float(rng.uniform(*ranges["wn"])),
+            "zn": float(rng.uniform(*ranges["zn"]))}
+
+
+def _accept(p, yc, motion_tf, ranges, wc, pm) -> dict | None:
+    a, b = parts(p, np.array([wc]), motion_tf)
+    m = loop_metrics(lambda w: sum(parts(p, w, motion_tf)) * yc(w))
+    ok = (m["n_crossings"] == 1 and abs(m["frequency_rad_s"] / wc - 1) < 1e-6
+          and abs(m["phase_margin_deg"] - pm) < 1e-3 and m["gain_margin"] > 1.0)
+    return m if ok else None
+
+
+def draw_precision(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float,
+                   fixed: dict) -> dict | None:
+    """Draw a precision pilot whose loop crosses over at a drawn wc with a drawn PM.
+
+    The equalisation is chosen as a human would for the plant: a lag (or
+    nothing) when the plant is K/s-like near crossover (`order` <= 1), a lead
+    when it is K/s^2-like. Returns None when no draw in the budget fits.
+    """
+    for _ in range(20):
+        p = {"structure": "precision", **_common(rng, ranges), **fixed.get("common", {})}
+        p["tau"] = p["tau_v"] + extra_delay
+        for _ in range(40):
+            wc = float(fixed.get("wc") or rng.uniform(*ranges["wc"]))
+            pm = float(fixed.get("pm") or rng.uniform(*ranges["pm"]))
+            ycw = sign * yc(np.array([wc]))[0]
+            nm = freqresp(*nm_tf(p["wn"], p["zn"]), np.array([wc]))[0]
+            base = np.degrees(np.angle(ycw * nm * np.exp(-1j * wc * p["tau"])))
+            need = _wrap180(-180.0 + pm - base)
+            if order <= 1 and -60.0 <= need <= 0.0:
+                p["TL"], p["TI"] = 0.0, float(np.tan(np.radians(-need)) / wc)
+            elif order == 2 and 0.0 < need <= 75.0:
+                p["TL"], p["TI"] = float(np.tan(np.radians(need)) / wc), 0.0
+            else:
+                continue
+            p["Kp"] = 1.0
+            h = sum(parts(p, np.array([wc])))[0]
+            p["Kp"] = float(sign / abs(h * ycw))
+            m = _accept(p, yc, None, ranges, wc, pm)
+            if m is not None:
+                return p
+    return None
+
+
+def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, fixed: dict,
+              motion_tf=None, km_ratio: float = 0.0, tau_m: float = 0.0) -> dict | None:
+    """Draw a hess pilot: sample its sensory and neuromuscular parameters, then solve.
+
+    For a drawn crossover wc and phase margin PM, the proprioceptive gain
+    K1*K2 is solved so the loop phase at wc is ``-180 + PM`` and Ke so that
+    ``|L(j wc)| = 1``. ``Km = km_ratio * Ke`` (vestibular gain relative to the
+    visual one). Returns None when no draw in the budget fits.
+    """
+    k = 1 if order <= 1 else 2
+    for _ in range(20):
+        p = {"structure": "hess", **_common(rng, ranges), "k": k,
+             "inv_T1": float(rng.uniform(*ranges["inv_T1"])),
+             "inv_T2": float(rng.uniform(*ranges["inv_T2"])) if k == 2 else None,
+             **fixed.get("common", {})}
+        p["tau"] = p["tau_v"] + extra_delay
+        p["tau_m"] = tau_m
+        k1 = float(rng.uniform(*ranges["K1"]))
+        for _ in range(40):
+            wc = float(fixed.get("wc") or rng.uniform(*ranges["wc"]))
+            pm = float(fixed.get("pm") or rng.uniform(*ranges["pm"]))
+            ycw = sign * yc(np.array([wc]))[0]
+            x = np.array([wc])
+            nm = freqresp(*nm_tf(p["wn"], p["zn"]), x)[0]
+            p.update(K1=1.0, K2=1.0)
+            shape = freqresp(*pf_tf(p), x)[0]           # Y_PF with K1*K2 = 1
+            p.update(Ke=1.0, Km=km_ratio)
+            outer = (np.exp(-1j * wc * p["tau"]) + (
+                km_ratio * freqresp(*SCC, x)[0] * freqresp(*motion_tf, x)[0]
+                * np.exp(-1j * wc * tau_m) if km_ratio and motion_tf is not None else 0.0))
+
+            def phase_err(logk):
+                h = nm / (1.0 + nm * np.exp(logk) * shape) * outer
+                return _wrap180(np.degrees(np.angle(h * ycw)) + 180.0 - pm)
+
+            grid = np.linspace(np.log(1e-3), np.log(200.0), 60)
+            err = phase_err(grid)
+            # A sign change, not a wrap of the phase through +-180 deg.
+            idx = np.nonzero((np.sign(err[:-1]) != np.sign(err[1:]))
+                             & (np.abs(err[:-1] - err[1:]) < 90))[0]
+            if not idx.size:
+                continue
+            logk = brentq(phase_err, grid[idx[0]], grid[idx[0] + 1], xtol=1e-12)
+            p.update(K1=k1, K2=float(np.exp(logk)) / k1)
+            num, den = pf_tf(p)
+            nmn, nmd = nm_tf(p["wn"], p["zn"])
+            inner = np.polyadd(np.polymul(nmd, den), np.polymul(nmn, num))
+            if not np.all(np.roots(inner).real < 0):
+                continue
+            h = sum(parts(p, x, motion_tf))[0]
+            p["Ke"] = float(sign / abs(h * ycw))
+            p["Km"] = float(km_ratio * p["Ke"])
+            if _accept(p, yc, motion_tf, ranges, wc, pm) is not None:
+                return p
+    return None

@@ -1,0 +1,384 @@
+"""Draw and simulate one human-like trial (the generator's public core).
+
+A trial is a compensatory task: ``e = r - y`` shown to the pilot, the pilot's
+control ``u``, the controlled output ``y = Yc (Act(u) + d)`` for a
+plant-input disturbance (or ``y = Yc Act(u) + Yd w`` for side wind), a
+multisine disturbance and/or target, and the pilot's remnant. See
+:func:`draw_trial` for every knob and :func:`simulate_trial` for the truth.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import HesspipeError
+from ..seeds import derive_seed
+from . import forcing, pilots
+from .lti import freqresp, ss_from_tf, zoh
+from .plants import Plant, make_plant
+from .simulate import Wiring, delay_steps
+
+GENERATOR = "hesspipe.humanlike 1"
+EFFECTS = ("motion_feedback", "extra_delay", "remnant", "dutch_roll", "actuator_lag", "rate_limit")
+
+# Literature ranges (SPEC "Describing functions"; McRuer crossover model), deliberately
+# not centred on hesspipe's Table 1 cohort. Each may be overridden by a value or (lo, hi).
+RANGES = dict(tau=(0.15, 0.35), wn=(7.0, 15.0), zn=(0.1, 0.5), wc=(1.5, 4.0), pm=(20.0, 60.0),
+              inv_T1=(0.1, 1.0), inv_T2=(0.2, 2.0), K1=(1.0, 5.0),
+              remnant_share=(0.10, 0.40), remnant_tn=(0.1, 0.3), w_corner=(1.5, 2.0),
+              km_ratio=(0.2, 1.0), extra_delay=(0.04, 0.10), actuator_tau=(0.05, 0.15),
+              rate_limit_factor=(1.0, 2.0))
+EFFECT_REMNANT = (0.40, 0.60)
+OPTIONS = dict(fs=60.0, T_m=45.0, run_in=15.0, fade=5.0, fine_ratio=20, n_lines=10,
+               output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
+               remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
+               pilot_params=None)
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """A fully drawn trial: everything :func:`simulate_trial` needs, nothing random left.
+
+    Attributes
+    ----------
+    name : str
+        Trial id (file stem when written).
+    seed : int
+        Base seed; sub-seeds are derived from it by name.
+    plant : Plant
+        True and nominal dynamics.
+    task : {"disturbance", "tracking", "both"}
+    pilot : dict
+        Pilot parameters (see :mod:`hesspipe.humanlike.pilots`); ``tau`` is the
+        total visual delay in s (``tau_v`` the pilot's own plus ``extra_delay``).
+    effects : tuple of str
+    options : dict
+        Sampling (fs Hz, T_m s, run_in s, fine_ratio), forcing and remnant settings.
+    disturbance, target : Multisine or None
+    remnant : dict
+        ``share`` (drawn fraction of control variance), ``Tn`` (s), ``at``.
+    actuator : dict
+        ``tau`` (s, 0 = none), ``rate_limit_factor`` (None = no limit).
+    motion_tf : (num, den) or None
+        Output -> cab angular velocity (hess pilot with motion feedback only).
+    """
+
+    name: str
+    seed: int
+    plant: Plant
+    task: str
+    pilot: dict
+    effects: tuple
+    options: dict
+    disturbance: forcing.Multisine | None
+    target: forcing.Multisine | None
+    remnant: dict
+    actuator: dict
+    motion_tf: tuple | None = None
+    style: dict | None = None
+
+    def yc_effective(self, w) -> np.ndarray:
+        """True control -> output response the pilot flies (actuator included)."""
+        tau = self.actuator["tau"]
+        return self.plant.yc(w) / (1.0 + 1j * np.asarray(w, dtype=float) * tau)
+
+    def pilot_parts(self, w) -> tuple[np.ndarray, np.ndarray]:
+        """Visual part A and vestibular part B of the pilot at `w` (rad/s)."""
+        return pilots.parts(self.pilot, w, self.motion_tf)
+
+
+@dataclass(frozen=True)
+class Trial:
+    """A simulated trial: logged signals over the measurement window and the truth.
+
+    Arrays (length fs*T_m): ``time`` (s from the window start), ``disturbance``
+    (input of Yd: control units for a plant-input disturbance, ft/s for side
+    wind), ``output`` (controlled variable), ``control`` (pilot's stick, remnant
+    included), ``reference`` (target r; zeros without one).
+    """
+
+    spec: TrialSpec
+    time: np.ndarray
+    disturbance: np.ndarray
+    output: np.ndarray
+    control: np.ndarray
+    reference: np.ndarray
+    truth: dict = field(repr=False)
+
+
+def _slope_order(yc, w: float) -> int:
+    """Hess's rule: integer slope of |Yc| over [w/2, 2w] (1: K/s-like, 2: K/s^2-like)."""
+    m1, m2 = np.abs(yc(np.array([w / 2.0, 2.0 * w])))
+    return int(min(max(round(-np.log(m2 / m1) / np.log(4.0)), 0), 2))
+
+
+def _range(overrides: dict, key: str, default) -> tuple:
+    v = overrides.pop(key, None)
+    if v is None:
+        return tuple(default)
+    if np.isscalar(v):
+        return (float(v), float(v))
+    try:
+        lo, hi = (float(x) for x in v)
+    except (TypeError, ValueError):
+        raise HesspipeError(f"{key}: expected a number or (low, high), got {v!r}") from None
+    if not lo <= hi:
+        raise HesspipeError(f"{key}: expected low <= high, got ({lo}, {hi})")
+    return (lo, hi)
+
+
+def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "precision",
+               effects=(), **overrides) -> TrialSpec:
+    """Draw a human-like trial (pilot, forcing, remnant, effects) from a seed.
+
+    Parameters
+    ----------
+    plant : str, dict, path or Plant
+        See :func:`hesspipe.humanlike.plants.make_plant`.
+    seed : int
+        Base seed; the same arguments and seed give the same trial.
+    task : {"disturbance", "tracking", "both"}
+        Disturbance rejection (d only), target tracking (r only) or both on
+        interleaved line sets.
+    pilot : {"precision", "hess"}
+    effects : iterable of str
+        Any of ``motion_feedback`` (hess pilot only), ``extra_delay``,
+        ``remnant`` (elevated remnant, 40-60 %), ``dutch_roll`` (plant "roll" or
+        "paper"), ``actuator_lag``, ``rate_limit``.
+    **overrides
+        Ranges as a value or (low, high): ``tau`` (s), ``wn`` (rad/s), ``zn``,
+        ``wc`` (rad/s), ``pm`` (deg), ``inv_T1``, ``inv_T2`` (1/s), ``K1``,
+        ``remnant_share``, ``remnant_tn`` (s), ``w_corner`` (rad/s), ``km_ratio``,
+        ``extra_delay`` (s), ``actuator_tau`` (s), ``rate_limit_factor``.
+        Options: ``fs`` (Hz, 60), ``T_m`` (s, 45; fs*T_m must be whole),
+        ``run_in`` (s, 15), ``fade`` (s, 5), ``fine_ratio`` (fine steps per
+        logged sample, 20), ``n_lines`` (10 per set), ``output`` ("rate"/"angle"),
+        ``disturbance`` ("input"/"wind"), ``gain``, ``d_rms``, ``r_rms``,
+        ``remnant_at`` ("control"/"error"), ``tau_m`` (vestibular delay, s, 0),
+        ``motion_path`` ((num, den)), ``name``, ``style`` (CSV style; see
+        :mod:`hesspipe.humanlike.writer`), ``pilot_params`` (a complete pilot
+        dict: no pilot is drawn).
+
+    Raises
+    ------
+    HesspipeError
+        For an unknown option, effect, task or pilot, or when no pilot in the
+        draw budget meets the crossover and phase-margin ranges.
+    """
+    ov = dict(overrides)
+    ranges = {k: _range(ov, k, v) for k, v in RANGES.items()}
+    opts = {k: ov.pop(k, v) for k, v in OPTIONS.items()}
+    if ov:
+        raise HesspipeError(f"draw_trial: unknown option(s) {', '.join(sorted(ov))}; expected "
+                            f"{', '.join(list(RANGES) + list(OPTIONS))}")
+    effects = tuple(effects)
+    bad = [e for e in effects if e not in EFFECTS]
+    if bad:
+        raise HesspipeError(f"effects: unknown {', '.join(bad)}; expected {', '.join(EFFECTS)}")
+    if task not in ("disturbance", "tracking", "both"):
+        raise HesspipeError(f"task: expected 'disturbance', 'tracking' or 'both', got {task!r}")
+    if pilot not in ("precision", "hess"):
+        raise HesspipeError(f"pilot: expected 'precision' or 'hess', got {pilot!r}")
+    if "motion_feedback" in effects and pilot != "hess":
+        raise HesspipeError("effect 'motion_feedback': needs pilot 'hess'")
+    n_log = opts["fs"] * opts["T_m"]
+    if abs(n_log - round(n_log)) > 1e-9 or n_log < 4:
+        raise HesspipeError(f"T_m: fs*T_m must be a whole number of samples, got {n_log:g}")
+    if "remnant" in effects and "remnant_share" not in overrides:
+        ranges["remnant_share"] = EFFECT_REMNANT
+    if not isinstance(plant, Plant):
+        plant = make_plant(plant, output=opts["output"], disturbance=opts["disturbance"],
+                           gain=opts["gain"], dutch_roll="dutch_roll" in effects)
+    rng = {k: np.random.default_rng(derive_seed(seed, k))
+           for k in ("pilot", "forcing", "remnant", "effects", "style")}
+    g_eff = rng["effects"]
+    extra = float(g_eff.uniform(*ranges["extra_delay"])) if "extra_delay" in effects else 0.0
+    act_tau = float(g_eff.uniform(*ranges["actuator_tau"])) if "actuator_lag" in effects else 0.0
+    rl = float(g_eff.uniform(*ranges["rate_limit_factor"])) if "rate_limit" in effects else None
+    km_ratio = float(g_eff.uniform(*ranges["km_ratio"])) if "motion_feedback" in effects else 0.0
+    motion_tf = None
+    if "motion_feedback" in effects:
+        motion_tf = tuple(opts["motion_path"]) if opts["motion_path"] is not None else plant.motion()
+    actuator = {"tau": act_tau, "rate_limit_factor": rl}
+
+    def yc(w):
+        return plant.yc(w) / (1.0 + 1j * np.asarray(w, dtype=float) * act_tau)
+
+    w_ref = float(np.sqrt(ranges["wc"][0] * ranges["wc"][1]))
+    ycr = yc(np.array([w_ref]))[0]
+    order = _slope_order(yc, w_ref)
+    sign = 1 if np.real(ycr * (1j * w_ref) ** order) >= 0 else -1
+    fixed = {}
+    if ranges["wc"][0] == ranges["wc"][1]:
+        fixed["wc"] = ranges["wc"][0]
+    if ranges["pm"][0] == ranges["pm"][1]:
+        fixed["pm"] = ranges["pm"][0]
+    if opts["pilot_params"] is not None:
+        p = dict(opts["pilot_params"])
+        p.setdefault("structure", pilot)
+        p.setdefault("tau", p.get("tau_v", 0.0) + extra)
+        p.setdefault("tau_v", p["tau"] - extra)
+    elif pilot == "precision":
+        p = pilots.draw_precision(rng["pilot"], yc, sign, order, ranges, extra, fixed)
+    else:
+        p = pilots.draw_hess(rng["pilot"], yc, sign, order, ranges, extra, fixed,
+                             motion_tf, km_ratio, float(opts["tau_m"]))
+    if p is None:
+        raise HesspipeError(f"draw_trial: no {pilot} pilot for plant {plant.name!r} meets "
+                            f"crossover {ranges['wc']} rad/s and phase margin {ranges['pm']} deg "
+                            f"with delay {ranges['tau']} s (+{extra:.3g} s extra)")
+    p["extra_delay"] = extra
+    p["km_ratio"] = km_ratio
+    k_d, k_t = forcing.line_sets(opts["T_m"], int(opts["n_lines"]))
+    g_f = rng["forcing"]
+    corner = float(g_f.uniform(*ranges["w_corner"]))
+    d_rms = opts["d_rms"] if opts["d_rms"] is not None else plant.d_rms
+    dist = forcing.design(k_d, opts["T_m"], d_rms, g_f, w_corner=corner) \
+        if task in ("disturbance", "both") else None
+    if task == "both":
+        r_rms = opts["r_rms"] if opts["r_rms"] is not None else abs(
+            d_rms * abs(yc(np.array([0.5]))[0]))
+        targ = forcing.design(k_t, opts["T_m"], r_rms, g_f, w_corner=corner)
+    elif task == "tracking":
+        r_rms = opts["r_rms"] if opts["r_rms"] is not None else 1.0
+        targ = forcing.design(k_d, opts["T_m"], r_rms, g_f, w_corner=corner)
+    else:
+        targ = None
+    g_r = rng["remnant"]
+    remnant = {"share": float(g_r.uniform(*ranges["remnant_share"])),
+               "Tn": float(g_r.uniform(*ranges["remnant_tn"])), "at": opts["remnant_at"],
+               "noise_seed": int(derive_seed(seed, "remnant-noise"))}
+    if remnant["at"] not in ("control", "error"):
+        raise HesspipeError(f"remnant_at: expected 'control' or 'error', got {remnant['at']!r}")
+    style = opts["style"]
+    if style is None:
+        from .writer import draw_style
+        style = draw_style(rng["style"])
+    name = opts["name"] or f"trial-{seed}"
+    options = {k: opts[k] for k in ("fs", "T_m", "run_in", "fade", "fine_ratio", "n_lines",
+                                    "output", "tau_m")}
+    options.update(w_corner=corner, d_rms=d_rms, pilot_sign=sign, plant_order=order)
+    return TrialSpec(name=name, seed=int(seed), plant=plant, task=task, pilot=p,
+                     effects=effects, options=options, disturbance=dist, target=targ,
+                     remnant=remnant, actuator=actuator, motion_tf=motion_tf, style=style)
+
+
+def outer_holds(spec: TrialSpec) -> int:
+    """Zero-order holds on the outer loop: pilot input, plant input, actuator input."""
+    return 2 + (1 if spec.actuator["tau"] > 0 else 0)
+
+
+def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
+    p = spec.pilot
+    rem = ss_from_tf([1.0], [spec.remnant["Tn"], 1.0])
+    blocks = {"rem": zoh(rem, h), "plant": zoh(spec.plant.true, h)}
+    if spec.actuator["tau"] > 0:
+        blocks["act"] = zoh(ss_from_tf([1.0], [spec.actuator["tau"], 1.0]), h)
+    steps = delay_steps(p["tau"], h, outer_holds(spec))
+    if p["structure"] == "precision":
+        blocks["eqnm"] = zoh(ss_from_tf(*pilots.equaliser_nm_tf(p)), h)
+    else:
+        blocks["nm"] = zoh(ss_from_tf(*pilots.nm_tf(p["wn"], p["zn"])), h)
+        blocks["pf"] = zoh(ss_from_tf(*pilots.pf_tf(p)), h)
+        if p.get("Km") and spec.motion_tf is not None:
+            blocks["motion"] = zoh(ss_from_tf(*spec.motion_tf), h)
+            blocks["scc"] = zoh(ss_from_tf(*pilots.SCC), h)
+    return Wiring(h=h, delay_steps=steps, pilot=p["structure"], blocks=blocks,
+                  Ke=p.get("Ke", 0.0), Km=p.get("Km", 0.0),
+                  motion_delay_steps=int(round(p.get("tau_m", 0.0) / h)),
+                  remnant_at=spec.remnant["at"], rate_limit=rate_limit,
+                  disturbance=spec.plant.disturbance)
+
+
+def _solve_gain(uf: np.ndarray, un: np.ndarray, share: float) -> float:
+    """Remnant gain g so that var(g un) / var(uf + g un) = share exactly.
+
+    Solves ``g^2 Vn (1 - s) - 2 g C s - s Vf = 0`` (C the covariance) for g >= 0.
+    """
+    if share <= 0.0:
+        return 0.0
+    uf, un = uf - uf.mean(), un - un.mean()
+    vf, vn, c = float(uf @ uf), float(un @ un), float(uf @ un)
+    a, b, cc = vn * (1.0 - share), -2.0 * c * share, -share * vf
+    return float((-b + np.sqrt(b * b - 4 * a * cc)) / (2 * a))
+
+
+def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
+    """Simulate a drawn trial at the fine step and log it at ``spec.options["fs"]``.
+
+    Parameters
+    ----------
+    spec : TrialSpec
+        From :func:`draw_trial`.
+    fine_ratio : int, optional
+        Fine steps per logged sample (default ``spec.options["fine_ratio"]``, 20:
+        1.2 kHz at 60 Hz).
+
+    Returns
+    -------
+    Trial
+        Logged signals over the measurement window (whole periods of every line,
+        after the discarded run-in) and the truth dict (see
+        :func:`hesspipe.humanlike.truth.build_truth`).
+
+    Raises
+    ------
+    HesspipeError
+        If the simulated loop diverges (it should not for a drawn pilot).
+    """
+    from .truth import build_truth
+    from .simulate import compile_loop
+
+    o = spec.options
+    fs, ratio = float(o["fs"]), int(fine_ratio or o["fine_ratio"])
+    h = 1.0 / (fs * ratio)
+    n_run = int(round(o["run_in"] * fs))
+    n_log = int(round(o["T_m"] * fs))
+    n = (n_run + n_log) * ratio
+    t = (np.arange(n) - n_run * ratio) * h
+    ramp = forcing.fade(t, -n_run / fs, o["fade"])
+    d_log = spec.disturbance(t) * ramp if spec.disturbance is not None else np.zeros(n)
+    # The plant holds its input over [t_k, t_k + h): the midpoint value carries no half-step lag.
+    d = spec.disturbance(t + h / 2) * forcing.fade(t + h / 2, -n_run / fs, o["fade"]) \
+        if spec.disturbance is not None else np.zeros(n)
+    r = spec.target(t) * ramp if spec.target is not None else np.zeros(n)
+    # Remnant noise is white at a fixed 10x the logging rate, held between its samples, so
+    # the realisation does not depend on the fine step.
+    noise_rate = 10.0 * fs
+    n_noise = int(np.ceil(n * h * noise_rate)) + 1
+    white = np.random.default_rng(spec.remnant["noise_seed"]).standard_normal(n_noise)
+    w = white[np.floor(np.arange(n) * (h * noise_rate) + 1e-9).astype(int)]
+    zeros = np.zeros(n)
+    idx = n_run * ratio + np.arange(n_log) * ratio
+
+    def sim(fn, rr, dd, ww, g):
+        ys, us, acts = fn(rr.tolist(), dd.tolist(), ww.tolist(), float(g), n)
+        sim.actuator = np.asarray(acts)
+        return np.asarray(ys), np.asarray(us)
+
+    rate = None
+    fn = compile_loop(_wiring(spec, h, None))
+    y_f, u_f = sim(fn, r, d, zeros, 0.0)
+    if spec.actuator["rate_limit_factor"] is not None:
+        rate = spec.actuator["rate_limit_factor"] * float(np.std(np.diff(u_f[idx[0]:]) / h))
+        fn = compile_loop(_wiring(spec, h, rate))
+        y_f, u_f = sim(fn, r, d, zeros, 0.0)
+    y_n, u_n = sim(fn, zeros, zeros, w, 1.0)
+    g = _solve_gain(u_f[idx], u_n[idx], spec.remnant["share"])
+    if rate is None:
+        y, u = y_f + g * y_n, u_f + g * u_n      # the loop is linear: superpose
+    else:
+        y, u = sim(fn, r, d, w, g)
+    if not (np.all(np.isfinite(y)) and np.all(np.isfinite(u))) \
+            or np.max(np.abs(y[idx])) > 1e6 * (np.max(np.abs(y_f[idx])) + 1e-12) + 1e6:
+        raise HesspipeError(f"trial {spec.name}: the simulated loop diverged")
+    sim_info = {"fine_step_s": h,
+                "remnant_gain": g, "rate_limit_per_s": rate,
+                "u_forcing": u_f[idx], "u": u[idx], "h": h, "ratio": ratio,
+                "rate_limited_fraction": (None if rate is None else float(
+                    np.mean(np.abs(np.diff(sim.actuator[idx[0]:])) >= rate * h * (1 - 1e-9))))}
+    truth = build_truth(spec, sim_info)
+    return Trial(spec=spec, time=np.arange(n_log) / fs, disturbance=d_log[idx], output=y[idx],
+                 control=u[idx], reference=r[idx], truth=truth)

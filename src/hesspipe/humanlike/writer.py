@@ -1,0 +1,164 @@
+"""Write generated trials the way real loggers write files.
+
+A trial becomes ``NAME.csv`` (SPEC measured-run format), ``NAME.truth.json``
+and the folder's ``plants.json`` (what a researcher would hand hesspipe). The
+CSV's style (time format, line ends, BOM, column order) is drawn per trial
+or given:
+
+``time``
+    ``"g9"`` seconds from the start with 9 significant digits (60 Hz times then
+    jitter by ~1e-7 s), ``"ms"`` rounded to milliseconds, ``"epoch_ms"`` /
+    ``"epoch_us"`` Unix time stamps rounded to ms / us, ``"g17"`` exact.
+``values``
+    printf format of the signal columns (``"%.6g"``).
+``newline``
+    ``"\\n"`` or ``"\\r\\n"``.
+``bom``
+    write a UTF-8 byte-order mark.
+``columns``
+    column order (names as in SPEC).
+``epoch0``
+    Unix time of the first sample (epoch styles).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import HesspipeError
+from ..io import atomic_path, to_json, write_json
+from .plants import ANGLE_MOTION, PLATFORM, WASHOUT
+from .lti import series
+
+TIME_STYLES = ("g9", "ms", "epoch_ms", "epoch_us", "g17")
+COLUMNS = ("time", "disturbance", "output", "control", "reference")
+LABEL = "synthetic data: independent human-like generator"
+PLAIN = {"time": "g17", "values": "%.6g", "newline": "\n", "bom": False,
+         "columns": list(COLUMNS), "epoch0": 0.0}
+
+
+def draw_style(rng: np.random.Generator) -> dict:
+    """Draw a logger style (time format, line ends, BOM, column order)."""
+    cols = list(COLUMNS) if rng.uniform() < 0.7 else \
+        ["time", "reference", "output", "control", "disturbance"]
+    return {"time": str(rng.choice(TIME_STYLES, p=[0.35, 0.25, 0.15, 0.15, 0.10])),
+            "values": "%.6g", "newline": "\r\n" if rng.uniform() < 0.4 else "\n",
+            "bom": bool(rng.uniform() < 0.3), "columns": cols,
+            "epoch0": float(np.round(rng.uniform(1.6e9, 1.8e9), 3))}
+
+
+def _style(style) -> dict:
+    if style is None:
+        return dict(PLAIN)
+    if isinstance(style, str):
+        if style == "plain":
+            return dict(PLAIN)
+        if style in TIME_STYLES:
+            return {**PLAIN, "time": style, "epoch0": 1.7e9}
+        raise HesspipeError(f"style: expected 'plain', one of {', '.join(TIME_STYLES)} "
+                            f"or a dict, got {style!r}")
+    out = {**PLAIN, **dict(style)}
+    if out["time"] not in TIME_STYLES:
+        raise HesspipeError(f"style: field 'time': expected one of {', '.join(TIME_STYLES)}, "
+                            f"got {out['time']!r}")
+    if sorted(out["columns"]) != sorted(COLUMNS):
+        raise HesspipeError(f"style: field 'columns': expected an order of {', '.join(COLUMNS)}")
+    return out
+
+
+def _times(t: np.ndarray, st: dict) -> list[str]:
+    kind = st["time"]
+    if kind == "g9":
+        return [f"{x:.9g}" for x in t]
+    if kind == "ms":
+        return [f"{x:.3f}" for x in t]
+    if kind == "epoch_ms":
+        return [f"{st['epoch0'] + x:.3f}" for x in t]
+    if kind == "epoch_us":
+        return [f"{st['epoch0'] + x:.6f}" for x in t]
+    return [f"{x:.17g}" for x in t]
+
+
+def csv_bytes(trial, style=None) -> bytes:
+    """The CSV file of `trial` in `style` (see module doc), as bytes."""
+    st = _style(style)
+    cols = {"time": _times(trial.time, st)}
+    fmt = st["values"]
+    for name in COLUMNS[1:]:
+        cols[name] = [fmt % v for v in getattr(trial, name)]
+    nl = st["newline"]
+    rows = [f"# {LABEL} ({trial.truth['generator']}); trial {trial.spec.name}",
+            ",".join(st["columns"])]
+    rows += [",".join(cols[c][i] for c in st["columns"]) for i in range(len(trial.time))]
+    text = nl.join(rows) + nl
+    return (b"\xef\xbb\xbf" if st["bom"] else b"") + text.encode("utf-8")
+
+
+def plants_dict(spec) -> dict:
+    """The SPEC plants JSON a researcher would hand hesspipe for this trial."""
+    p = spec.plant
+
+    def tfd(t):
+        return {"num": [float(x) for x in t[0]], "den": [float(x) for x in t[1]]}
+
+    out = {"control_to_output": tfd(p.nominal_yc), "disturbance_to_output": tfd(p.nominal_yd),
+           "source": f"{LABEL} ({p.name}); nominal plants"
+                     + (", rolling approximation of the flown aircraft" if "dutch_roll" in spec.effects else "")}
+    default = series(PLATFORM, WASHOUT)
+    motion = spec.motion_tf if spec.motion_tf is not None else p.motion()
+    if not (np.array_equal(motion[0], default[0]) and np.array_equal(motion[1], default[1])):
+        out["motion_path"] = tfd(motion)
+    elif p.output == "angle":
+        out["motion_path"] = tfd(ANGLE_MOTION)
+    return out
+
+
+def write_trial(folder, trial, style=None) -> Path:
+    """Write ``NAME.csv``, ``NAME.truth.json`` and ``plants.json`` into `folder`.
+
+    Parameters
+    ----------
+    folder : path
+        Output folder (created if missing).
+    trial : Trial
+        From :func:`hesspipe.humanlike.simulate_trial`.
+    style : dict or str, optional
+        CSV style (module doc); default the style drawn with the trial.
+
+    Returns
+    -------
+    Path
+        The CSV file.
+
+    Raises
+    ------
+    HesspipeError
+        If `folder` already holds a different ``plants.json`` (trials of different
+        plants belong in different folders).
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    plants = plants_dict(trial.spec)
+    ppath = folder / "plants.json"
+    if ppath.exists():
+        try:
+            old = json.loads(ppath.read_text(encoding="utf-8-sig"))
+        except (OSError, ValueError):
+            old = None
+        if old != json.loads(to_json(plants)):
+            raise HesspipeError(f"{ppath}: holds other plants than trial {trial.spec.name}'s; "
+                                "expected one plant per folder")
+    else:
+        write_json(ppath, plants)
+    st = style if style is not None else trial.spec.style
+    path = folder / f"{trial.spec.name}.csv"
+    data = csv_bytes(trial, st)
+    truth = dict(trial.truth)
+    truth["style"] = _style(st)
+    write_json(folder / f"{trial.spec.name}.truth.json", truth)
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+    return path
