@@ -73,8 +73,16 @@ def main(argv=None) -> int:
     for plant in args.plants.split(","):
         rows_np, rows = [], {c: [] for c in criteria}
         t_frf = []
-        for i in range(args.n):
-            run, plants, truth, pilot = trial_run(plant, i, args.seed)
+        i, skipped = -1, 0
+        while len(rows_np) < args.n:
+            i += 1
+            try:
+                run, plants, truth, pilot = trial_run(plant, i, args.seed)
+            except Exception as exc:  # the generator found no pilot in range for this draw
+                skipped += 1
+                if skipped > 3 * args.n:
+                    raise
+                continue
             wc_t = truth["crossover"]["frequency_rad_s"]
             pm_t = truth["crossover"]["phase_margin_deg"]
             t0 = time.perf_counter()
@@ -84,27 +92,30 @@ def main(argv=None) -> int:
             rows_np.append((c.frequency_rad_s / wc_t, c.phase_margin_deg - pm_t, frf.method,
                             frf.remnant_share, truth["remnant"]["control_power_off_lines_share"]))
             for crit in criteria:
-                if crit == "output" and i >= args.output_n:
+                if crit == "output" and len(rows_np) > args.output_n:
                     continue
                 t0 = time.perf_counter()
                 try:
                     res = identify(run, plants, "original", criterion=crit, seed=i, frf=frf,
-                                   with_identifiability=False)
+                                   with_identifiability=False, with_benchmark=False)
+                    dt = time.perf_counter() - t0
+                    # the McRuer benchmark by the same criterion (timed apart)
+                    bench = identify(run, plants, "original", criterion=crit, seed=i, frf=frf,
+                                     free=(), with_identifiability=False).benchmark_fitness
                 except Exception as exc:  # a benchmark reports, it does not stop
                     print(f"  {plant} {run.id} {crit}: failed: {exc}")
                     continue
-                dt = time.perf_counter() - t0
                 x = res.crossover
                 rows[crit].append(dict(
                     ratio=x.frequency_rad_s / wc_t, dpm=x.phase_margin_deg - pm_t,
                     np_ratio=x.frequency_rad_s / c.frequency_rad_s,
-                    fit_ratio=res.fitness / res.benchmark_fitness, time=dt,
+                    fit_ratio=res.fitness / bench, time=dt,
                     nfree=len(res.free), k=res.parameters["k"], pilot=pilot))
         r = np.array([x[0] for x in rows_np])
         d = np.array([x[1] for x in rows_np])
         ok = (np.abs(np.log(r)) <= np.log(1.2)) & (np.abs(d) <= 10)
         all_np.extend(ok.tolist())
-        print(f"\nplant {plant}: {args.n} trials, frf method(s) {sorted(set(x[2] for x in rows_np))}")
+        print(f"\nplant {plant}: {args.n} trials ({skipped} draws without a pilot in range skipped), frf method(s) {sorted(set(x[2] for x in rows_np))}")
         print(f"  nonparametric: wc/truth median {np.nanmedian(r):.3f} [{np.nanmin(r):.3f}, "
               f"{np.nanmax(r):.3f}], PM error median {np.nanmedian(d):+.1f} deg "
               f"[{np.nanmin(d):+.1f}, {np.nanmax(d):+.1f}]; within x1.2 and 10 deg: {pct(ok)}")

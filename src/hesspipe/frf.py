@@ -23,8 +23,9 @@ instrument (unbiased by the remnant, which is uncorrelated with d), at the
 Welch bins where d explains e and u (coherence), with the coherence-based
 error ``sigma/|H| = sqrt((1 - g_du)/(2 n g_du) + (1 - g_de)/(2 n g_de))``.
 
-Crossover of ``L = H Yc``: the highest line pair where |L| falls through 1,
-log|L| interpolated linearly in log w and the unwrapped phase linearly in w;
+Crossover of ``L = H Yc``: bracketed by the highest pair of reliable lines where
+|L| falls through 1, then located by weighted straight-line fits of ln|L| in
+ln w and of the phase in w over the reliable lines near it (see :func:`_cross`);
 its uncertainty is the spread over seeded draws of H from its error model.
 """
 
@@ -48,6 +49,10 @@ NEIGHBOURS = 4
 MIN_COHERENCE = 0.3
 """Welch fallback: bins kept where d explains both e and u at least this much."""
 DRAWS = 400
+RELIABLE = 0.5
+"""Lines with a relative error sigma/|H| above this are left out of the crossover."""
+BAND = 2.5
+"""The crossover's local fit uses the reliable lines within this factor of it."""
 
 
 @dataclass(frozen=True)
@@ -96,7 +101,8 @@ class FrfCrossover:
         return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
                 "frequency_std_rad_s": self.frequency_std,
                 "phase_margin_std_deg": self.phase_margin_std_deg, "note": self.note,
-                "method": "|L| interpolated log-log between the bracketing lines, phase linear in w; "
+                "method": "weighted local fits of ln|L| in ln w and of the phase in w over the reliable "
+                          "lines near the crossing; "
                           f"std over {DRAWS} seeded draws of H from its error model"}
 
 
@@ -359,44 +365,99 @@ def nonparametric_crossover(resp: Response, yc, *, seed: int = 0) -> FrfCrossove
     """
     block = yc if hasattr(yc, "response") else from_tf(yc)
     w = resp.freq_rad_s
+    nan = float("nan")
     if w.size < 2:
-        nan = float("nan")
         return FrfCrossover(nan, nan, nan, nan, "fewer than two lines")
     order = np.argsort(w)
     w = w[order]
-    G = block.response(1j * w)
     H0 = resp.H[order]
     sig = resp.sigma[order]
-    wc, pm = _cross(w, H0 * G)
+    rel = sig / np.maximum(np.abs(H0), 1e-300)
+    grid = np.logspace(np.log10(w[0] / BAND), np.log10(w[-1] * BAND), 1500)
+    plant = (grid, block.response(1j * grid), block.response(1j * w))
+    wc, pm = _cross(w, H0, rel, plant)
     if not np.isfinite(wc):
-        mag = np.abs(H0 * G)
+        mag = np.abs(H0 * plant[2])
         note = ("|L| > 1 at every line: crossover above the highest line" if np.all(mag > 1) else
                 "|L| < 1 at every line: crossover below the lowest line" if np.all(mag < 1) else
-                "|L| does not fall through 1 between lines")
-        nan = float("nan")
+                "|L| does not fall through 1 between reliable lines")
         return FrfCrossover(nan, nan, nan, nan, note)
     rng = np.random.default_rng(derive_seed(seed, "frf-crossover"))
     noise = (rng.standard_normal((DRAWS, w.size)) + 1j * rng.standard_normal((DRAWS, w.size))) / np.sqrt(2)
-    draws = [_cross(w, (H0 + sig * z) * G) for z in noise]
-    arr = np.array(draws)
+    arr = np.array([_cross(w, H0 + sig * z, rel, plant) for z in noise])
     ok = np.isfinite(arr[:, 0])
     if ok.sum() < DRAWS // 2:
         return FrfCrossover(wc, pm, float("inf"), float("inf"),
                             "crossover not found in most draws: very uncertain")
-    return FrfCrossover(wc, pm, float(np.std(arr[ok, 0])), float(np.std(arr[ok, 1])))
+    dpm = (arr[ok, 1] - pm + 180.0) % 360.0 - 180.0
+    return FrfCrossover(wc, pm, float(np.std(arr[ok, 0])), float(np.std(dpm)))
 
 
-def _cross(w: np.ndarray, L: np.ndarray) -> tuple[float, float]:
-    lm = np.log(np.abs(L))
-    down = np.nonzero((lm[:-1] > 0) & (lm[1:] <= 0))[0]
+def _line(x, y, wt):
+    """Weighted least-squares line y = a + b x (weights: inverse variances)."""
+    sw = wt.sum()
+    mx, my = (wt * x).sum() / sw, (wt * y).sum() / sw
+    sxx = (wt * (x - mx) ** 2).sum()
+    b = (wt * (x - mx) * (y - my)).sum() / sxx if sxx > 0 else 0.0
+    return my - b * mx, b
+
+
+def _down(x, f):
+    """Highest x where f (sampled at x, ascending) falls through 0, linearly interpolated."""
+    down = np.nonzero((f[:-1] > 0) & (f[1:] <= 0))[0]
     if down.size == 0:
-        return float("nan"), float("nan")
+        return float("nan"), -1
     i = down[-1]
-    t = lm[i] / (lm[i] - lm[i + 1])
-    wc = float(np.exp(np.log(w[i]) + t * (np.log(w[i + 1]) - np.log(w[i]))))
-    ph = np.unwrap(np.angle(L))
-    # Anchor the unwrapped phase near the crossover's own branch.
-    phase = ph[i] + (ph[i + 1] - ph[i]) * (wc - w[i]) / (w[i + 1] - w[i])
+    t = f[i] / (f[i] - f[i + 1])
+    return float(x[i] + t * (x[i + 1] - x[i])), int(i)
+
+
+def _cross(w, H, rel, plant) -> tuple[float, float]:
+    """Crossover and phase margin of ``L = H Yc`` from measured points H(j w) (w ascending).
+
+    Lines whose relative error exceeds RELIABLE are left out (above the
+    forcing's corner the remnant swamps them). The crossing is bracketed
+    between the remaining lines (or extrapolated at most a factor BAND beyond
+    the highest when |L| is still above 1 there). Then the pilot's points
+    within a factor BAND of it are smoothed: ln|H| by a weighted straight
+    line in ln w, its unwrapped phase by one in w (weights: inverse relative
+    variances), and the crossing of that smooth H times the exact plant is
+    found. The plant's curvature (1/(s(s+1)) near 1 rad/s) is thus not
+    interpolated, and the remnant's scatter is averaged over neighbouring
+    lines instead of trusting two.
+    """
+    grid, yc_grid, yc_w = plant
+    keep = rel < RELIABLE
+    if keep.sum() < 2:
+        keep = np.isin(np.arange(w.size), np.argsort(rel)[:2])
+    w, H, rel, yc_w = w[keep], H[keep], rel[keep], yc_w[keep]
+    lw = np.log(w)
+    lm = np.log(np.abs(H * yc_w))
+    x0, i = _down(lw, lm)
+    wt = 1.0 / np.maximum(rel, 0.02) ** 2
+    if np.isfinite(x0):
+        wc0 = float(np.exp(x0))
+    else:
+        if not lm[-1] > 0:
+            return float("nan"), float("nan")
+        wc0 = float(w[-1])  # still above 1 at the last reliable line: look just beyond it
+    near = (w >= wc0 / BAND) & (w <= wc0 * BAND)
+    if near.sum() < 2:
+        if not np.isfinite(x0):
+            return float("nan"), float("nan")
+        near = np.isin(np.arange(w.size), (i, i + 1))
+    a, b = _line(lw[near], np.log(np.abs(H[near])), wt[near])
+    ph = np.unwrap(np.angle(H))
+    c, d = _line(w[near], ph[near], wt[near])
+    sel = (grid >= wc0 / BAND) & (grid <= wc0 * BAND)
+    g = grid[sel]
+    lmag = a + b * np.log(g) + np.log(np.abs(yc_grid[sel]))
+    xc, j = _down(np.log(g), lmag)
+    if not np.isfinite(xc):
+        return float("nan"), float("nan")
+    wc = float(np.exp(xc))
+    yc_phase = np.angle(yc_grid[sel][j])
+    phase = c + d * wc + yc_phase
     pm = (np.degrees(phase) + 180.0 + 180.0) % 360.0 - 180.0
     return wc, float(180.0 if pm == -180.0 else pm)
 
