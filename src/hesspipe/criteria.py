@@ -11,7 +11,8 @@ gain gives ``|u| ~ |d|`` below crossover, so the PSD cannot see the gain there
     divided by its uncertainty: ``J = sqrt(mean_k |H_model(j w_k) - H_k|^2 /
     s_k^2)`` with ``s_k^2 = sigma_k^2 + (REL_FLOOR |H_k|)^2`` (the floor keeps a
     few very clean lines from deciding alone where the structure cannot fit
-    exactly). Dimensionless; ~1 means "within the measurement's noise".
+    exactly), over the lines whose relative error is below FIT_RELIABLE.
+    Dimensionless; ~1 means "within the measurement's noise".
 ``output``
     Output error on the control time signal: the model, closed around the
     plants and driven by the measured disturbance and reference (no remnant),
@@ -39,9 +40,20 @@ DEFAULT_CRITERION = "df"
 
 LITERATURE_BOUNDS = {"tau0": (0.05, 0.5), "wn": (4.0, 25.0), "zn": (0.05, 1.0)}
 """Bounds of freed Table 1 parameters in the phase-aware fits (McRuer & Jex; van Paassen)."""
-PHASE_AWARE_FREE = ("Ke", "K1", "K2", "tau0", "wn", "zn")
+PHASE_AWARE_FREE = {1: ("Ke", "K1", "1/T1", "tau0", "wn", "zn"),
+                    2: ("Ke", "K1", "1/T1", "1/T2", "tau0", "wn", "zn")}
+"""Default free set of the phase-aware criteria, per k. K1 and K2 enter only as a product
+(K2 stays at Table 1's value); the proprioceptive corners (1/T1, and 1/T2 for k = 2)
+shape the pilot's lag/lead around crossover, which Table 1 cannot know for a given pilot."""
 LOG_PARAMETERS = ("Ke", "K1", "K2", "Km", "Ko", "Kn")
 REL_FLOOR = 0.02
+STABILITY_MARGIN = 0.02
+NM_PRIOR = {"zn": (0.3, np.log(3.0)), "wn": (10.0, np.log(2.0))}
+"""Weak prior of the df search on the neuromuscular mode (centre, width in ln units), worth
+one line's residual at one width: above the forcing's band the lines are swamped by remnant,
+and without it the search bends a lightly damped peak onto a noisy high line."""
+STABILITY_WEIGHT = 10.0
+FIT_RELIABLE = 3.0
 STABLE_CAP = UNSTABLE_FITNESS / 10
 
 
@@ -95,6 +107,8 @@ class _Base:
     """Shared: parameter completion, stability grading, scalar score."""
 
     accepts_threshold = False
+    loss = "linear"
+    f_scale = 1.0
 
     def __init__(self, run, plants, model: PilotModel, base: Mapping[str, float], sim=None):
         self.model = model
@@ -129,14 +143,29 @@ class DFObjective(_Base):
     """Describing-function error at the lines, weighted by their uncertainty (see module)."""
 
     units = "RMS describing-function error in line standard deviations (dimensionless)"
+    # The search down-weights lines far outside their stated error (a Cauchy loss on
+    # the per-line residual components, scaled so that 1 = 2 line standard deviations):
+    # single-period records have heavy-tailed errors at the weakly forced high lines.
+    # The reported fitness is the plain RMS above.
+    loss = "cauchy"
 
     def __init__(self, run, plants, model, base, frf, sim=None):
         super().__init__(run, plants, model, base, sim)
         resp = frf.feedback
-        self.s = 1j * resp.freq_rad_s
-        self.H = resp.H
-        self.scale = np.sqrt(resp.sigma ** 2 + (REL_FLOOR * np.abs(resp.H)) ** 2)
+        rel = resp.sigma / np.maximum(np.abs(resp.H), 1e-300)
+        # Lines the remnant swamps (relative error above FIT_RELIABLE) are left out: each
+        # carries little information, and a model that bends to fit one (a lightly damped
+        # neuromuscular peak at a noisy high line) is fitting noise.
+        keep = rel < FIT_RELIABLE
+        if keep.sum() < 3:
+            keep = np.isin(np.arange(rel.size), np.argsort(rel)[:3])
+        self.used = keep
+        self.s = 1j * resp.freq_rad_s[keep]
+        self.H = resp.H[keep]
+        self.scale = np.sqrt(resp.sigma[keep] ** 2 + (REL_FLOOR * np.abs(self.H)) ** 2)
         self.norm = 1.0 / np.sqrt(2 * self.H.size)  # sum of squares = mean |e|^2 over lines
+        self.f_scale = 2.0 * self.norm  # a residual component of 2 standard deviations
+        self.prior_weight = self.norm
 
     def residuals_loop(self, loop) -> np.ndarray:
         e = (model_df(loop, self.s) - self.H) / self.scale
@@ -193,8 +222,9 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
     logm = np.array([n in LOG_PARAMETERS for n in names])
     lo = np.array([bounds[n][0] for n in names], dtype=float)
     hi = np.array([bounds[n][1] for n in names], dtype=float)
-    xlo = np.where(logm, np.log(lo), lo)
-    xhi = np.where(logm, np.log(hi), hi)
+    with np.errstate(divide="ignore"):
+        xlo = np.where(logm, np.log(np.where(logm, lo, 1.0)), lo)
+        xhi = np.where(logm, np.log(np.where(logm, hi, 1.0)), hi)
 
     def values(x):
         v = np.where(logm, np.exp(x), x)
@@ -202,7 +232,20 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
 
     def resid(x):
         objective.calls += 1
-        return objective.residuals_loop(objective.model.loop(objective.params(values(x))))
+        loop = objective.model.loop(objective.params(values(x)))
+        r = objective.residuals_loop(loop)
+        # Least squares cannot see closed-loop stability: a residual that grows with the
+        # slowest mode's real part, once it is within STABILITY_MARGIN of the axis, keeps
+        # the search on the stable side.
+        rate = objective.sim.growth_rate(loop)
+        pen = STABILITY_WEIGHT * max(0.0, rate + STABILITY_MARGIN)
+        out = np.append(r, pen)
+        prior = getattr(objective, "prior_weight", 0.0)
+        if prior:
+            v = values(x)
+            out = np.append(out, [prior * np.log(v[n] / c) / width for n, (c, width)
+                                  in NM_PRIOR.items() if n in v])
+        return np.where(np.isfinite(out), out, 1e6)
 
     x0 = np.array([start[n] for n in names], dtype=float)
     x0 = np.clip(np.where(logm, np.log(np.maximum(x0, 1e-300)), x0), xlo, xhi)
@@ -212,6 +255,7 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
     for xi in inits:
         try:
             r = least_squares(resid, xi, bounds=(xlo, xhi), method="trf", x_scale="jac",
+                              loss=objective.loss, f_scale=objective.f_scale,
                               max_nfev=max_nfev * len(names), xtol=1e-6, ftol=1e-8)
         except (ValueError, np.linalg.LinAlgError):
             continue
@@ -246,9 +290,9 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
                          initial: Mapping[str, float] | None = None):
     """:func:`hesspipe.identify.identify` for the ``df`` and ``output`` criteria.
 
-    Frees Table 1's tau0, wn, zn by default besides Ke, K1, K2 (and the
-    effects' parameters), within :data:`LITERATURE_BOUNDS`; multi-start
-    bounded least squares (:func:`multistart_fit`).
+    Frees :data:`PHASE_AWARE_FREE` by default (and the effects' parameters),
+    tau0, wn, zn within :data:`LITERATURE_BOUNDS`; multi-start bounded least
+    squares (:func:`multistart_fit`).
     """
     from .crossover import loop_crossover
     from .frf import estimate_frf
@@ -256,7 +300,8 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
     from .mcruer import fit_precision
 
     if free is None:
-        free = tuple(PHASE_AWARE_FREE) + tuple(n for n in default_free(model) if n not in PHASE_AWARE_FREE)
+        core = PHASE_AWARE_FREE[int(k)]
+        free = core + tuple(n for n in default_free(model) if n not in core and n != "K2")
     base, free, fixed, flds, gain = _resolve(model, free, fixed, k, None, plants)
     if frf is None:
         frf = estimate_frf(run, plants, seed=seed)
@@ -290,4 +335,5 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
         freq_hz=spectral.freq_hz, optimizer="least_squares", restarts=int(starts), seed=seed,
         passes=0, run_id=run.id, synthetic=run.synthetic, stable=bool(stable and sim_psd is not None),
         benchmark_parameters=bench_par, fields={}, climb=None, gain_scale=gain,
-        criterion=criterion, fitness_units=obj.units, k_rule=k_rule, frf=frf)
+        criterion=criterion, fitness_units=obj.units, k_rule=k_rule, frf=frf,
+        primary_crossover=loop_crossover(loop, sim.yc_block, limits, first=True))

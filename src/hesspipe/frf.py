@@ -44,14 +44,14 @@ LINE_RATIO = 100.0
 """A bin is a line when its power exceeds LINE_RATIO times the median of its NEAR
 neighbours each side: a random broadband spectrum does so with probability ~e^-70."""
 NEAR = 6
-NEIGHBOURS = 4
+NEIGHBOURS = 10
 """Non-excited bins each side of a line used for its remnant variance."""
 MIN_COHERENCE = 0.3
 """Welch fallback: bins kept where d explains both e and u at least this much."""
 DRAWS = 400
 RELIABLE = 0.5
 """Lines with a relative error sigma/|H| above this are left out of the crossover."""
-BAND = 2.5
+BAND = 1.8
 """The crossover's local fit uses the reliable lines within this factor of it."""
 
 

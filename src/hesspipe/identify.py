@@ -194,6 +194,7 @@ class Identification:
     fitness_units: str = "RMS PSD difference (Eq. 10)"
     k_rule: str = ""
     frf: object = field(default=None, repr=False)
+    primary_crossover: Crossover | None = None
 
     def to_dict(self, spectra: bool = True) -> dict:
         out = {
@@ -211,6 +212,8 @@ class Identification:
             "gain_scale": self.gain_scale,
             "criterion": self.criterion, "fitness_units": self.fitness_units, "k_rule": self.k_rule,
             "nonparametric": _nonparametric(self.frf),
+            "primary_crossover": (None if self.primary_crossover is None
+                                  else self.primary_crossover.to_dict()),
         }
         if self.climb is not None:
             out["passes_run"] = self.climb.passes
@@ -463,7 +466,8 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         freq_hz=obj.freq_hz, optimizer=optimizer, seed=seed, passes=passes,
         band=obj.band, psd_method=psd_method, run_id=run.id, restarts=int(restarts), coding=coding, synthetic=run.synthetic, stable=stable,
         benchmark_parameters=bench_par, fields={f.name: (f.bits, f.scale, f.offset) for f in flds},
-        climb=climb, gain_scale=gain, k_rule=k_rule, frf=frf if frf is not None else _try_frf(run, plants, seed))
+        climb=climb, gain_scale=gain, k_rule=k_rule,
+        primary_crossover=loop_crossover(loop, obj.sim.yc_block, limits, first=True), frf=frf if frf is not None else _try_frf(run, plants, seed))
 
 
 def _try_frf(run, plants, seed):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+import numpy as np
+
 from ..criteria import CRITERIA, DEFAULT_CRITERION
 from ..errors import HesspipeError
 
@@ -110,6 +112,11 @@ def format_table(result) -> str:
                  f"{c.phase_margin_deg:.1f} deg, within limits: {'yes' if c.within_limits else 'no'} "
                  f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
                  f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
+    pc = result.primary_crossover
+    if pc is not None and np.isfinite(pc.frequency_rad_s) and pc.frequency_rad_s != c.frequency_rad_s:
+        lines.append(f"primary crossover  {pc.frequency_rad_s:.3f} rad/s, phase margin "
+                     f"{pc.phase_margin_deg:.1f} deg (|L| first falls through 1 here and rises "
+                     "above 1 again higher up)")
     frf = result.frf
     if isinstance(frf, str):
         lines.append(f"nonparametric      {frf}")
