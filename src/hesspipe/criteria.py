@@ -28,11 +28,11 @@ from __future__ import annotations
 from typing import Mapping, Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
 
-from .blocks import from_tf
 from .errors import HesspipeError
-from .hess import UNSTABLE_FITNESS, PilotModel, Simulator
+
+# Importing this module stays light (the command line reads CRITERIA at start-up):
+# scipy and the model modules are imported where they are used.
 
 CRITERIA = ("paper", "df", "output")
 DEFAULT_CRITERION = "df"
@@ -54,7 +54,6 @@ one line's residual at one width: above the forcing's band the lines are swamped
 and without it the search bends a lightly damped peak onto a noisy high line."""
 STABILITY_WEIGHT = 10.0
 FIT_RELIABLE = 3.0
-STABLE_CAP = UNSTABLE_FITNESS / 10
 
 
 def check_criterion(criterion: str) -> str:
@@ -65,6 +64,8 @@ def check_criterion(criterion: str) -> str:
 
 def plant_slope(plants, band=(1.0, 5.0)) -> float:
     """Mean slope of ln|Yc| against ln w over `band` (rad/s): -1 for K/s, -2 for K/s^2."""
+    from .blocks import from_tf
+
     yc = from_tf(getattr(plants, "control_to_output", plants))
     w = np.logspace(np.log10(band[0]), np.log10(band[1]), 41)
     mag = np.log(np.abs(yc.response(1j * w)))
@@ -110,7 +111,9 @@ class _Base:
     loss = "linear"
     f_scale = 1.0
 
-    def __init__(self, run, plants, model: PilotModel, base: Mapping[str, float], sim=None):
+    def __init__(self, run, plants, model, base: Mapping[str, float], sim=None):
+        from .hess import Simulator
+
         self.model = model
         self.base = dict(base)
         self.sim = sim if sim is not None else Simulator(plants, run.disturbance, run.dt,
@@ -127,13 +130,16 @@ class _Base:
 
     def score_loop(self, loop, threshold=None) -> float:
         """Criterion value of a loop; unstable: graded, at least UNSTABLE_FITNESS."""
+        from .hess import UNSTABLE_FITNESS
+
         self.calls += 1
         rate = self.sim.growth_rate(loop)
         if not rate < 0.0:
             return UNSTABLE_FITNESS * (1.0 + min(max(rate, 0.0), 1000.0))
         r = self.residuals_loop(loop)
         value = float(np.sqrt(np.sum(r * r)))
-        return min(value, STABLE_CAP) if np.isfinite(value) else UNSTABLE_FITNESS
+        # Stable fits stay below a tenth of the unstable value, as in hesspipe.identify.
+        return min(value, UNSTABLE_FITNESS / 10) if np.isfinite(value) else UNSTABLE_FITNESS
 
     def __call__(self, values: Mapping[str, float], threshold=None) -> float:
         return self.score_loop(self.model.loop(self.params(values)))
@@ -195,7 +201,7 @@ class OutputObjective(_Base):
 OBJECTIVES = {"df": DFObjective, "output": OutputObjective}
 
 
-def fit_bounds(model: PilotModel, names: Sequence[str], gain: float) -> dict:
+def fit_bounds(model, names: Sequence[str], gain: float) -> dict:
     """Box of each free parameter: the model's, narrowed to :data:`LITERATURE_BOUNDS`."""
     box = model.bounds(gain)
     out = {}
@@ -218,6 +224,10 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
     (values, fitness, stable)
         The best stable end point (or the best unstable one, flagged).
     """
+    from scipy.optimize import least_squares
+
+    from .hess import UNSTABLE_FITNESS
+
     names = list(names)
     logm = np.array([n in LOG_PARAMETERS for n in names])
     lo = np.array([bounds[n][0] for n in names], dtype=float)
@@ -287,7 +297,7 @@ def smart_start(objective: _Base, base: Mapping[str, float], frf) -> dict:
 
 def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, seed: int, k: int,
                          k_rule: str, limits, with_benchmark: bool, frf=None, starts: int = 4,
-                         initial: Mapping[str, float] | None = None):
+                         initial: Mapping[str, float] | None = None, fields=None):
     """:func:`hesspipe.identify.identify` for the ``df`` and ``output`` criteria.
 
     Frees :data:`PHASE_AWARE_FREE` by default (and the effects' parameters),
@@ -296,13 +306,15 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
     """
     from .crossover import loop_crossover
     from .frf import estimate_frf
+    from .hess import UNSTABLE_FITNESS, PilotModel, Simulator
     from .identify import Identification, SpectralObjective, _resolve, default_free
     from .mcruer import fit_precision
 
     if free is None:
         core = PHASE_AWARE_FREE[int(k)]
         free = core + tuple(n for n in default_free(model) if n not in core and n != "K2")
-    base, free, fixed, flds, gain = _resolve(model, free, fixed, k, None, plants)
+    # Bit fields are APID's; they are still checked (a bad one is the user's mistake).
+    base, free, fixed, flds, gain = _resolve(model, free, fixed, k, fields, plants)
     if frf is None:
         frf = estimate_frf(run, plants, seed=seed)
     sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference, noise_seed=seed)

@@ -415,7 +415,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         return identify_phase_aware(run, plants, model, criterion=criterion, free=free, fixed=fixed,
                                     seed=seed, k=k, k_rule=k_rule, limits=limits,
                                     with_benchmark=with_benchmark, frf=frf, starts=restarts,
-                                    initial=initial)
+                                    initial=initial, fields=fields)
     if optimizer not in OPTIMIZERS:
         raise HesspipeError(f"--optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
     where = run.source or run.id
