@@ -260,7 +260,7 @@ def test_cli_end_to_end_with_figures(cohorts, tmp_path, capsys):
     for name in ("pilot01.csv", "pilot01.truth.json"):
         shutil.copy(cohorts / "none" / name, folder / name)
     code = main(["compare-pilots", str(folder), "--plants", str(plants), "--workers", "1", "--passes", "2",
-                 "--restarts", "1",
+                 "--restarts", "1", "--criterion", "paper",
                  "--json", str(tmp_path / "c.json"), "--figures", str(tmp_path / "fig")])
     out = capsys.readouterr().out
     assert code == 0

@@ -47,12 +47,12 @@ PHASE_AWARE_FREE = {1: ("Ke", "K1", "1/T1", "tau0", "wn", "zn"),
 shape the pilot's lag/lead around crossover, which Table 1 cannot know for a given pilot."""
 LOG_PARAMETERS = ("Ke", "K1", "K2", "Km", "Ko", "Kn")
 REL_FLOOR = 0.02
-STABILITY_MARGIN = 0.02
+STABILITY_MARGIN = 0.01
 NM_PRIOR = {"zn": (0.3, np.log(3.0)), "wn": (10.0, np.log(2.0))}
 """Weak prior of the df search on the neuromuscular mode (centre, width in ln units), worth
 one line's residual at one width: above the forcing's band the lines are swamped by remnant,
 and without it the search bends a lightly damped peak onto a noisy high line."""
-STABILITY_WEIGHT = 10.0
+STABILITY_WEIGHT = 100.0
 FIT_RELIABLE = 3.0
 
 
@@ -244,6 +244,11 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
         objective.calls += 1
         loop = objective.model.loop(objective.params(values(x)))
         r = objective.residuals_loop(loop)
+        if objective.loss == "cauchy":
+            # Cauchy loss on the fit's residuals only (least_squares' own loss would also
+            # soften the stability residual): r -> c sign(r) sqrt(ln(1 + (r/c)^2)).
+            c = objective.f_scale
+            r = c * np.sign(r) * np.sqrt(np.log1p((r / c) ** 2))
         # Least squares cannot see closed-loop stability: a residual that grows with the
         # slowest mode's real part, once it is within STABILITY_MARGIN of the axis, keeps
         # the search on the stable side.
@@ -265,7 +270,6 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
     for xi in inits:
         try:
             r = least_squares(resid, xi, bounds=(xlo, xhi), method="trf", x_scale="jac",
-                              loss=objective.loss, f_scale=objective.f_scale,
                               max_nfev=max_nfev * len(names), xtol=1e-6, ftol=1e-8)
         except (ValueError, np.linalg.LinAlgError):
             continue

@@ -202,6 +202,10 @@ def _lines(power: np.ndarray) -> np.ndarray:
     ok = p > LINE_RATIO * ref
     ok[0] = False
     cand = np.nonzero(ok)[0]
+    if cand.size and cand.max() < 3:
+        # Only the record's first one or two bins: a slow drift (the paper's turning side
+        # wind), whose steep spectrum clears its neighbours there; a forcing has lines higher up.
+        return np.zeros(0, dtype=int)
     if cand.size < 2:
         return cand
     # Leakage (a window that is not a whole number of periods) puts sidebands beside
