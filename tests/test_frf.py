@@ -185,3 +185,14 @@ def test_cli_frf_one_line_errors_and_json(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "short.csv" in err[0] and "two periods" in err[0]
     assert not (tmp_path / "s.json").exists()
+    # --model: an identify --json result drawn over the points; anything else is one line
+    (tmp_path / "id.json").write_text('{"model": "original", "criterion": "df", "parameters": '
+                                      '{"Ke": 3.0, "tau0": 0.25, "wn": 10.0, "zn": 0.3}}')
+    assert main(["frf", str(tmp_path / "ok.csv"), "--plants", str(plants), "--figure",
+                 str(tmp_path / "m.png"), "--model", str(tmp_path / "id.json")]) == 0
+    assert (tmp_path / "m.png").stat().st_size > 0
+    capsys.readouterr()
+    assert main(["frf", str(tmp_path / "ok.csv"), "--plants", str(plants), "--figure",
+                 str(tmp_path / "n.png"), "--model", str(plants)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "identify --json result" in err[0] and not (tmp_path / "n.png").exists()

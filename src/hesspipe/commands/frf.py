@@ -20,6 +20,9 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the crossover's uncertainty draws")
     p.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
     p.add_argument("--figure", metavar="OUT.png", help="write a Bode figure")
+    p.add_argument("--model", metavar="IDENT.json",
+                   help="an identify --json result: its model's describing function is drawn over "
+                        "the points")
     p.set_defaults(func=run)
 
 
@@ -48,12 +51,39 @@ def format_table(frf) -> str:
     return "\n".join(lines)
 
 
+def _model_curves(path) -> dict:
+    """Label -> H(s) of the model (and benchmark) in an ``identify --json`` result."""
+    import json
+
+    from ..criteria import model_df
+    from ..errors import HesspipeError
+    from ..hess import model_from_name
+    from ..mcruer import precision_loop
+
+    try:
+        obj = json.loads(open(path, encoding="utf-8-sig").read())
+        model = model_from_name(obj["model"])
+        loop = model.loop(model.complete({k: float(v) for k, v in obj["parameters"].items()},
+                                         int(obj["parameters"].get("k", 1))))
+    except HesspipeError as exc:
+        raise HesspipeError(f"{path}: {exc}") from None
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise HesspipeError(f"{path}: expected an identify --json result with 'model' and "
+                            f"'parameters' ({type(exc).__name__}: {exc})") from None
+    out = {f"{obj['model']} model ({obj.get('criterion', 'paper')})": lambda s: model_df(loop, s)}
+    if obj.get("benchmark_parameters"):
+        bench = precision_loop(obj["benchmark_parameters"])
+        out["McRuer precision benchmark"] = lambda s: model_df(bench, s)
+    return out
+
+
 def run(args) -> int:
     from ..formats import read_plants, read_run
     from ..frf import estimate_frf
     from ..io import write_json
 
     plants = read_plants(args.plants)
+    curves = _model_curves(args.model) if args.model else None  # a bad file fails before any work
     rec = read_run(args.run, columns=args.columns, resample=args.resample)
     result = estimate_frf(rec, plants, seed=args.seed)
     print(format_table(result))
@@ -65,5 +95,5 @@ def run(args) -> int:
     if args.figure:
         from ..viz.frf import frf_figure
 
-        frf_figure(args.figure, result)
+        frf_figure(args.figure, result, curves)
     return 0
