@@ -301,7 +301,8 @@ def smart_start(objective: _Base, base: Mapping[str, float], frf) -> dict:
 
 def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, seed: int, k: int,
                          k_rule: str, limits, with_benchmark: bool, frf=None, starts: int = 4,
-                         initial: Mapping[str, float] | None = None, fields=None):
+                         initial: Mapping[str, float] | None = None, fields=None,
+                         band=(0.0, 5.0), psd_method: str = "paper"):
     """:func:`hesspipe.identify.identify` for the ``df`` and ``output`` criteria.
 
     Frees :data:`PHASE_AWARE_FREE` by default (and the effects' parameters),
@@ -317,6 +318,7 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
     if free is None:
         core = PHASE_AWARE_FREE[int(k)]
         free = core + tuple(n for n in default_free(model) if n not in core and n != "K2")
+        free = tuple(n for n in free if n not in (fixed or {}))  # what the user fixed stays fixed
     # Bit fields are APID's; they are still checked (a bad one is the user's mistake).
     base, free, fixed, flds, gain = _resolve(model, free, fixed, k, fields, plants)
     if frf is None:
@@ -334,7 +336,8 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
     params = obj.params(values)
     loop = model.loop(params)
     cross = loop_crossover(loop, sim.yc_block, limits)
-    spectral = SpectralObjective(run, plants, model, base, noise_seed=seed)
+    spectral = SpectralObjective(run, plants, model, base, band=band, psd_method=psd_method,
+                                 noise_seed=seed)
     sim_psd = spectral.loop_psd(loop)
     bench_fit, bench_par = float("nan"), {}
     if with_benchmark:
@@ -343,12 +346,13 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
         bench_fit, bench_par = b.fitness, b.parameters
     return Identification(
         model=model.name, parameters=params, free=free, fixed=fixed,
-        fitness=best if best < UNSTABLE_FITNESS else float("nan"), benchmark_fitness=bench_fit,
+        # An unstable optimum keeps its finite graded score (never NaN), flagged by `stable`.
+        fitness=float(best), benchmark_fitness=bench_fit,
         crossover=cross, evaluations=obj.calls,
         identifiability={"method": f"not computed for criterion {criterion}"},
         measured_psd=spectral.measured,
         simulated_psd=sim_psd if sim_psd is not None else np.full_like(spectral.measured, np.nan),
-        freq_hz=spectral.freq_hz, optimizer="least_squares", restarts=int(starts), seed=seed,
+        freq_hz=spectral.freq_hz, band=spectral.band, psd_method=psd_method, optimizer="least_squares", restarts=int(starts), seed=seed,
         passes=0, run_id=run.id, synthetic=run.synthetic, stable=bool(stable and sim_psd is not None),
         benchmark_parameters=bench_par, fields={}, climb=None, gain_scale=gain,
         criterion=criterion, fitness_units=obj.units, k_rule=k_rule, frf=frf,

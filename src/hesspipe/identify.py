@@ -449,20 +449,21 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         k, k_rule = choose_k(plants)
     else:
         k_rule = f"k = {k} (given)"
+    seed = check_seed(seed)
+    check_control(run)
     if criterion != "paper":
+        # The band and PSD method still define the control PSDs reported beside the fit.
         return identify_phase_aware(run, plants, model, criterion=criterion, free=free, fixed=fixed,
                                     seed=seed, k=k, k_rule=k_rule, limits=limits,
                                     with_benchmark=with_benchmark, frf=frf, starts=restarts,
-                                    initial=initial, fields=fields)
+                                    initial=initial, fields=fields, band=band, psd_method=psd_method)
     if optimizer not in OPTIMIZERS:
         raise HesspipeError(f"optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
-    seed = check_seed(seed)
     where = run.source or run.id
     nper = PaperWelch().nperseg
     if len(run) < nper:
         raise HesspipeError(f"{where}: {len(run)} samples is shorter than one spectral segment "
                             f"({nper} samples); expected a longer record")
-    check_control(run)
     base, free, fixed, flds, gain = _resolve(model, free, fixed, k, fields, plants)
     obj = SpectralObjective(run, plants, model, base, band=band, psd_method=psd_method,
                             noise_seed=seed)
