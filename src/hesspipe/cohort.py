@@ -254,7 +254,7 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
     truth : dict
         Parameters, effects, seeds, disturbance and distributions.
     """
-    from .hess import PilotModel, Simulator, causal_pad_factor, gain_scale, synthetic_run
+    from .hess import PilotModel, Simulator, gain_scale, synthetic_run
 
     model = PilotModel(effects=_with_remnant(effects))
     gain = gain_scale(plants, spec.k)
@@ -273,10 +273,6 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
         raise HesspipeError(f"synthetic pilot {pilot_id}: no stable closed loop in {MAX_DRAWS} draws "
                             "around Table 1 with these plants; expected plants like SPEC.md's")
     share = _lognormal(rng, spec.remnant_share, spec.remnant_spread, *SHARE_RANGE)
-    # The share is measured on the same causal simulation synthetic_run records.
-    pad = causal_pad_factor(sim, model.loop(model.complete(params)))
-    if pad > sim.nfft / sim.n:
-        sim = Simulator(plants, wind, spec.dt_s, noise_seed=remnant_seed, pad_factor=pad)
     params["Kn"] = remnant_gain(model, model.complete(params), sim, share)
     run = synthetic_run(model, params, plants, wind, spec.dt_s, seed=remnant_seed, run_id=pilot_id)
     truth = {
