@@ -565,6 +565,7 @@ def _channel_report(fit: ChannelFit, config: PlantsConfig) -> dict:
                       "variance": ("simulation error" if config.focus == "simulation"
                                    else "one-step prediction error") + " on the estimation data",
                       "n_samples": sel.n_samples, "grid_size": len(sel.candidates),
+                      "max_growth_1_per_s": fit.slow_roots.limit, "growth_rate_1_per_s": m.growth_rate(),
                       "ranked": [c.to_dict() for c in sel.ranked(10)]},
         "excitation_order": sel.excitation_order,
         "fit_percent": {"estimation": fit.fit_estimation, "validation": fit.fit_validation,
@@ -605,9 +606,12 @@ def _markdown(report: dict, synthetic: bool) -> str:
                   f"samples (validation from t = {ch['samples']['validation_start_s']:.2f} s).", "",
                   f"- ARX orders: na = {o['na']}, nb = {o['nb']}, nk = {o['nk']} "
                   f"(chosen by {ch['criterion']['name'].upper()} = {ch['criterion']['value']:.6g} of the "
-                  f"{ch['criterion']['variance']}, over {ch['criterion']['grid_size']} stable-checked "
-                  f"candidates, {ch['criterion']['focus']} focus; input excitation order "
-                  f"{ch['excitation_order']})",
+                  f"{ch['criterion']['variance']}, over {ch['criterion']['grid_size']} candidates, "
+                  f"eligible if their poles grow slower than ln 2 / duration = "
+                  f"{ch['criterion']['max_growth_1_per_s']:.3g} 1/s (stable on the record), "
+                  f"{ch['criterion']['focus']} focus; input excitation order "
+                  f"{ch['excitation_order']}; the chosen model's fastest pole: "
+                  f"{ch['criterion']['growth_rate_1_per_s']:.3g} 1/s)",
                   f"- Fit (simulated output): estimation {fp['estimation']:.2f} %, **validation "
                   f"{fp['validation']:.2f} %**, continuous model on validation "
                   f"{fp['validation_continuous']:.2f} %",
