@@ -20,7 +20,7 @@ from hesspipe import arx
 from hesspipe.cohort import CohortSpec, pilot_ids, synth_pilot
 from hesspipe.formats import Plants
 from hesspipe.hess import PilotModel, Simulator, growth_limit, simulate, table1
-from hesspipe.plants import reflect_slow_roots
+from hesspipe.slow_roots import reflect_slow_roots
 from hesspipe.seeds import derive_seed
 
 from pilot_data import DT, N, YD, multisine, reference_control

@@ -84,6 +84,7 @@ from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
 from .errors import HesspipeError
 from .formats import Plants, read_csv_columns, sample_interval, tf_coefficients, write_plants
 from .hess import growth_limit
+from .slow_roots import SlowRoots, phase_change, reflect_slow_roots
 from .io import staged_output, write_json, write_text
 from .provenance import file_hash, versions
 
@@ -258,88 +259,6 @@ def read_record(path: str | Path, input_column: str, output_column: str, *,
 
 
 @dataclass(frozen=True)
-class SlowRoots:
-    """Right-half-plane roots of one continuous plant that its record cannot place (step 7).
-
-    Attributes
-    ----------
-    limit : float
-        Record resolution, 1/s: ``ln 2 / duration`` (:func:`hesspipe.hess.growth_limit`).
-    roots : tuple of dict
-        ``{"kind": "zero" | "pole", "before": {"re", "im"}, "after": {"re", "im"}}``
-        per root slower than `limit` (a complex pair once) and its reflection.
-    applied : {"keep", "reflect"}
-        Which of the two went into plants.json.
-    fit_validation_before, fit_validation_after : float
-        Fit percent of the continuous model's simulated output on the
-        validation tail as fitted and with the roots reflected.
-    max_phase_change_deg : float
-        Largest phase change the reflection makes on the check band.
-    """
-
-    limit: float
-    roots: tuple[dict, ...]
-    applied: str
-    fit_validation_before: float
-    fit_validation_after: float
-    max_phase_change_deg: float
-
-    def to_dict(self) -> dict:
-        return {"rule": "right-half-plane poles and zeros with |s| below the record's resolution "
-                        "ln 2 / duration cannot be placed by the record; listed with the continuous "
-                        "validation fit as fitted and reflected into the left half plane "
-                        "(gain response unchanged)",
-                "limit_1_per_s": self.limit, "roots": list(self.roots), "applied": self.applied,
-                "fit_validation_continuous_as_fitted": self.fit_validation_before,
-                "fit_validation_continuous_reflected": self.fit_validation_after,
-                "max_phase_change_deg": self.max_phase_change_deg}
-
-
-def _reflect(poly: np.ndarray, limit: float, kind: str) -> tuple[np.ndarray, list[dict]]:
-    """Reflect the roots of `poly` with real part > 0 and modulus < `limit` by deflation."""
-    poly = np.trim_zeros(np.atleast_1d(np.asarray(poly, dtype=float)), "f")
-    done: list[dict] = []
-    if poly.size < 2:
-        return poly, done
-    for r in np.roots(poly):
-        if not (r.real > 0.0 and abs(r) < limit) or r.imag < 0:
-            continue
-        if abs(r.imag) > 1e-9 * max(1.0, abs(r)):
-            old = np.array([1.0, -2.0 * r.real, abs(r) ** 2])
-            new = np.array([1.0, 2.0 * r.real, abs(r) ** 2])
-        else:
-            old, new = np.array([1.0, -r.real]), np.array([1.0, r.real])
-        q, _ = np.polydiv(poly, old)
-        poly = np.polymul(q, new)
-        done.append({"kind": kind, "before": {"re": float(r.real), "im": float(r.imag)},
-                     "after": {"re": float(-r.real), "im": float(r.imag)}})
-    return poly, done
-
-
-def reflect_slow_roots(sys: ct.TransferFunction, limit: float) -> tuple[ct.TransferFunction, list[dict]]:
-    """Reflect right-half-plane poles and zeros of modulus below `limit` (1/s).
-
-    Each such root ``r`` becomes ``-conj(r)``: ``|j w - r| = |j w + conj(r)|``,
-    so the gain response is unchanged and only the phase moves, by
-    ``2 atan(Re r / w)`` per real root. Returns the new continuous transfer
-    function and one entry per reflected root (see :class:`SlowRoots`).
-    """
-    num = np.squeeze(sys.num[0][0]).astype(float)
-    den = np.squeeze(sys.den[0][0]).astype(float)
-    num, zeros = _reflect(num, limit, "zero")
-    den, poles = _reflect(den, limit, "pole")
-    if not zeros and not poles:
-        return sys, []
-    return ct.tf(num, den), zeros + poles
-
-
-def _phase_change(before, after, band_hz) -> float:
-    w = 2 * np.pi * np.logspace(np.log10(band_hz[0]), np.log10(band_hz[1]), 400)
-    ratio = np.asarray(after(1j * w)).reshape(-1) / np.asarray(before(1j * w)).reshape(-1)
-    return float(np.max(np.abs(np.degrees(np.angle(ratio)))))
-
-
-@dataclass(frozen=True)
 class ChannelFit:
     """Everything identified and checked for one plant.
 
@@ -468,7 +387,7 @@ def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
     slow = SlowRoots(limit=limit, roots=tuple(reflected), applied=config.slow_roots,
                      fit_validation_before=_arx.fit_percent(y[val], y_sim_c[val]),
                      fit_validation_after=_arx.fit_percent(y[val], y_res[val]),
-                     max_phase_change_deg=_phase_change(sysc, resolved, config.check_band_hz))
+                     max_phase_change_deg=phase_change(sysc, resolved, config.check_band_hz))
     if config.slow_roots == "reflect":
         sysc, y_sim_c = resolved, y_res
     return ChannelFit(
