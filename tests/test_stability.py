@@ -157,3 +157,13 @@ def test_plant_check_response_of_a_near_integrating_plant_matches_time_domain():
     y = forced_response(sys, u, DT)
     err = np.sqrt(np.mean((y - ref) ** 2)) / np.sqrt(np.mean(ref ** 2))
     assert err < 0.01, err
+
+
+def test_slow_roots_setting_is_checked():
+    from hesspipe.errors import HesspipeError
+    from hesspipe.plants import PlantsConfig
+
+    assert PlantsConfig().slow_roots == "keep"
+    assert PlantsConfig.from_table({"slow_roots": "reflect"}).slow_roots == "reflect"
+    with pytest.raises(HesspipeError, match="slow_roots"):
+        PlantsConfig.from_table({"slow_roots": "maybe"})
