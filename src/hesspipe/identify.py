@@ -4,10 +4,13 @@ The measured control PSD (:mod:`hesspipe.spectra`) is compared with the PSD
 of the control simulated by the pilot model closed around the plants and
 driven by the measured disturbance (:class:`hesspipe.hess.Simulator`). The
 free parameters are searched by the bit-climbing GA (:mod:`hesspipe.apid`)
-or by a scipy optimiser over the same box. Unstable parameter sets get
-:data:`~hesspipe.hess.UNSTABLE_FITNESS` (1e12) or more, graded by the
-loop's growth rate (finite, worse than any stable fit, which is capped at
-1e11) and never raise.
+or by a scipy optimiser over the same box. Parameter sets whose closed loop
+is not stable on the record (growth rate at or above
+:func:`hesspipe.hess.growth_limit`, ln 2 / duration: a mode that more than
+doubles over the record) get :data:`~hesspipe.hess.UNSTABLE_FITNESS` (1e12)
+or more, graded by the growth rate beyond that limit (finite, worse than any
+stable fit, which is capped at 1e11) and never raise. Slower growth is not
+punished: neither the record nor the pilot can see it.
 
 After the fit, :func:`identifiability` looks at the Jacobian of the
 simulated PSD with respect to the free parameters (relative perturbations):
@@ -23,13 +26,12 @@ from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
-import scipy.fft as sfft
 from scipy.optimize import differential_evolution
 
 from .apid import ClimbResult, Field, bit_climb
 from .crossover import Crossover, CrossoverLimits, loop_crossover
 from .errors import HesspipeError
-from .hess import LOOP_GAINS, STRUCTURAL, UNSTABLE_FITNESS, PilotModel, Simulator, gain_scale, model_from_name
+from .hess import LOOP_GAINS, STRUCTURAL, UNSTABLE_FITNESS, unstable_fitness, PilotModel, Simulator, gain_scale, model_from_name
 from .mcruer import bounded_powell
 from .seeds import check_seed
 
@@ -98,14 +100,15 @@ class SpectralObjective:
         if check_stability and not self.sim.stable(loop):
             return None
         control, _ = self.sim.spectra(loop, output=False)
-        delta = sfft.irfft(control, self.sim.nfft)[: self.sim.n]
+        delta = self.sim.waveform(control)
         if not np.isfinite(delta).all():
             return None
         return psd(delta, self.fs, method=self.psd_method)[1]
 
     def unstable_fitness(self, loop) -> float:
-        """Graded worst fitness: >= UNSTABLE_FITNESS, growing with the loop's growth rate."""
-        return _graded(self.sim.growth_rate(loop))
+        """Graded worst fitness: >= UNSTABLE_FITNESS, growing with the loop's growth rate
+        beyond the record's limit (:func:`hesspipe.hess.growth_limit`)."""
+        return unstable_fitness(self.sim.growth_rate(loop), self.sim.growth_limit)
 
     def score_loop(self, loop, threshold: float | None = None) -> float:
         """Fitness of a loop; unstable: at least UNSTABLE_FITNESS.
@@ -118,8 +121,8 @@ class SpectralObjective:
         self.calls += 1
         if threshold is None:
             rate = self.sim.growth_rate(loop)
-            if not rate < 0.0:
-                return _graded(rate)
+            if not rate < self.sim.growth_limit:
+                return unstable_fitness(rate, self.sim.growth_limit)
         sim = self.loop_psd(loop, check_stability=False)
         if sim is None:
             return self.unstable_fitness(loop)
@@ -140,12 +143,6 @@ class SpectralObjective:
 
     def __call__(self, values: Mapping[str, float], threshold: float | None = None) -> float:
         return self.score_loop(self.model.loop(self.params(values)), threshold)
-
-
-def _graded(rate: float) -> float:
-    """Fitness of an unstable (or undecidable: NaN growth rate) loop: finite, >= UNSTABLE_FITNESS."""
-    rate = float(rate) if np.isfinite(rate) else 1000.0
-    return UNSTABLE_FITNESS * (1.0 + min(max(rate, 0.0), 1000.0))
 
 
 @dataclass(frozen=True)
@@ -202,6 +199,11 @@ class Identification:
     fields: dict = field(default_factory=dict)
     climb: ClimbResult | None = field(default=None, repr=False)
     gain_scale: float = 1.0
+    criterion: str = "paper"
+    fitness_units: str = "RMS PSD difference (Eq. 10)"
+    k_rule: str = ""
+    frf: object = field(default=None, repr=False)
+    primary_crossover: Crossover | None = None
 
     def to_dict(self, spectra: bool = True) -> dict:
         out = {
@@ -217,6 +219,10 @@ class Identification:
             "stable": self.stable,
             "fields": {n: {"bits": b, "scale": s, "offset": o} for n, (b, s, o) in self.fields.items()},
             "gain_scale": self.gain_scale,
+            "criterion": self.criterion, "fitness_units": self.fitness_units, "k_rule": self.k_rule,
+            "nonparametric": _nonparametric(self.frf),
+            "primary_crossover": (None if self.primary_crossover is None
+                                  else self.primary_crossover.to_dict()),
         }
         if self.climb is not None:
             out["passes_run"] = self.climb.passes
@@ -225,6 +231,16 @@ class Identification:
             out["spectra"] = {"freq_hz": self.freq_hz, "measured": self.measured_psd,
                               "simulated": self.simulated_psd}
         return out
+
+
+def _nonparametric(frf) -> dict | None:
+    if frf is None:
+        return None
+    if isinstance(frf, str):  # why it could not be estimated
+        return {"note": frf}
+    return {"method": frf.method, "crossover": frf.crossover.to_dict(),
+            "remnant_share_of_control_power": frf.remnant_share,
+            "lines": int(frf.feedback.freq_rad_s.size)}
 
 
 def _as_field(name, spec) -> Field:
@@ -361,12 +377,12 @@ def check_control(run) -> None:
 
 def identify(run, plants, model="original", *, free: Sequence[str] | None = None,
              fixed: Mapping[str, float] | None = None, seed: int = 0, passes: int = 10,
-             optimizer: str = "apid", band=(0.0, 5.0), k: int = 1,
+             optimizer: str = "apid", band=(0.0, 5.0), k: int | None = None,
              fields: Mapping[str, Field | tuple] | None = None, psd_method: str = "paper",
              with_benchmark: bool = True, with_identifiability: bool = True,
              limits: CrossoverLimits = CrossoverLimits(),
              initial: Mapping[str, float] | None = None, restarts: int = 4,
-             coding: str = "gray") -> Identification:
+             coding: str = "gray", criterion: str = "paper", frf=None) -> Identification:
     """Identify pilot parameters from a measured run by matching control PSDs.
 
     Parameters
@@ -391,8 +407,9 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         "scipy" is bounded Powell from the default values (deterministic, cheap).
     band : (lo, hi)
         Fitness band, Hz.
-    k : int
-        Table 1 column (1: plant ~ K/s, 2: ~ K/s^2) unless ``fixed["k"]``.
+    k : int, optional
+        Table 1 column (1: plant ~ K/s, 2: ~ K/s^2) unless ``fixed["k"]``;
+        None: Hess's rule on the plant (:func:`hesspipe.criteria.choose_k`).
     fields : mapping, optional
         APID bit fields name → Field or (bits, scale, offset); must lie in the
         parameter's bounds. Default :func:`default_fields` (Table 1's, the loop
@@ -405,6 +422,13 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     coding : {"gray", "binary"}
         APID: bits → integer by Gray code (default; no Hamming cliffs, so a
         climb stalls far less) or plain binary (the paper).
+    criterion : {"paper", "df", "output"}
+        "paper": Eq. 10 (control PSD), searched as above. "df" / "output":
+        phase-aware criteria of :mod:`hesspipe.criteria` (describing-function
+        error at the excited lines / control output error), multi-start
+        least squares (`restarts` starts); tau0, wn, zn free by default.
+    frf : hesspipe.frf.Frf, optional
+        The run's nonparametric describing function (estimated if None).
 
     Raises
     ------
@@ -412,16 +436,31 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         Unknown parameter, bad field, record shorter than one segment, unstable Yd.
         Never for unstable parameter sets.
     """
+    from .criteria import check_criterion, choose_k, identify_phase_aware
+
     model = model_from_name(model)
+    criterion = check_criterion(criterion)
+    if fixed and "k" in fixed:
+        k_rule = f"k = {int(round(float(fixed['k'])))} (given)"
+    elif k is None:
+        k, k_rule = choose_k(plants)
+    else:
+        k_rule = f"k = {k} (given)"
+    seed = check_seed(seed)
+    check_control(run)
+    if criterion != "paper":
+        # The band and PSD method still define the control PSDs reported beside the fit.
+        return identify_phase_aware(run, plants, model, criterion=criterion, free=free, fixed=fixed,
+                                    seed=seed, k=k, k_rule=k_rule, limits=limits,
+                                    with_benchmark=with_benchmark, frf=frf, starts=restarts,
+                                    initial=initial, fields=fields, band=band, psd_method=psd_method)
     if optimizer not in OPTIMIZERS:
         raise HesspipeError(f"optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
-    seed = check_seed(seed)
     where = run.source or run.id
     nper = PaperWelch().nperseg
     if len(run) < nper:
         raise HesspipeError(f"{where}: {len(run)} samples is shorter than one spectral segment "
                             f"({nper} samples); expected a longer record")
-    check_control(run)
     base, free, fixed, flds, gain = _resolve(model, free, fixed, k, fields, plants)
     obj = SpectralObjective(run, plants, model, base, band=band, psd_method=psd_method,
                             noise_seed=seed)
@@ -459,13 +498,24 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         bench_fit, bench_par = b.fitness, b.parameters
     return Identification(
         model=model.name, parameters=params, free=free, fixed=fixed,
-        fitness=best if np.isfinite(best) else _graded(float("nan")), benchmark_fitness=bench_fit,
+        fitness=best if np.isfinite(best) else unstable_fitness(float("nan")), benchmark_fitness=bench_fit,
         crossover=cross, evaluations=evaluations, identifiability=ident,
         measured_psd=obj.measured, simulated_psd=sim_psd if stable else np.full_like(obj.measured, np.nan),
         freq_hz=obj.freq_hz, optimizer=optimizer, seed=seed, passes=passes,
         band=obj.band, psd_method=psd_method, run_id=run.id, restarts=int(restarts), coding=coding, synthetic=run.synthetic, stable=stable,
         benchmark_parameters=bench_par, fields={f.name: (f.bits, f.scale, f.offset) for f in flds},
-        climb=climb, gain_scale=gain)
+        climb=climb, gain_scale=gain, k_rule=k_rule,
+        primary_crossover=loop_crossover(loop, obj.sim.yc_block, limits, first=True), frf=frf if frf is not None else _try_frf(run, plants, seed))
+
+
+def _try_frf(run, plants, seed):
+    """The run's nonparametric describing function, or why there is none (a string)."""
+    from .frf import estimate_frf
+
+    try:
+        return estimate_frf(run, plants, seed=seed)
+    except HesspipeError as exc:
+        return f"no nonparametric estimate: {exc}"
 
 
 def identifiability(objective: SpectralObjective, values: Mapping[str, float],

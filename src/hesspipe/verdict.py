@@ -48,6 +48,7 @@ motion in 0 of 4 pilots.)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Mapping, Sequence
 
@@ -59,31 +60,41 @@ from .errors import HesspipeError
 ALPHA = 0.05
 """Significance level of the per-pilot test and of the cohort test."""
 
-LINE_RATIO = 1.0e3
-"""A bin is a forcing line when the forcing's power there exceeds this many times the
-forcing's median bin power in the band (a multisine's unforced bins are numerically zero;
-a random signal's bins never stand out like this)."""
-
 MIN_LINES = 4
 NEIGHBOURS = 6
 """Unforced bins on each side of a line used to estimate the remnant level there."""
 
 
+def analysis_window(run) -> tuple[int, int]:
+    """(start, length) in samples of the window that puts the forcing's lines on exact bins
+    (:func:`hesspipe.frf._window`: the record, or a whole number of its periods)."""
+    from .frf import _window
+
+    d = np.asarray(run.disturbance, dtype=float)
+    r = np.asarray(run.reference, dtype=float)
+    start, length, _ = _window(d, r if np.any(r) else None)
+    return int(start), int(length)
+
+
 def forcing_lines(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> np.ndarray:
-    """Indices (into ``numpy.fft.rfft`` of the record) of the multisine forcing lines.
+    """Indices (into ``numpy.fft.rfft`` of the run as given) of the multisine forcing lines.
 
     Parameters
     ----------
     run : hesspipe.formats.Run
-        Disturbance and reference are the forcing signals.
+        Disturbance and reference are the forcing signals; pass the analysis window
+        (:func:`analysis_window`) so that the lines fall on exact bins.
     band_hz : (float, float)
         Lines are looked for in this band, Hz (DC excluded).
 
     Returns
     -------
     ndarray of int
-        Sorted bin indices; empty if the forcing has no line structure.
+        Sorted bin indices; empty if the forcing has no line structure (lines as in
+        :mod:`hesspipe.frf`: a bin standing far above its neighbours).
     """
+    from .frf import _lines
+
     n = len(run.control)
     f = np.fft.rfftfreq(n, run.dt)
     inband = (f > max(band_hz[0], 0.0)) & (f <= band_hz[1])
@@ -92,12 +103,8 @@ def forcing_lines(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> np.ndarray:
         sig = np.asarray(sig, dtype=float)
         if not np.any(sig):
             continue
-        p = np.abs(np.fft.rfft(sig - sig.mean())) ** 2
-        med = np.median(p[inband])
-        if not np.any(p[inband] > 0):
-            continue
-        floor = med if med > 0 else np.max(p[inband]) * 1e-12
-        lines.update(np.flatnonzero(inband & (p > LINE_RATIO * floor)).tolist())
+        found = _lines(np.abs(np.fft.rfft(sig - sig.mean())) ** 2)
+        lines.update(int(b) for b in found if inband[b])
     return np.array(sorted(lines), dtype=int)
 
 
@@ -173,6 +180,12 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     from .hess import PilotModel, gain_scale
     from .motion import motion_block
 
+    start_, length = analysis_window(run)
+    if length < len(run.control):
+        cut = slice(start_, start_ + length)
+        run = dataclasses.replace(run, time=run.time[cut], disturbance=run.disturbance[cut],
+                                  output=run.output[cut], control=run.control[cut],
+                                  reference=run.reference[cut])
     lines = forcing_lines(run, band_hz)
     if lines.size < MIN_LINES:
         return {"available": False, "n_lines": int(lines.size),
@@ -243,7 +256,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         km_se = float(math.sqrt(max(cov[-1, -1], 0.0)))
     except np.linalg.LinAlgError:
         km_se = math.nan
-    return {"available": True, "n_lines": int(lines.size), "rss_original": rss_o,
+    return {"available": True, "n_lines": int(lines.size), "window_samples": int(length),
+            "rss_original": rss_o,
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
             "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": float(p_e["Km"]),
             "Km_se": km_se, "significant": bool(p_value < ALPHA),
