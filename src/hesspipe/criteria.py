@@ -174,7 +174,7 @@ class DFObjective(_Base):
         self.prior_weight = self.norm
 
     def residuals_loop(self, loop) -> np.ndarray:
-        e = (model_df(loop, self.s) - self.H) / self.scale
+        e = (model_df(self.sim.prepare(loop), self.s) - self.H) / self.scale  # plants' motion_path
         return np.concatenate((e.real, e.imag)) * (np.sqrt(2) * self.norm)
 
 
@@ -290,7 +290,7 @@ def smart_start(objective: _Base, base: Mapping[str, float], frf) -> dict:
     else:
         s, H = objective.s, objective.H
     p = dict(base)
-    hm = model_df(objective.model.loop(p), s)
+    hm = model_df(objective.sim.prepare(objective.model.loop(p)), s)
     ok = np.isfinite(hm) & (np.abs(hm) > 0) & (np.abs(H) > 0)
     if ok.any() and p.get("Ke", 0) > 0:
         p["Ke"] = float(p["Ke"] * np.exp(np.median(np.log(np.abs(H[ok]) / np.abs(hm[ok])))))
@@ -332,7 +332,7 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
         values, best = {}, obj({})
         stable = best < UNSTABLE_FITNESS
     params = obj.params(values)
-    loop = model.loop(params)
+    loop = sim.prepare(model.loop(params))
     cross = loop_crossover(loop, sim.yc_block, limits)
     spectral = SpectralObjective(run, plants, model, base, band=band, psd_method=psd_method,
                                  noise_seed=seed)
