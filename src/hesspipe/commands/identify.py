@@ -161,9 +161,8 @@ def format_table(result) -> str:
 def run(args) -> int:
     from ..formats import read_plants, read_run
     from ..identify import identify
-    from ..io import write_json
     from ..spectra import PaperWelch
-    from ._outputs import check_file_outputs
+    from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
@@ -189,10 +188,7 @@ def run(args) -> int:
                       criterion=args.criterion)
     print(format_table(result))
     if args.json:
-        obj = result.to_dict()
-        obj["run"] = str(args.run)
-        obj["plants"] = str(args.plants)
-        write_json(args.json, obj)
+        write_result_json(args.json, result, run=args.run, plants=args.plants)
     if args.figure and result.criterion == "paper":
         from ..viz.pilots import identification_figure
 
