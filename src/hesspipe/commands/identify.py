@@ -144,10 +144,13 @@ def format_table(result) -> str:
         lines.append(f"nonparametric      {frf}")
     elif frf is not None:
         n = frf.crossover
-        lines.append(f"nonparametric      crossover {n.frequency_rad_s:.3f} +- {n.frequency_std:.3f} rad/s, "
-                     f"phase margin {n.phase_margin_deg:.1f} +- {n.phase_margin_std_deg:.1f} deg "
-                     f"({frf.method}; remnant {100 * frf.remnant_share:.0f} % of control power)"
-                     + (f"; {n.note}" if n.note else ""))
+        where = f"({frf.method}; remnant {100 * frf.remnant_share:.0f} % of control power)"
+        if math.isfinite(n.frequency_rad_s):
+            lines.append(f"nonparametric      crossover {n.frequency_rad_s:.3f} +- {n.frequency_std:.3f} "
+                         f"rad/s, phase margin {n.phase_margin_deg:.1f} +- {n.phase_margin_std_deg:.1f} deg "
+                         + where + (f"; {n.note}" if n.note else ""))
+        else:
+            lines.append(f"nonparametric      crossover not found {where}: {n.note or 'no crossing'}")
     lines.append(f"evaluations        {result.evaluations}")
     ident = result.identifiability
     lines.append(f"identifiability    {ident.get('summary', ident.get('method'))}")
