@@ -34,8 +34,10 @@ is "yes" when it is significant at alpha. Beside it: the count of individually
 significant pilots, tested against Binomial(n, alpha). (The first benchmark run
 used the binomial count as the rule; it said "no" for one of six motion
 cohorts of 8 pilots whose weak-motion pilots were each just short of
-significance, where Fisher's p was 1e-4. Fisher's rule was then checked on
-fresh seeds: benchmarks/bench_verdict.py.)
+significance, where Fisher's p was 1e-4. Fisher's rule, tried on three more
+seeds, gave one false "yes" from a pilot whose original fit had stopped in a
+local optimum: hence the exchange of optima in :func:`motion_test`. See
+benchmarks/bench_verdict.py and the README for the numbers.)
 
 Records without separated multisine lines (random wind or gusts, as in the
 JSBSim pipeline's cohort) have no describing function to test: the pilot's
