@@ -973,6 +973,7 @@ class Diagnosis:
     final_psd: np.ndarray
     seed: int = 0
     source: str = ""
+    plant_finding: dict | None = None   # :class:`hesspipe.diagnose_aircraft.PlantFinding` as a dict
 
     @property
     def gap_reduction(self) -> float:
@@ -1004,6 +1005,7 @@ class Diagnosis:
                        "closed": bool(b.disagrees and not a.disagrees)}
                       for b, a in zip(self.bands_before, self.bands_after)],
             "plant_check": self.plant_check.to_dict(),
+            "plant_finding": self.plant_finding,
             "control_error_tests": {"before": self.control_error_before,
                                     "after": self.control_error_after},
             "criterion": self.criterion,
@@ -1129,11 +1131,13 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     check_control(run)
     _check_inputs(run, plants, cfg)
     check = plant_check(run, plants, max_lag=cfg.max_lag)
-    if not math.isfinite(check.fit_percent) or check.fit_percent < cfg.min_plant_fit:
-        raise HesspipeError(f"{run.source or run.id}: the plants do not match the data's columns: driven by "
-                            f"'control' and 'disturbance' they reproduce 'output' with fit "
-                            f"{check.fit_percent:.0f} %; expected at least {cfg.min_plant_fit:g} % "
-                            "(wrong plants file, swapped or mis-scaled columns?)")
+    # A failed plant check is a finding, never a refusal: the aircraft-side candidate that
+    # closes it (or the file error it proves) is named and the pilot identified around it.
+    from .diagnose_aircraft import corrected, plant_finding
+
+    finding = plant_finding(run, plants, check)
+    run, plants = corrected(run, plants, finding)
+    cands = tuple(c for c in cands if _effect(c).where != "aircraft")  # judged on the output above
     problem = _Problem(run, plants, cfg, seed)
 
     # The baseline's own parameters get the same grid start as a candidate's (the
@@ -1144,10 +1148,11 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
                             "and plants; cannot diagnose")
     baseline = current
     steps: list[Step] = []
-    named: list[str] = []
+    named: list[str] = [finding.named] if finding.verdict == "aircraft" else []
     remaining = list(cands)
     rnd = 0
-    while remaining and len(named) < cfg.max_effects:
+    n_aircraft = len(named)
+    while remaining and len(named) - n_aircraft < cfg.max_effects:
         rnd += 1
         tried: list[tuple[Step, _Fit | None]] = []
         for cand in remaining:
@@ -1209,7 +1214,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
                    "scatter_db": _DB * math.sqrt(scatter),
                    "welch_scatter_db": _DB * math.sqrt(problem.var_floor)},
         config=cfg, freq_hz=problem.freq, measured_psd=problem.measured, baseline_psd=baseline.psd,
-        final_psd=current.psd, seed=seed, source=run.source)
+        final_psd=current.psd, seed=seed, source=run.source, plant_finding=finding.to_dict())
 
 
 # -- readable report ------------------------------------------------------------------------
@@ -1228,9 +1233,8 @@ def format_report(d: Diagnosis) -> str:
                f"(p={pc.independence_p['control']:.2g}), of disturbance: "
                f"{'yes' if pc.independence_p['disturbance'] >= 0.01 else 'NO'} "
                f"(p={pc.independence_p['disturbance']:.2g})")
-    if not pc.passes:
-        out.append("  -> the plants miss part of the aircraft's response: aircraft-side effects "
-                   "(e.g. dutch_roll) are plausible")
+    if d.plant_finding and d.plant_finding["verdict"] != "match":
+        out.append("  -> " + d.plant_finding["message"])
     ce = d.control_error_before
     if ce is not None:
         out.append(f"Control error of the baseline model (time domain): "
@@ -1256,7 +1260,9 @@ def format_report(d: Diagnosis) -> str:
     if d.named_effects:
         out.append("Named: " + ", ".join(d.named_effects) + " (in the order added)")
         for eff in d.named_effects:
-            step = next(s for s in d.steps if s.accepted and s.candidate == eff)
+            step = next((s for s in d.steps if s.accepted and s.candidate == eff), None)
+            if step is None:  # aircraft side, named from the plant check above
+                continue
             out.append(f"  {eff}: {_describe(eff).rstrip('.')}; LR {step.statistic:.1f} on {step.dof} parameter(s), "
                        f"p = {step.p_value:.1e}; fitted " + ", ".join(
                            f"{k}={step.parameters[k]:.4g}" for k in _effect(eff).parameters))
