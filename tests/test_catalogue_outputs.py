@@ -92,6 +92,7 @@ BUILDERS: dict[str, Callable[[Path, Path], list[str]]] = {
                                       "--workers", "1", "--json", str(out / "c.json")],
     "diagnose": lambda i, out: ["diagnose", str(i / "runs" / "p0.csv"), "--plants", str(i / "plants.json"),
                                 "--json", str(out / "d.json")],
+    "fly-pilot": lambda i, out: ["fly-pilot", "--plants", str(i / "plants.json"), "--out", str(out)],
     "frf": lambda i, out: ["frf", str(i / "runs" / "p0.csv"), "--plants", str(i / "plants.json"),
                            "--json", str(out / "f.json")],
 }

@@ -40,6 +40,9 @@ def test_pilots(table):
     from hesspipe.compare import PilotsConfig
 
     assert PilotsConfig.from_table(table["pilots"], DEFAULT) == PilotsConfig()
+    # the default cohort flies JSBSim; the linear frequency-domain cohort is the option
+    assert table["pilots"]["simulator"] == PilotsConfig().simulator == "jsbsim"
+    assert PilotsConfig.from_table({"simulator": "fft"}, DEFAULT).simulator == "fft"
 
 
 def test_diagnose(table):

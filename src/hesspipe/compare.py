@@ -640,6 +640,10 @@ def write_comparison(comparison: Comparison, out_dir: str | Path, *, figures: bo
 
 # -- pipeline configuration --------------------------------------------------------------------
 
+#: How the pipeline's synthetic cohort is simulated (``[pilots] simulator``).
+SIMULATORS = ("jsbsim", "fft")
+
+
 @dataclass(frozen=True)
 class PilotsConfig:
     """The ``[pilots]`` table of the pipeline configuration.
@@ -680,6 +684,10 @@ class PilotsConfig:
         Column names of the data's files, "ROLE=NAME,..." ("": the format's names).
     resample : bool
         Interpolate non-uniform time columns onto a uniform grid instead of refusing them.
+    simulator : str
+        How the synthetic cohort is made: "jsbsim" (the pilots fly the JSBSim
+        aircraft in closed loop, :func:`hesspipe.pilotflight.fly_cohort`) or "fft"
+        (the linear frequency-domain model around the fitted plants).
     """
 
     data: str = ""
@@ -700,6 +708,7 @@ class PilotsConfig:
     figures: bool = True
     columns: str = ""
     resample: bool = False
+    simulator: str = "jsbsim"
 
     @classmethod
     def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
@@ -724,7 +733,8 @@ class PilotsConfig:
                   restarts=f.integer("restarts", d.restarts, min=1),
                   benchmark=f.boolean("benchmark", d.benchmark),
                   figures=f.boolean("figures", d.figures),
-                  columns=f.string("columns", d.columns), resample=f.boolean("resample", d.resample))
+                  columns=f.string("columns", d.columns), resample=f.boolean("resample", d.resample),
+                  simulator=f.string("simulator", d.simulator, choices=SIMULATORS))
         f.reject_unknown()
         try:
             _parse_columns(cfg.columns)
@@ -739,8 +749,10 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
               progress: bool | None = None) -> Comparison:
     """The pipeline's pilots stage: cohort (or data folder) → comparison files in `out_dir`.
 
-    Without ``config.data`` a synthetic cohort of ``config.n`` pilots is written
-    to ``out_dir/cohort``; then every run is compared and ``comparison.json``,
+    Without ``config.data`` a synthetic frequency-domain cohort of ``config.n`` pilots
+    is written to ``out_dir/cohort`` (with ``simulator = "jsbsim"`` the pipeline's
+    pilots stage has flown the cohort in JSBSim before and passes its folder as
+    ``data``: :func:`hesspipe.pilotflight.fly_pipeline_cohort`); then every run is compared and ``comparison.json``,
     ``comparison.md`` and ``figures/<pilot>.png`` are written. Failed pilots
     are listed in the outputs; the caller decides whether ``not result.ok``
     fails the stage.

@@ -126,6 +126,7 @@ def _pilots(folder: Path, root: Path) -> list[str]:
            + (" — SYNTHETIC DATA" if synthetic else ""), ""]
     if synthetic:
         out += [SYNTHETIC_NOTE, ""]
+    out += _simulator_note(folder)
     out += ["Fitness is the paper's Eq. 10 (RMS difference of control PSDs, lower is better). "
             "*expanded_fixed* adds motion feedback with Table 1's Km to the original's parameters; "
             "*expanded* identifies Km with the rest. Improvement = 1 − expanded / original.", ""]
@@ -162,6 +163,21 @@ def _pilots(folder: Path, root: Path) -> list[str]:
     return out
 
 
+def _simulator_note(pilots_folder: Path) -> list[str]:
+    """Which simulator made the pipeline's synthetic cohort (from its cohort.json), if any."""
+    cohort = _load(pilots_folder / "cohort" / "cohort.json")
+    if cohort is None:
+        return []
+    if cohort.get("simulator") == "jsbsim":
+        return [f"Simulator of the cohort: **JSBSim** — each synthetic pilot model flew the "
+                f"{cohort.get('aircraft')} in closed loop at {1 / cohort.get('simulation_dt_s', 1 / 120):.0f} Hz "
+                f"(records at {1 / cohort.get('dt_s', 0.025):.0f} Hz); identification and diagnose fit "
+                "them with the linear plants of stage two, i.e. data from another simulator than the "
+                "fitted plants.", ""]
+    return ["Simulator of the cohort: the linear frequency-domain model around the fitted plants "
+            "(`[pilots] simulator = \"fft\"`): identification and diagnose see the model's own output.", ""]
+
+
 def _diagnose(folder: Path, root: Path) -> list[str]:
     d = _load(folder / "diagnosis.json")
     if d is None:
@@ -170,6 +186,9 @@ def _diagnose(folder: Path, root: Path) -> list[str]:
            + (" — SYNTHETIC DATA" if d.get("synthetic") else ""), ""]
     if d.get("synthetic"):
         out += [SYNTHETIC_NOTE, ""]
+        source = Path(str(d.get("source") or ""))
+        if source.parent.name == "cohort":  # the pipeline's own cohort: say which simulator made it
+            out += _simulator_note(source.parent.parent)
     named = d.get("named_effects") or []
     out += [f"Run `{d.get('run')}`, baseline model `{d.get('baseline_model')}`. Named effects: "
             + (", ".join(f"**{n}**" for n in named) if named else "none") + ".", "",

@@ -162,8 +162,12 @@ def pilots(ctx) -> None:
     from .formats import read_plants
 
     config = PilotsConfig.from_table(ctx.section, ctx.source)
-    result = run_study(config, read_plants(ctx.upstream["plants"] / "plants.json"), ctx.out_dir,
-                       seed=ctx.seed, progress=False)
+    plants_ = read_plants(ctx.upstream["plants"] / "plants.json")
+    if not config.data and config.simulator == "jsbsim":
+        from .pilotflight import fly_pipeline_cohort
+
+        config = fly_pipeline_cohort(config, plants_, ctx)
+    result = run_study(config, plants_, ctx.out_dir, seed=ctx.seed, progress=False)
     if not result.ok:
         failed = ", ".join(f"{f.id} ({_config_terms(f.error)})" for f in result.failures)
         raise HesspipeError(f"pilots: {len(result.failures)} run(s) failed: {failed}")

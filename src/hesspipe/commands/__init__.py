@@ -13,6 +13,7 @@ _NAMES = [
     "plants",
     "identify",
     "synth_pilots", "compare_pilots",
+    "fly_pilot",
     "diagnose",
 ]
 
