@@ -1136,6 +1136,12 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     from .diagnose_aircraft import corrected, plant_finding
 
     finding = plant_finding(run, plants, check)
+    before = None
+    if finding.verdict == "aircraft":
+        # "Before" is the pilot identified around the plants as given (same measured
+        # spectrum), so the report shows what naming the aircraft effect closed.
+        before = _Problem(run, plants, cfg, seed)
+        before = (before, before.fit(base, base.defaults(k=cfg.k), grid=before.free_parameters(base)))
     run, plants = corrected(run, plants, finding)
     cands = tuple(c for c in cands if _effect(c).where != "aircraft")  # judged on the output above
     problem = _Problem(run, plants, cfg, seed)
@@ -1196,13 +1202,14 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     # Band verdicts are relative to the scatter the final model leaves (or the resolution):
     # a band disagrees if its mismatch is beyond what the rest of the record shows.
     scatter = problem.variance(current)
+    p0, baseline = (problem, baseline) if before is None or not before[1].stable else before
     return Diagnosis(
         run_id=run.id, synthetic=run.synthetic, baseline_model=base.name, final_model=current.model.name,
-        named_effects=tuple(named), gap_before=problem.gap(baseline.psd), gap_after=problem.gap(current.psd),
-        log_rms_db_before=problem.log_rms_db(baseline.psd), log_rms_db_after=problem.log_rms_db(current.psd),
+        named_effects=tuple(named), gap_before=p0.gap(baseline.psd), gap_after=problem.gap(current.psd),
+        log_rms_db_before=p0.log_rms_db(baseline.psd), log_rms_db_after=problem.log_rms_db(current.psd),
         parameters_before=baseline.parameters, parameters_after=current.parameters, steps=tuple(steps),
-        bands_before=problem.bands(baseline.psd, scatter), bands_after=problem.bands(current.psd, scatter),
-        plant_check=check, control_error_before=_control_error_tests(problem, baseline),
+        bands_before=p0.bands(baseline.psd, scatter), bands_after=problem.bands(current.psd, scatter),
+        plant_check=check, control_error_before=_control_error_tests(p0, baseline),
         control_error_after=_control_error_tests(problem, current),
         criterion={"name": "likelihood-ratio test on log-spectral residuals over Welch bins "
                            "(Bonferroni per round), delta BIC as the score",
