@@ -33,6 +33,7 @@ import sys
 import tempfile
 import time
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 
@@ -53,7 +54,7 @@ def run_case(folder, plant, output, task, effect, seed):
     kw = dict(disturbance="wind") if plant == "paper" else {}
     spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
                       output=output, name=f"{plant}-{output}-{task}-{effect}-{seed}", **kw)
-    path = write_trial(folder, simulate_trial(spec))
+    path = write_trial(Path(folder) / f"{plant}-{output}-{task}-{effect}-{seed}", simulate_trial(spec))
     run = read_run(path)
     plants = read_plants(path.parent / "plants.json")
     t = time.process_time()
