@@ -266,7 +266,7 @@ def test_cli_end_to_end_with_figures(cohorts, tmp_path, capsys):
     for name in ("pilot01.csv", "pilot01.truth.json"):
         shutil.copy(cohorts / "none" / name, folder / name)
     code = main(["compare-pilots", str(folder), "--plants", str(plants), "--workers", "1", "--passes", "2",
-                 "--restarts", "1",
+                 "--restarts", "1", "--criterion", "paper",
                  "--json", str(tmp_path / "c.json"), "--figures", str(tmp_path / "fig")])
     out = capsys.readouterr().out
     assert code == 0
@@ -318,7 +318,8 @@ def test_run_study_writes_the_pilots_stage_outputs(tmp_path):
     names = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
     assert names == ["cohort/.hesspipe-output", "cohort/cohort.json", "cohort/pilot01.csv", "cohort/pilot01.truth.json",
                      "cohort/pilot02.csv", "cohort/pilot02.truth.json", "comparison.json", "comparison.md",
-                     "figures/pilot01.png", "figures/pilot02.png"]
+                     "figures/pilot01.png", "figures/pilot01_df.png", "figures/pilot02.png",
+                     "figures/pilot02_df.png"]
     d = json.loads((tmp_path / "comparison.json").read_text())
     assert d["synthetic"] is True and d["settings"]["seed"] == 4
     assert "SYNTHETIC DATA" in (tmp_path / "comparison.md").read_text()

@@ -37,6 +37,7 @@ from .config import Fields
 from .errors import HesspipeError
 from .formats import Plants, Run, _parse_columns, read_run, record_samples
 from .io import write_json, write_text
+from .criteria import CRITERIA, DEFAULT_CRITERION, check_criterion
 from .seeds import MAX_SEED, check_seed, derive_seed
 
 CONFIGURATIONS = ("original", "expanded_fixed", "expanded")
@@ -93,6 +94,10 @@ class CompareSettings:
     benchmark : bool
         Also fit the McRuer precision model (the paper's benchmark score);
         off by default: it costs as much as the three configurations together.
+    criterion : str
+        Fit criterion of every identification (:data:`hesspipe.criteria.CRITERIA`):
+        "paper" (Eq. 10; the library's default, the paper's study) or a phase-aware
+        one ("df", the command line's and the pipeline's default).
     """
 
     seed: int = 0
@@ -104,6 +109,7 @@ class CompareSettings:
     start: str = "warm"
     restarts: int = 2
     benchmark: bool = False
+    criterion: str = "paper"
 
 
 @dataclass(frozen=True)
@@ -137,6 +143,7 @@ class PilotComparison:
     freq_hz: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     measured_psd: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     simulated_psd: dict = field(repr=False, default_factory=dict)
+    frf: object = field(repr=False, default=None)
 
     def configuration(self, name: str) -> dict:
         """The result of configuration `name` (one of :data:`CONFIGURATIONS`)."""
@@ -241,7 +248,7 @@ class Comparison:
                          "passes": self.settings.passes, "band_hz": list(self.settings.band),
                          "k": self.settings.k, "km_fixed": self.km_fixed_value(),
                          "start": self.settings.start, "restarts": self.settings.restarts,
-                         "benchmark": self.settings.benchmark},
+                         "benchmark": self.settings.benchmark, "criterion": self.settings.criterion},
             "plants": self.plants,
             "pilots": [p.to_dict(psd=psd) for p in self.pilots],
             "failures": [f.to_dict() for f in self.failures],
@@ -275,7 +282,8 @@ def _km_fixed(settings: CompareSettings, plants) -> float:
 
 
 def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
-             band: tuple[float, float] = (0.0, 5.0), k: int = 1, benchmark: bool = False) -> dict:
+             band: tuple[float, float] = (0.0, 5.0), k: int = 1, benchmark: bool = False,
+             criterion: str = "paper", frf=None) -> dict:
     """Fitness and crossover of fixed parameters on a run, nothing identified.
 
     Returns a dict with the keys of ``Identification.to_dict(spectra=False)``
@@ -288,6 +296,17 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
 
     model = model_from_name(model)
     complete = model.complete(params, k, strict=True)
+    if criterion != "paper":
+        from .identify import identify
+
+        res = identify(run, plants, model, free=(), fixed=complete, k=k, band=band,
+                       with_benchmark=benchmark, with_identifiability=False, criterion=criterion,
+                       frf=frf)
+        out = res.to_dict(spectra=False)
+        out.update(free=[], evaluations=1,
+                   identifiability={"method": "not computed: nothing identified"},
+                   simulated_psd=res.simulated_psd)
+        return out
     obj = SpectralObjective(run, plants, model, complete, band=band)
     loop = model.loop(complete)
     sim_psd = obj.loop_psd(loop)
@@ -374,7 +393,8 @@ def _search(run, plants, model, seed, common, initial=None):
     from .identify import identify
 
     first = identify(run, plants, model, seed=seed, initial=initial, **common)
-    if common["optimizer"] == "scipy":
+    if common["optimizer"] == "scipy" or common.get("criterion", "paper") != "paper":
+        # Phase-aware criteria are fitted by multi-start least squares: already local.
         return first, first.evaluations
     polished = _polish(run, plants, model, first.parameters, seed, common)
     # NaN (an unstable end point) never compares smaller: the climb's result is kept then.
@@ -399,6 +419,13 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
     """
     common = dict(optimizer=settings.optimizer, passes=settings.passes, band=tuple(settings.band),
                   k=settings.k, restarts=settings.restarts, with_benchmark=settings.benchmark)
+    frf = None
+    if settings.criterion != "paper":
+        from .frf import estimate_frf
+
+        # One nonparametric estimate serves every configuration's fit.
+        frf = estimate_frf(run, plants, seed=settings.seed)
+        common.update(criterion=settings.criterion, frf=frf)
     seed = functools.partial(derive_seed, settings.seed, run.id)
     km = _km_fixed(settings, plants)
     spent = {}
@@ -414,7 +441,8 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
     # The paper's "Exp." row: the original's parameters with the motion path added at a fixed
     # gain, evaluated rather than re-fitted.
     fixed = evaluate(run, plants, "expanded", {**original.parameters, "Km": km},
-                     band=settings.band, k=settings.k, benchmark=settings.benchmark)
+                     band=settings.band, k=settings.k, benchmark=settings.benchmark,
+                     criterion=settings.criterion, frf=frf)
     mask = np.asarray(original.freq_hz) <= settings.band[1]
     fixed_psd = fixed.pop("simulated_psd")
     # "evaluations"/"optimizer" are the kept search's; "evaluations_total" everything spent.
@@ -438,7 +466,8 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
         freq_hz=np.asarray(original.freq_hz)[mask], measured_psd=np.asarray(original.measured_psd)[mask],
         simulated_psd={"original": np.asarray(original.simulated_psd)[mask],
                        "expanded_fixed": np.asarray(fixed_psd)[mask],
-                       "expanded": np.asarray(expanded_psd)[mask]})
+                       "expanded": np.asarray(expanded_psd)[mask]},
+        frf=frf if frf is not None else (original.frf if not isinstance(original.frf, str) else None))
 
 
 def _guarded(job, run: Run):
@@ -498,10 +527,11 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
 
 def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
                    scheduler: str | None = None, seed: int = 0, optimizer: str = "apid",
-                   passes: int = 10, band: tuple[float, float] = (0.0, 5.0), k: int = 1,
+                   passes: int = 10, band: tuple[float, float] = (0.0, 5.0), k: int | None = None,
                    km_fixed: float | None = None, start: str = "warm", restarts: int = 2,
                    benchmark: bool = False, columns=None,
-                   resample: bool = False, progress: bool | None = None, job=None) -> Comparison:
+                   resample: bool = False, progress: bool | None = None, job=None,
+                   criterion: str = "paper") -> Comparison:
     """Identify original, expanded-fixed-Km and expanded models on each pilot's run.
 
     Parameters
@@ -516,7 +546,7 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
         Dask distributed scheduler address; the work is submitted there instead.
     seed : int
         Base seed (pilot seeds derive from it and the pilot id).
-    optimizer, passes, band, k, km_fixed, start, restarts, benchmark
+    optimizer, passes, band, k, km_fixed, start, restarts, benchmark, criterion
         See :class:`CompareSettings`.
     columns, resample
         Passed to :func:`hesspipe.formats.read_run`.
@@ -539,10 +569,15 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
     """
     if start not in STARTS:
         raise HesspipeError(f"start: expected one of {', '.join(STARTS)}, got {start!r}")
+    if k is None:
+        from .criteria import choose_k
+
+        k = choose_k(plants)[0]  # Hess's rule on the control plant
     settings = CompareSettings(seed=check_seed(seed), optimizer=optimizer, passes=int(passes),
                                band=(float(band[0]), float(band[1])), k=int(k),
                                km_fixed=None if km_fixed is None else float(km_fixed), start=start,
-                               restarts=int(restarts), benchmark=bool(benchmark))
+                               restarts=int(restarts), benchmark=bool(benchmark),
+                               criterion=check_criterion(criterion))
     if job is None and settings.km_fixed is None:
         settings = replace(settings, km_fixed=_km_fixed(settings, plants))
     _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
@@ -635,7 +670,23 @@ def write_comparison(comparison: Comparison, out_dir: str | Path, *, figures: bo
 
         for p in comparison.pilots:
             written.append(plot_pilot(p, out_dir / "figures" / f"{p.id}.png"))
+            if p.frf is not None:
+                written.append(_df_figure(p, out_dir / "figures" / f"{p.id}_df.png"))
     return written
+
+
+def _df_figure(p: PilotComparison, path: Path) -> Path:
+    """The identified models' describing functions over the pilot's measured one."""
+    from .criteria import model_df
+    from .hess import model_from_name
+    from .viz.frf import frf_figure
+
+    models = {}
+    for name in ("original", "expanded"):
+        d = getattr(p, name)
+        loop = model_from_name(d["model"]).loop(d["parameters"])
+        models[name] = (lambda lp: (lambda s: model_df(lp, s)))(loop)
+    return frf_figure(path, p.frf, models)
 
 
 # -- pipeline configuration --------------------------------------------------------------------
@@ -679,7 +730,7 @@ class PilotsConfig:
     benchmark : bool
         Also compute the McRuer benchmark score per pilot.
     figures : bool
-        Write a PSD figure per pilot.
+        Write a PSD figure per pilot (and a describing-function figure).
     columns : str
         Column names of the data's files, "ROLE=NAME,..." ("": the format's names).
     resample : bool
@@ -688,6 +739,9 @@ class PilotsConfig:
         How the synthetic cohort is made: "jsbsim" (the pilots fly the JSBSim
         aircraft in closed loop, :func:`hesspipe.pilotflight.fly_cohort`) or "fft"
         (the linear frequency-domain model around the fitted plants).
+    criterion : str
+        Fit criterion (see :class:`CompareSettings`); default
+        :data:`hesspipe.criteria.DEFAULT_CRITERION`, as the identify command.
     """
 
     data: str = ""
@@ -709,6 +763,7 @@ class PilotsConfig:
     columns: str = ""
     resample: bool = False
     simulator: str = "jsbsim"
+    criterion: str = DEFAULT_CRITERION
 
     @classmethod
     def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
@@ -734,7 +789,8 @@ class PilotsConfig:
                   benchmark=f.boolean("benchmark", d.benchmark),
                   figures=f.boolean("figures", d.figures),
                   columns=f.string("columns", d.columns), resample=f.boolean("resample", d.resample),
-                  simulator=f.string("simulator", d.simulator, choices=SIMULATORS))
+                  simulator=f.string("simulator", d.simulator, choices=SIMULATORS),
+                  criterion=f.string("criterion", d.criterion, choices=CRITERIA))
         f.reject_unknown()
         try:
             _parse_columns(cfg.columns)
@@ -771,7 +827,8 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
                             scheduler=config.scheduler or None, seed=seed, optimizer=config.optimizer,
                             passes=config.passes, band=config.band_hz, km_fixed=config.km_fixed,
                             start=config.start, restarts=config.restarts, benchmark=config.benchmark,
-                            columns=config.columns or None, resample=config.resample, progress=progress)
+                            columns=config.columns or None, resample=config.resample, progress=progress,
+                            criterion=config.criterion)
     write_comparison(result, out_dir, figures=config.figures)
     return result
 

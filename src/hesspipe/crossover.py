@@ -69,8 +69,14 @@ def _plant_block(plants) -> Block:
     return from_tf(yc)
 
 
-def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits()) -> Crossover:
-    """Crossover of an already built :class:`~hesspipe.blocks.Loop` with control plant `yc`."""
+def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits(), *,
+                   first: bool = False) -> Crossover:
+    """Crossover of an already built :class:`~hesspipe.blocks.Loop` with control plant `yc`.
+
+    `first`: the lowest frequency where |L| falls through 1 (the primary crossover)
+    instead of the highest (SPEC's definition, which a neuromuscular or
+    proprioceptive peak touching 1 far above the forcing's band moves there).
+    """
     def gain_db(w):
         s = 1j * np.atleast_1d(np.asarray(w, dtype=float))
         with np.errstate(divide="ignore"):  # a zero gain (Ke = 0) is log 0 = -inf: no crossover
@@ -81,7 +87,7 @@ def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits())
     down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
     if down.size == 0:
         return Crossover(float("nan"), float("nan"), False, limits)
-    i = down[-1]
+    i = down[0] if first else down[-1]
     wc = brentq(lambda x: float(gain_db(x)[0]), w[i], w[i + 1], xtol=1e-10, rtol=1e-12)
     s = np.array([1j * wc])
     phase = np.degrees(np.angle(loop.pilot_open_loop(s, yc.response(s))[0]))

@@ -202,6 +202,11 @@ class Identification:
     fields: dict = field(default_factory=dict)
     climb: ClimbResult | None = field(default=None, repr=False)
     gain_scale: float = 1.0
+    criterion: str = "paper"
+    fitness_units: str = "RMS PSD difference (Eq. 10)"
+    k_rule: str = ""
+    frf: object = field(default=None, repr=False)
+    primary_crossover: Crossover | None = None
 
     def to_dict(self, spectra: bool = True) -> dict:
         out = {
@@ -217,6 +222,10 @@ class Identification:
             "stable": self.stable,
             "fields": {n: {"bits": b, "scale": s, "offset": o} for n, (b, s, o) in self.fields.items()},
             "gain_scale": self.gain_scale,
+            "criterion": self.criterion, "fitness_units": self.fitness_units, "k_rule": self.k_rule,
+            "nonparametric": _nonparametric(self.frf),
+            "primary_crossover": (None if self.primary_crossover is None
+                                  else self.primary_crossover.to_dict()),
         }
         if self.climb is not None:
             out["passes_run"] = self.climb.passes
@@ -225,6 +234,16 @@ class Identification:
             out["spectra"] = {"freq_hz": self.freq_hz, "measured": self.measured_psd,
                               "simulated": self.simulated_psd}
         return out
+
+
+def _nonparametric(frf) -> dict | None:
+    if frf is None:
+        return None
+    if isinstance(frf, str):  # why it could not be estimated
+        return {"note": frf}
+    return {"method": frf.method, "crossover": frf.crossover.to_dict(),
+            "remnant_share_of_control_power": frf.remnant_share,
+            "lines": int(frf.feedback.freq_rad_s.size)}
 
 
 def _as_field(name, spec) -> Field:
@@ -361,12 +380,12 @@ def check_control(run) -> None:
 
 def identify(run, plants, model="original", *, free: Sequence[str] | None = None,
              fixed: Mapping[str, float] | None = None, seed: int = 0, passes: int = 10,
-             optimizer: str = "apid", band=(0.0, 5.0), k: int = 1,
+             optimizer: str = "apid", band=(0.0, 5.0), k: int | None = None,
              fields: Mapping[str, Field | tuple] | None = None, psd_method: str = "paper",
              with_benchmark: bool = True, with_identifiability: bool = True,
              limits: CrossoverLimits = CrossoverLimits(),
              initial: Mapping[str, float] | None = None, restarts: int = 4,
-             coding: str = "gray") -> Identification:
+             coding: str = "gray", criterion: str = "paper", frf=None) -> Identification:
     """Identify pilot parameters from a measured run by matching control PSDs.
 
     Parameters
@@ -391,8 +410,9 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         "scipy" is bounded Powell from the default values (deterministic, cheap).
     band : (lo, hi)
         Fitness band, Hz.
-    k : int
-        Table 1 column (1: plant ~ K/s, 2: ~ K/s^2) unless ``fixed["k"]``.
+    k : int, optional
+        Table 1 column (1: plant ~ K/s, 2: ~ K/s^2) unless ``fixed["k"]``;
+        None: Hess's rule on the plant (:func:`hesspipe.criteria.choose_k`).
     fields : mapping, optional
         APID bit fields name → Field or (bits, scale, offset); must lie in the
         parameter's bounds. Default :func:`default_fields` (Table 1's, the loop
@@ -405,6 +425,13 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     coding : {"gray", "binary"}
         APID: bits → integer by Gray code (default; no Hamming cliffs, so a
         climb stalls far less) or plain binary (the paper).
+    criterion : {"paper", "df", "output"}
+        "paper": Eq. 10 (control PSD), searched as above. "df" / "output":
+        phase-aware criteria of :mod:`hesspipe.criteria` (describing-function
+        error at the excited lines / control output error), multi-start
+        least squares (`restarts` starts); tau0, wn, zn free by default.
+    frf : hesspipe.frf.Frf, optional
+        The run's nonparametric describing function (estimated if None).
 
     Raises
     ------
@@ -412,16 +439,31 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         Unknown parameter, bad field, record shorter than one segment, unstable Yd.
         Never for unstable parameter sets.
     """
+    from .criteria import check_criterion, choose_k, identify_phase_aware
+
     model = model_from_name(model)
+    criterion = check_criterion(criterion)
+    if fixed and "k" in fixed:
+        k_rule = f"k = {int(round(float(fixed['k'])))} (given)"
+    elif k is None:
+        k, k_rule = choose_k(plants)
+    else:
+        k_rule = f"k = {k} (given)"
+    seed = check_seed(seed)
+    check_control(run)
+    if criterion != "paper":
+        # The band and PSD method still define the control PSDs reported beside the fit.
+        return identify_phase_aware(run, plants, model, criterion=criterion, free=free, fixed=fixed,
+                                    seed=seed, k=k, k_rule=k_rule, limits=limits,
+                                    with_benchmark=with_benchmark, frf=frf, starts=restarts,
+                                    initial=initial, fields=fields, band=band, psd_method=psd_method)
     if optimizer not in OPTIMIZERS:
         raise HesspipeError(f"optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
-    seed = check_seed(seed)
     where = run.source or run.id
     nper = PaperWelch().nperseg
     if len(run) < nper:
         raise HesspipeError(f"{where}: {len(run)} samples is shorter than one spectral segment "
                             f"({nper} samples); expected a longer record")
-    check_control(run)
     base, free, fixed, flds, gain = _resolve(model, free, fixed, k, fields, plants)
     obj = SpectralObjective(run, plants, model, base, band=band, psd_method=psd_method,
                             noise_seed=seed)
@@ -465,7 +507,18 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         freq_hz=obj.freq_hz, optimizer=optimizer, seed=seed, passes=passes,
         band=obj.band, psd_method=psd_method, run_id=run.id, restarts=int(restarts), coding=coding, synthetic=run.synthetic, stable=stable,
         benchmark_parameters=bench_par, fields={f.name: (f.bits, f.scale, f.offset) for f in flds},
-        climb=climb, gain_scale=gain)
+        climb=climb, gain_scale=gain, k_rule=k_rule,
+        primary_crossover=loop_crossover(loop, obj.sim.yc_block, limits, first=True), frf=frf if frf is not None else _try_frf(run, plants, seed))
+
+
+def _try_frf(run, plants, seed):
+    """The run's nonparametric describing function, or why there is none (a string)."""
+    from .frf import estimate_frf
+
+    try:
+        return estimate_frf(run, plants, seed=seed)
+    except HesspipeError as exc:
+        return f"no nonparametric estimate: {exc}"
 
 
 def identifiability(objective: SpectralObjective, values: Mapping[str, float],

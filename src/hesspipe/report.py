@@ -127,7 +127,13 @@ def _pilots(folder: Path, root: Path) -> list[str]:
     if synthetic:
         out += [SYNTHETIC_NOTE, ""]
     out += _simulator_note(folder)
-    out += ["Fitness is the paper's Eq. 10 (RMS difference of control PSDs, lower is better). "
+    crit = (comp.get("settings") or {}).get("criterion", "paper")
+    fit_text = ("Fitness is the paper's Eq. 10 (RMS difference of control PSDs, lower is better). "
+                if crit == "paper" else
+                f"Fitness is criterion '{crit}' (" + ("the describing-function error at the excited "
+                "frequencies in line standard deviations" if crit == "df" else "the control output "
+                "error relative to the control's RMS") + ", lower is better; see README). ")
+    out += [fit_text +
             "*expanded_fixed* adds motion feedback with Table 1's Km to the original's parameters; "
             "*expanded* identifies Km with the rest. Improvement = 1 − expanded / original.", ""]
     rows = []
@@ -135,7 +141,8 @@ def _pilots(folder: Path, root: Path) -> list[str]:
         o, f, e = p["original"], p["expanded_fixed"], p["expanded"]
         rows.append([p["id"] + (" (synthetic)" if p.get("synthetic") else ""),
                      *(e["parameters"].get(k) for k in ("Ke", "K1", "K2", "Km")),
-                     o["fitness"], f["fitness"], e["fitness"], f"{100 * p['improvement']:.1f} %"])
+                     o["fitness"], f["fitness"], e["fitness"],
+                     "—" if p.get("improvement") is None else f"{100 * p['improvement']:.1f} %"])
     out += _table(["pilot", "Ke", "K1", "K2", "Km", "fitness original", "fitness expanded, Km fixed",
                    "fitness expanded", "improvement"], rows)
     mean, std = comp.get("mean_improvement"), comp.get("std_improvement")
@@ -160,6 +167,8 @@ def _pilots(folder: Path, root: Path) -> list[str]:
         out += ["Failed runs: " + "; ".join(f"{f['id']}: {f['error']}" for f in comp["failures"]), ""]
     for p in comp["pilots"]:
         out += _figure(folder / "figures" / f"{p['id']}.png", root, f"control PSD, pilot {p['id']}")
+        out += _figure(folder / "figures" / f"{p['id']}_df.png", root,
+                       f"describing function, pilot {p['id']}: identified models over the measured points")
     return out
 
 

@@ -12,6 +12,7 @@ _NAMES = [
     "flight",
     "plants",
     "identify",
+    "frf",
     "synth_pilots", "compare_pilots",
     "fly_pilot",
     "diagnose",

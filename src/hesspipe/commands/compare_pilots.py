@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+from ..criteria import CRITERIA, DEFAULT_CRITERION
+
 
 def register(sub) -> None:
     p = sub.add_parser("compare-pilots", help="identify original / expanded-fixed-Km / expanded models per pilot",
@@ -29,6 +31,9 @@ def register(sub) -> None:
                                                            "(default: %(default)s)")
     p.add_argument("--benchmark", action="store_true",
                    help="also fit the McRuer precision model per pilot (the paper's benchmark score)")
+    p.add_argument("--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
+                   help=f"fit criterion (default {DEFAULT_CRITERION}, as identify): paper = Eq. 10 "
+                        "control PSD; df = describing-function error; output = control output error")
     p.add_argument("--start", choices=("warm", "random"), default="warm",
                    help="warm (default): the expanded search starts from the original's optimum "
                         "plus fixed Km and the models exchange optima, so improvements measure Km, "
@@ -61,16 +66,19 @@ def _run(args) -> int:
     result = compare_pilots(args.dir, plants, workers=args.workers, scheduler=args.scheduler,
                             seed=args.seed, optimizer=args.optimizer, passes=args.passes,
                             start=args.start, restarts=args.restarts, benchmark=args.benchmark,
-                            **run_options(args))
+                            criterion=args.criterion, **run_options(args))
     print(result.table())
     if args.json:
         write_json(args.json, result.to_dict())
     if args.figures:
+        from ..compare import _df_figure
         from ..viz.compare import plot_pilot
 
         with staged_output(args.figures, kind="figures") as stage:
             for p in result.pilots:
                 plot_pilot(p, stage / f"{p.id}.png")
+                if p.frf is not None:
+                    _df_figure(p, stage / f"{p.id}_df.png")
     for f in result.failures:
         print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
     if result.failures:

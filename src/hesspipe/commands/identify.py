@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 import math
 
+import numpy as np
+
+from ..criteria import CRITERIA, DEFAULT_CRITERION
 from ..errors import HesspipeError
 from ._options import add_run_options, add_seed, add_terms, run_options
 
@@ -76,14 +79,23 @@ def register(subparsers) -> None:
     p.add_argument("--bits", action="append", type=_bits, default=[], metavar="NAME=BITS[:SCALE[:OFFSET]]",
                    help="APID bit field of a free parameter (value = offset + integer/scale)")
     p.add_argument("--optimizer", choices=("apid", "scipy", "differential_evolution"), default="apid")
-    p.add_argument("--k", type=int, choices=(1, 2), default=1,
-                   help="Table 1 column: 1 for a rate-like plant (K/s), 2 for K/s^2")
+    p.add_argument("--k", type=int, choices=(1, 2), default=None,
+                   help="Table 1 column: 1 for a rate-like plant (K/s), 2 for K/s^2 "
+                        "(default: Hess's rule on the plant's slope around 1-5 rad/s)")
+    p.add_argument("--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
+                   help=f"fit criterion (default {DEFAULT_CRITERION}): paper = Eq. 10 control PSD; "
+                        "df = describing-function error at the excited lines weighted by their "
+                        "uncertainty; output = control output error")
     p.add_argument("--band", type=_band, default=(0.0, 5.0), metavar="LOW,HIGH",
                    help="fitness band in Hz (default 0,5)")
     p.add_argument("--psd", choices=("paper", "scipy"), default="paper", help="PSD estimate")
     p.add_argument("--no-benchmark", action="store_true", help="skip the McRuer benchmark fit")
     p.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
-    p.add_argument("--figure", metavar="OUT.png", help="write a Fig. 8-style PSD figure")
+    p.add_argument("--figure", metavar="OUT.png",
+                   help="write a figure: the model's describing function over the measured one "
+                        "(criteria df/output), a Fig. 8-style PSD figure (criterion paper)")
+    p.add_argument("--df-figure", metavar="OUT.png",
+                   help="write the describing-function figure whatever the criterion")
     p.set_defaults(func=run)
 
 
@@ -91,8 +103,10 @@ def format_table(result) -> str:
     """Readable summary of an :class:`~hesspipe.identify.Identification`."""
     lines = []
     tag = "  [SYNTHETIC DATA]" if result.synthetic else ""
-    lines.append(f"run {result.run_id}: model {result.model}, optimizer {result.optimizer}, "
-                 f"seed {result.seed}{tag}")
+    lines.append(f"run {result.run_id}: model {result.model}, criterion {result.criterion}, "
+                 f"optimizer {result.optimizer}, seed {result.seed}{tag}")
+    if result.k_rule:
+        lines.append(result.k_rule)
     lines.append(f"{'parameter':<10} {'value':>10}  status")
     for name, value in result.parameters.items():
         status = "identified" if name in result.free else (
@@ -100,11 +114,16 @@ def format_table(result) -> str:
         lines.append(f"{name:<10} {value:>10.4g}  {status}")
     what = ("RMS PSD difference" if result.stable else
             "unstable closed loop: the worst score, graded by its growth rate")
-    lines.append(f"fitness            {result.fitness:.6g}   ({what}, "
-                 f"{result.band[0]:g}-{result.band[1]:g} Hz; lower is better)")
+    if result.criterion == "paper":
+        lines.append(f"fitness            {result.fitness:.6g}   ({what}, "
+                     f"{result.band[0]:g}-{result.band[1]:g} Hz; lower is better)")
+    else:
+        what = result.fitness_units if result.stable else what
+        lines.append(f"fitness            {result.fitness:.6g}   (criterion {result.criterion}: "
+                     f"{what}; lower is better)")
     bench = result.benchmark_fitness
-    lines.append(f"benchmark fitness  {bench:.6g}   (McRuer precision model)" if math.isfinite(bench)
-                 else "benchmark fitness  not computed")
+    lines.append(f"benchmark fitness  {bench:.6g}   (McRuer precision model, same criterion and units)"
+                 if math.isfinite(bench) else "benchmark fitness  not computed")
     c = result.crossover
     limits = (f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
               f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
@@ -115,6 +134,20 @@ def format_table(result) -> str:
     else:
         lines.append("crossover          none found (the open loop's gain never crosses 1), within "
                      "limits: no " + limits)
+    pc = result.primary_crossover
+    if pc is not None and np.isfinite(pc.frequency_rad_s) and pc.frequency_rad_s != c.frequency_rad_s:
+        lines.append(f"primary crossover  {pc.frequency_rad_s:.3f} rad/s, phase margin "
+                     f"{pc.phase_margin_deg:.1f} deg (|L| first falls through 1 here and rises "
+                     "above 1 again higher up)")
+    frf = result.frf
+    if isinstance(frf, str):
+        lines.append(f"nonparametric      {frf}")
+    elif frf is not None:
+        n = frf.crossover
+        lines.append(f"nonparametric      crossover {n.frequency_rad_s:.3f} +- {n.frequency_std:.3f} rad/s, "
+                     f"phase margin {n.phase_margin_deg:.1f} +- {n.phase_margin_std_deg:.1f} deg "
+                     f"({frf.method}; remnant {100 * frf.remnant_share:.0f} % of control power)"
+                     + (f"; {n.note}" if n.note else ""))
     lines.append(f"evaluations        {result.evaluations}")
     ident = result.identifiability
     lines.append(f"identifiability    {ident.get('summary', ident.get('method'))}")
@@ -152,15 +185,37 @@ def run(args) -> int:
     result = identify(rec, plants, args.model, free=free, fixed=fixed, seed=args.seed,
                       passes=args.passes, optimizer=args.optimizer, band=args.band, k=args.k,
                       fields=dict(args.bits) or None, psd_method=args.psd,
-                      with_benchmark=not args.no_benchmark, restarts=args.restarts, coding=args.coding)
+                      with_benchmark=not args.no_benchmark, restarts=args.restarts, coding=args.coding,
+                      criterion=args.criterion)
     print(format_table(result))
     if args.json:
         obj = result.to_dict()
         obj["run"] = str(args.run)
         obj["plants"] = str(args.plants)
         write_json(args.json, obj)
-    if args.figure:
+    if args.figure and result.criterion == "paper":
         from ..viz.pilots import identification_figure
 
         identification_figure(args.figure, [result])
+    for path in ([args.figure] if args.figure and result.criterion != "paper" else []) + (
+            [args.df_figure] if args.df_figure else []):
+        df_figure(path, result, rec.source)
     return 0
+
+
+def df_figure(path, result, where: str = "") -> None:
+    """The model's (and the precision benchmark's) describing function over the measured one."""
+    from ..criteria import model_df
+    from ..hess import model_from_name
+    from ..mcruer import precision_loop
+    from ..viz.frf import frf_figure
+
+    if result.frf is None or isinstance(result.frf, str):
+        raise HesspipeError(f"{where or result.run_id}: no describing-function figure: "
+                            f"{result.frf or 'no nonparametric estimate'}")
+    loop = model_from_name(result.model).loop(result.parameters)
+    models = {f"{result.model} model ({result.criterion})": lambda s: model_df(loop, s)}
+    if result.benchmark_parameters:
+        bench = precision_loop(result.benchmark_parameters)
+        models["McRuer precision benchmark"] = lambda s: model_df(bench, s)
+    frf_figure(path, result.frf, models)

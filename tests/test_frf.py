@@ -1,0 +1,198 @@
+"""Nonparametric describing function (hesspipe.frf): lines, sets, fallback, bad input.
+
+The records here are built in the test from known linear responses applied on a
+whole-period FFT grid (no pilot model, no hesspipe simulator), so the true U/E
+at every line is known exactly. Synthetic.
+"""
+
+import numpy as np
+import pytest
+
+from hesspipe.errors import HesspipeError
+from hesspipe.formats import Run
+from hesspipe.frf import estimate_frf
+
+FS, T = 50.0, 40.0
+N = int(FS * T)
+D_BINS = np.array([3, 7, 11, 17, 23, 31, 41, 53, 67, 83])   # disturbance lines
+R_BINS = D_BINS + 2                                          # interleaved reference lines
+
+
+def _multisine(bins, seed, n=N):
+    rng = np.random.default_rng(seed)
+    X = np.zeros(n // 2 + 1, complex)
+    X[bins] = np.exp(1j * rng.uniform(0, 2 * np.pi, bins.size)) * n / 2
+    return np.fft.irfft(X, n)
+
+
+def _apply(x, fn):
+    """Periodic (steady-state) response of x through fn(s)."""
+    X = np.fft.rfft(x)
+    w = 2 * np.pi * np.fft.rfftfreq(x.size, 1 / FS)
+    return np.fft.irfft(X * fn(1j * w), x.size)
+
+
+def H_fb(s):
+    return 3.0 * np.exp(-0.25 * s) * 100 / (s * s + 2 * 0.3 * 10 * s + 100)
+
+
+def H_ff(s):
+    return 0.5 * np.exp(-0.1 * s)
+
+
+def _run(d, r, noise=0.0, seed=0, e=None):
+    """A run where e and u are given by construction: u = H_fb e (+ H_ff r) + remnant."""
+    rng = np.random.default_rng(seed)
+    e = d + r if e is None else e  # the displayed error carries both forcing functions
+    u = _apply(e, H_fb) + (_apply(r, H_ff) if np.any(r) else 0.0) + noise * rng.standard_normal(d.size)
+    t = np.arange(d.size) / FS
+    # output so that e = r - y
+    return Run(time=t, disturbance=d, output=r - e, control=u, reference=r, id="t", synthetic=True)
+
+
+def test_lines_of_each_set_and_their_own_responses():
+    d, r = _multisine(D_BINS, 1), 0.5 * _multisine(R_BINS, 2)
+    f = estimate_frf(_run(d, r, noise=0.01))
+    assert f.method == "multisine"
+    assert np.array_equal(f.feedback.bins, D_BINS)
+    assert np.array_equal(f.reference.bins, R_BINS)
+    w = f.feedback.freq_rad_s
+    assert np.allclose(w, 2 * np.pi * D_BINS / T)
+    # disturbance lines: the error response alone
+    err = np.abs(f.feedback.H - H_fb(1j * w)) / np.abs(H_fb(1j * w))
+    assert np.max(err) < 0.05
+    # reference lines: U/E there also holds the feedforward path, a different response
+    wr = f.reference.freq_rad_s
+    e_r = np.fft.rfft(r)[R_BINS]
+    expect = H_fb(1j * wr) + H_ff(1j * wr) * e_r / np.fft.rfft(d + r)[R_BINS]
+    assert np.max(np.abs(f.reference.H - expect) / np.abs(expect)) < 0.05
+    assert np.min(np.abs(f.reference.H - H_fb(1j * wr)) / np.abs(H_fb(1j * wr))) > 0.05
+
+
+def test_uncertainty_covers_the_error_and_remnant_share():
+    d = _multisine(D_BINS, 3)
+    hits, shares = [], []
+    for seed in range(5):
+        f = estimate_frf(_run(d, np.zeros(N), noise=0.3, seed=seed))
+        w = f.feedback.freq_rad_s
+        hits.append(np.abs(f.feedback.H - H_fb(1j * w)) <= 2 * f.feedback.sigma)
+        shares.append(f.remnant_share)
+    assert np.mean(hits) >= 0.85  # |dH| <= 2 sigma has probability 0.98 for a circular Gaussian
+    u_lines = np.var(_apply(d, H_fb))
+    expect = 0.3 ** 2 / (0.3 ** 2 + u_lines)
+    assert np.mean(shares) == pytest.approx(expect, rel=0.15)
+
+
+def test_record_not_a_whole_number_of_periods():
+    d = _multisine(D_BINS, 4, n=N)
+    run = _run(d, np.zeros(N), noise=0.01)
+    cut = Run(time=run.time[:-1], disturbance=run.disturbance[:-1], output=run.output[:-1],
+              control=run.control[:-1], reference=run.reference[:-1])
+    f = estimate_frf(cut)
+    assert f.feedback.bins.size == D_BINS.size
+    w = f.feedback.freq_rad_s
+    assert np.max(np.abs(f.feedback.H - H_fb(1j * w)) / np.abs(H_fb(1j * w))) < 0.1
+    # a record holding two periods plus a start-up: the window keeps whole periods at its end
+    d2 = np.concatenate((d[-300:], d, d))
+    run2 = _run(d2, np.zeros(d2.size), noise=0.01)
+    f2 = estimate_frf(run2)
+    assert f2.window == (300, 2 * N)
+
+
+def test_broadband_falls_back_to_welch():
+    rng = np.random.default_rng(5)
+    d = _apply(rng.standard_normal(4 * N), lambda s: 5 / (s + 5))
+    FSr = FS
+    f = estimate_frf(_run(d, np.zeros(d.size), noise=0.05))
+    assert f.method == "welch" and f.reference is None
+    w = f.feedback.freq_rad_s
+    sel = (w > 1) & (w < 15)
+    err = np.abs(f.feedback.H[sel] - H_fb(1j * w[sel])) / np.abs(H_fb(1j * w[sel]))
+    assert np.median(err) < 0.1
+
+
+def test_crossover_of_L_against_the_known_loop():
+    import control as ct
+
+    from hesspipe.crossover import loop_crossover  # noqa: F401  (same definition: L = H Yc)
+
+    d = _multisine(np.unique(np.geomspace(2, 150, 25).astype(int)), 6)
+    f = estimate_frf(_run(d, np.zeros(N), noise=0.01), ct.tf([1], [1, 0]))
+    w = np.logspace(-1, 2, 20001)
+    L = H_fb(1j * w) / (1j * w)
+    i = np.nonzero(np.abs(L) < 1)[0][0]
+    wc, pm = w[i], 180 + np.degrees(np.angle(L[i]))
+    assert f.crossover.frequency_rad_s == pytest.approx(wc, rel=0.05)
+    assert f.crossover.phase_margin_deg == pytest.approx(pm, abs=4)
+    assert 0 < f.crossover.frequency_std < 0.2 * wc
+
+
+def test_no_power_at_any_line_and_no_broadband():
+    rng = np.random.default_rng(7)
+    t = np.arange(N) / FS
+    quiet = Run(time=t, disturbance=np.zeros(N), output=rng.standard_normal(N),
+                control=rng.standard_normal(N), reference=np.zeros(N), source="quiet.csv")
+    with pytest.raises(HesspipeError, match=r"quiet.csv: disturbance: constant"):
+        estimate_frf(quiet)
+    # broadband, but it does not drive the loop (no coherence with e or u)
+    unrelated = Run(time=t, disturbance=rng.standard_normal(N), output=rng.standard_normal(N),
+                    control=rng.standard_normal(N), reference=np.zeros(N), source="noise.csv")
+    with pytest.raises(HesspipeError, match=r"noise.csv: disturbance: no power at any detectable"):
+        estimate_frf(unrelated)
+
+
+def test_shorter_than_two_periods_of_the_lowest_line():
+    d = _multisine(np.array([1, 5, 9, 14]), 8)
+    run = _run(d, np.zeros(N))
+    with pytest.raises(HesspipeError, match=r"fewer than two periods of its lowest excited line"):
+        estimate_frf(run)
+
+
+def test_gaps():
+    d = _multisine(D_BINS, 9)
+    run = _run(d, np.zeros(N))
+    u = run.control.copy()
+    u[100] = np.nan
+    with pytest.raises(HesspipeError, match=r"control: a gap \(non-finite value\) at t = 2 s"):
+        estimate_frf(Run(run.time, run.disturbance, run.output, u, run.reference))
+    t = run.time.copy()
+    t[500:] += 0.5
+    with pytest.raises(HesspipeError, match=r"time: a gap of 0.52 s after t = 9.98 s"):
+        estimate_frf(Run(t, run.disturbance, run.output, run.control, run.reference))
+
+
+def test_cli_frf_one_line_errors_and_json(tmp_path, capsys):
+    import json
+
+    from hesspipe.cli import main
+    from hesspipe.formats import write_run
+
+    plants = tmp_path / "p.json"
+    plants.write_text('{"control_to_output": {"num": [1], "den": [1, 0]}, '
+                      '"disturbance_to_output": {"num": [1], "den": [1, 0]}}')
+    d = _multisine(D_BINS, 10)
+    write_run(tmp_path / "ok.csv", _run(d, np.zeros(N), noise=0.01), ("synthetic test data",))
+    assert main(["frf", str(tmp_path / "ok.csv"), "--plants", str(plants),
+                 "--json", str(tmp_path / "o.json"), "--figure", str(tmp_path / "o.png")]) == 0
+    out = json.loads((tmp_path / "o.json").read_text())
+    assert out["crossover"]["frequency_rad_s"] > 0 and "phase_margin_deg" in out["crossover"]
+    assert (tmp_path / "o.png").stat().st_size > 0
+    short = _run(_multisine(np.array([1, 4, 9]), 11), np.zeros(N))
+    write_run(tmp_path / "short.csv", short)
+    capsys.readouterr()
+    assert main(["frf", str(tmp_path / "short.csv"), "--plants", str(plants),
+                 "--json", str(tmp_path / "s.json")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "short.csv" in err[0] and "two periods" in err[0]
+    assert not (tmp_path / "s.json").exists()
+    # --model: an identify --json result drawn over the points; anything else is one line
+    (tmp_path / "id.json").write_text('{"model": "original", "criterion": "df", "parameters": '
+                                      '{"Ke": 3.0, "tau0": 0.25, "wn": 10.0, "zn": 0.3}}')
+    assert main(["frf", str(tmp_path / "ok.csv"), "--plants", str(plants), "--figure",
+                 str(tmp_path / "m.png"), "--model", str(tmp_path / "id.json")]) == 0
+    assert (tmp_path / "m.png").stat().st_size > 0
+    capsys.readouterr()
+    assert main(["frf", str(tmp_path / "ok.csv"), "--plants", str(plants), "--figure",
+                 str(tmp_path / "n.png"), "--model", str(plants)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "identify --json result" in err[0] and not (tmp_path / "n.png").exists()
