@@ -195,6 +195,9 @@ class DiagnoseConfig:
         common model-error variance; "uniform" the common variance alone.
     k : int
         Controlled-element order of the Hess model (1 rate, 2 attitude).
+    motion_alpha : float
+        Significance level of the describing-function test of motion feedback
+        (:mod:`hesspipe.diagnose_motion`).
     """
 
     candidates: tuple[str, ...] | None = None
@@ -216,6 +219,9 @@ class DiagnoseConfig:
     dynamic_range_db: float = 40.0
     weighting: str = "random-share"
     k: int = 1
+    #: Level of the describing-function motion test (one pre-planned test per diagnosis,
+    #: so no Bonferroni share; issue 13 allows <= 10 % of no-motion runs named).
+    motion_alpha: float = 0.05
 
     @classmethod
     def from_table(cls, table: Mapping | None, source: str = "<config>",
@@ -247,7 +253,8 @@ class DiagnoseConfig:
                   resolution_db=f.number("resolution_db", d.resolution_db, min=0.0, strict_min=True),
                   dynamic_range_db=f.number("dynamic_range_db", d.dynamic_range_db, min=10.0, max=200.0),
                   weighting=f.string("weighting", d.weighting, choices=("random-share", "uniform")),
-                  k=f.integer("k", d.k, min=1, max=2))
+                  k=f.integer("k", d.k, min=1, max=2),
+                  motion_alpha=f.number("motion_alpha", d.motion_alpha, min=0.0, max=0.5, strict_min=True))
         f.reject_unknown()
         return cfg
 
@@ -977,6 +984,7 @@ class Diagnosis:
     seed: int = 0
     source: str = ""
     plant_finding: dict | None = None   # :class:`hesspipe.diagnose_aircraft.PlantFinding` as a dict
+    motion_verdict: dict | None = None  # :class:`hesspipe.diagnose_motion.MotionVerdict` as a dict
 
     @property
     def gap_reduction(self) -> float:
@@ -1009,6 +1017,7 @@ class Diagnosis:
                       for b, a in zip(self.bands_before, self.bands_after)],
             "plant_check": self.plant_check.to_dict(),
             "plant_finding": self.plant_finding,
+            "motion_verdict": self.motion_verdict,
             "control_error_tests": {"before": self.control_error_before,
                                     "after": self.control_error_after},
             "criterion": self.criterion,
@@ -1158,9 +1167,18 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     baseline = current
     steps: list[Step] = []
     named: list[str] = [finding.named] if finding.verdict == "aircraft" else []
+    n_aircraft = len(named)
+    motion = _motion_round(run, plants, problem, current, cands, cfg, seed)
+    if motion is not None:
+        verdict, step, fit = motion
+        cands = tuple(c for c in cands if c != "motion_feedback")  # judged on the shape above
+        if step is not None:
+            steps.append(step)
+            if step.accepted:
+                named.append("motion_feedback")
+                current = fit
     remaining = list(cands)
     rnd = 0
-    n_aircraft = len(named)
     while remaining and len(named) - n_aircraft < cfg.max_effects:
         rnd += 1
         tried: list[tuple[Step, _Fit | None]] = []
@@ -1224,10 +1242,37 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
                    "scatter_db": _DB * math.sqrt(scatter),
                    "welch_scatter_db": _DB * math.sqrt(problem.var_floor)},
         config=cfg, freq_hz=problem.freq, measured_psd=problem.measured, baseline_psd=baseline.psd,
-        final_psd=current.psd, seed=seed, source=run.source, plant_finding=finding.to_dict())
+        final_psd=current.psd, seed=seed, source=run.source, plant_finding=finding.to_dict(),
+        motion_verdict=None if motion is None else motion[0].to_dict())
 
 
 # -- readable report ------------------------------------------------------------------------
+
+def _motion_round(run, plants, problem, current, cands, cfg, seed):
+    """Motion feedback judged on the describing function's shape
+    (:mod:`hesspipe.diagnose_motion`): (verdict, step or None, fit) or None when motion
+    feedback is not a candidate or the run has no describing function (the control-PSD
+    rounds then judge it). A named motion path is fitted into the model (Km from the
+    verdict's start, on the PSD criterion) so the later rounds extend it."""
+    from .criteria import choose_k
+    from .diagnose_motion import motion_verdict
+
+    if "motion_feedback" not in cands:
+        return None
+    v = motion_verdict(run, plants, k=choose_k(plants)[0], seed=seed, alpha=cfg.motion_alpha)
+    if v.note:
+        return None
+    aug = current.model.with_effect("motion_feedback")
+    fit = problem.fit(aug, {**current.parameters, "Km": max(v.Km, 1e-3)}) if v.named else None
+    named = bool(v.named and fit is not None and fit.stable)
+    step = Step(round=0, candidate="motion_feedback", model=aug.name, status="ok", accepted=named,
+                statistic=v.statistic, dof=1, p_value=v.p_value, threshold=cfg.motion_alpha,
+                delta_bic=v.delta_bic, gap=problem.gap(fit.psd) if named else float("nan"),
+                gap_ok=named, log_rms_db=problem.log_rms_db(fit.psd) if named else float("nan"),
+                parameters=fit.parameters if named else {"Km": v.Km},
+                evaluations=fit.evaluations if fit is not None else 0)
+    return v, step, fit
+
 
 def format_report(d: Diagnosis) -> str:
     """A plain-text report of a diagnosis (what disagreed, what was tried, what was named)."""
@@ -1245,6 +1290,12 @@ def format_report(d: Diagnosis) -> str:
                f"(p={pc.independence_p['disturbance']:.2g})")
     if d.plant_finding and d.plant_finding["verdict"] != "match":
         out.append("  -> " + d.plant_finding["message"])
+    mv = d.motion_verdict
+    if mv is not None:
+        out.append(f"Motion feedback on the describing function's shape ({mv['n_lines']} lines, df criterion "
+                   f"{mv['df_fitness_without']:.2f} -> {mv['df_fitness_with']:.2f} with Km={mv['Km']:.3g}): "
+                   f"LR={mv['statistic']:.1f}, p={mv['p_value']:.2g} (needs < {d.config.motion_alpha:g}) -> "
+                   f"{'NAMED' if mv['named'] else 'not named'}")
     ce = d.control_error_before
     if ce is not None:
         out.append(f"Control error of the baseline model (time domain): "
