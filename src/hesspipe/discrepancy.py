@@ -1171,12 +1171,11 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     motion = _motion_round(run, plants, problem, current, cands, cfg, seed)
     if motion is not None:
         verdict, step, fit = motion
-        cands = tuple(c for c in cands if c != "motion_feedback")  # judged on the shape above
-        if step is not None:
-            steps.append(step)
-            if step.accepted:
-                named.append("motion_feedback")
-                current = fit
+        steps.append(step)
+        if step.accepted:
+            named.append("motion_feedback")
+            current = fit
+            cands = tuple(c for c in cands if c != "motion_feedback")
     remaining = list(cands)
     rnd = 0
     while remaining and len(named) - n_aircraft < cfg.max_effects:
@@ -1250,10 +1249,10 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
 
 def _motion_round(run, plants, problem, current, cands, cfg, seed):
     """Motion feedback judged on the describing function's shape
-    (:mod:`hesspipe.diagnose_motion`): (verdict, step or None, fit) or None when motion
-    feedback is not a candidate or the run has no describing function (the control-PSD
-    rounds then judge it). A named motion path is fitted into the model (Km from the
-    verdict's start, on the PSD criterion) so the later rounds extend it."""
+    (:mod:`hesspipe.diagnose_motion`): (verdict, step, fit) or None when motion feedback
+    is not a candidate or the run has no describing function. A named motion path is
+    fitted into the model (Km from the verdict's start, on the PSD criterion) so the later
+    rounds extend it; one not named there stays a candidate of the control-PSD rounds."""
     from .criteria import choose_k
     from .diagnose_motion import motion_verdict
 
@@ -1264,12 +1263,17 @@ def _motion_round(run, plants, problem, current, cands, cfg, seed):
         return None
     aug = current.model.with_effect("motion_feedback")
     fit = problem.fit(aug, {**current.parameters, "Km": max(v.Km, 1e-3)}) if v.named else None
-    named = bool(v.named and fit is not None and fit.stable)
-    step = Step(round=0, candidate="motion_feedback", model=aug.name, status="ok", accepted=named,
-                statistic=v.statistic, dof=1, p_value=v.p_value, threshold=cfg.motion_alpha,
-                delta_bic=v.delta_bic, gap=problem.gap(fit.psd) if named else float("nan"),
-                gap_ok=named, log_rms_db=problem.log_rms_db(fit.psd) if named else float("nan"),
-                parameters=fit.parameters if named else {"Km": v.Km},
+    fitted = bool(fit is not None and fit.stable)
+    gap = problem.gap(fit.psd) if fitted else float("nan")
+    # The same guard as every named effect: the Eq. 10 gap may not rise. Not significant:
+    # nothing to guard (the control-PSD rounds may still try it).
+    gap_ok = not fitted or gap <= problem.gap(current.psd)
+    step = Step(round=0, candidate="motion_feedback", model=aug.name, status="ok",
+                accepted=bool(v.named and fitted and gap_ok), statistic=v.statistic, dof=1,
+                p_value=v.p_value, threshold=cfg.motion_alpha, delta_bic=v.delta_bic, gap=gap,
+                gap_ok=gap_ok, veto="" if gap_ok else "gap rises",
+                log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
+                parameters=fit.parameters if fitted else {"Km": v.Km},
                 evaluations=fit.evaluations if fit is not None else 0)
     return v, step, fit
 
