@@ -151,4 +151,8 @@ def test_motion_feedback_shows_on_the_737_plants_and_only_when_present(tmp_path)
             assert r.expanded_fixed["parameters"]["Km"] == pytest.approx(0.1 * gain_scale(plants))
         improvements[effects] = [r.improvement for r in results]
     assert min(improvements[("motion_feedback",)]) > 0.1, improvements
-    assert max(improvements[()]) < 0.05, improvements
+    # 0.06, was 0.05: since stability is judged relative to the record (hess.growth_limit)
+    # these seeds' pilots are their first draws, no longer redrawn until the loop decays on
+    # the slow plant zero (which biased Ke low); the high-gain pilot p1 leaves Km a Ke-Km
+    # trade-off worth 5.4 % on this 24 s record (0.30 and 0.31 with motion feedback).
+    assert max(improvements[()]) < 0.06, improvements

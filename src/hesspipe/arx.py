@@ -93,9 +93,20 @@ class ArxModel:
         """Poles of the model in the z plane (roots of A)."""
         return np.roots(self.a) if self.na else np.array([])
 
-    def is_stable(self) -> bool:
-        """All poles strictly inside the unit circle."""
-        return bool(np.all(np.abs(self.poles()) < 1.0))
+    def is_stable(self, max_growth: float = 0.0) -> bool:
+        """All poles grow slower than `max_growth` (1/s): ``ln|z| / dt < max_growth``.
+
+        With the default 0 that is: all poles strictly inside the unit circle.
+        """
+        return self.growth_rate() < max_growth
+
+    def growth_rate(self) -> float:
+        """Largest ``ln|z| / dt`` over the poles (1/s); negative for a stable model."""
+        p = self.poles()
+        if p.size == 0:
+            return -math.inf
+        with np.errstate(divide="ignore"):
+            return float(np.max(np.log(np.abs(p)))) / self.dt
 
     def tf(self) -> ct.TransferFunction:
         """The model u → y as a discrete python-control transfer function."""
@@ -416,7 +427,7 @@ def check_data(u, y, *, na_max: int = 6, nb_max: int = 6, nk_max: int = 3, min_e
 def select_order(u, y, *, na_max: int = 6, nb_max: int = 6, nk_min: int = 1, nk_max: int = 3,
                  criterion: str = "bic", dt: float = 1.0, min_excitation: int = 4,
                  rcond: float = 1e-4, stable_only: bool = True, focus: str = "prediction",
-                 iterations: int = 10, label: str = "data") -> OrderSelection:
+                 iterations: int = 10, max_growth: float = 0.0, label: str = "data") -> OrderSelection:
     """Choose ARX orders and delay by an information criterion, and fit.
 
     The grid is ``na in 1..na_max``, ``nb in 1..nb_max`` (capped at the input's
@@ -426,6 +437,11 @@ def select_order(u, y, *, na_max: int = 6, nb_max: int = 6, nk_min: int = 1, nk_
     listed but cannot be chosen: the plants are stable aircraft, and an
     equation-error fit can place a slow pole just outside the circle, which
     the one-step criterion cannot see but the simulated output does.
+    `max_growth` (1/s, default 0) relaxes "stable" to "stable on the record":
+    poles growing slower than it are accepted (a record of duration T
+    cannot tell a pole at ``ln|z|/dt = +1e-4`` from one at ``-1e-4``; see
+    :func:`hesspipe.hess.growth_limit`). Refusing them can leave only
+    candidates that fit badly (the MD11's slightly divergent spiral mode).
 
     Raises
     ------
@@ -452,7 +468,8 @@ def select_order(u, y, *, na_max: int = 6, nb_max: int = 6, nk_min: int = 1, nk_
                 except HesspipeError:
                     continue  # rank deficient at this order: not a candidate
                 cands.append(Candidate(na, nb, nk, information_criterion(
-                    criterion, m.noise_variance, n, na + nb), m.noise_variance, m.is_stable()))
+                    criterion, m.noise_variance, n, na + nb), m.noise_variance,
+                    m.is_stable(max_growth)))
     if not cands:
         raise HesspipeError(f"{label}: regressors rank deficient at every order; input not "
                             "persistently exciting")

@@ -130,12 +130,12 @@ class _Base:
 
     def score_loop(self, loop, threshold=None) -> float:
         """Criterion value of a loop; unstable: graded, at least UNSTABLE_FITNESS."""
-        from .hess import UNSTABLE_FITNESS
+        from .hess import UNSTABLE_FITNESS, unstable_fitness
 
         self.calls += 1
         rate = self.sim.growth_rate(loop)
-        if not rate < 0.0:
-            return UNSTABLE_FITNESS * (1.0 + min(max(rate, 0.0), 1000.0))
+        if not rate < self.sim.growth_limit:  # stability relative to the record, as identify
+            return unstable_fitness(rate, self.sim.growth_limit)
         r = self.residuals_loop(loop)
         value = float(np.sqrt(np.sum(r * r)))
         # Stable fits stay below a tenth of the unstable value, as in hesspipe.identify.
@@ -190,10 +190,8 @@ class OutputObjective(_Base):
         self.norm = 1.0 / (np.sqrt(np.mean(self.u ** 2)) * np.sqrt(self.u.size))
 
     def residuals_loop(self, loop) -> np.ndarray:
-        import scipy.fft as sfft
-
         c, _ = self.sim.spectra(loop.replace(noise=type(loop.noise)()), output=False)
-        u = sfft.irfft(c, self.sim.nfft)[: self.sim.n]
+        u = self.sim.waveform(c)
         u = u - u.mean()
         return (u - self.u) * self.norm
 

@@ -13,13 +13,27 @@ rate). The expanded model adds the effect ``motion_feedback``
 augment the loop the same way.
 
 Simulation is done in the frequency domain on a zero-padded FFT grid: every
-block, the delays included, is evaluated exactly at ``s = j w``; the input
-samples are taken as band-limited (no hold). Padding the record to several
-times its length makes the circular convolution a linear one, so the result
-is the zero-initial-state response. Stability is decided separately from
-the roots of the closed loop's characteristic polynomial (delays as Padé
-approximants of an order chosen for the delay), because an FFT simulation of
-an unstable loop returns finite nonsense.
+block, the delays included, is evaluated exactly on the shifted contour
+``s = sigma0 + j w``; the input samples are taken as band-limited (no hold).
+The inputs are weighted by ``exp(-sigma0 t)`` and the result un-weighted by
+``exp(+sigma0 t)``: that is exact for a causal linear loop, and every mode
+slower than ``sigma0`` (slow decaying modes, and the slow growing modes a
+record cannot see) decays on the weighted grid, so a padding of a few
+record lengths makes the circular convolution a linear one and the result
+is the causal zero-initial-state response, the one a time-domain simulator
+gives. (On ``s = j w`` a loop with a right-half-plane mode gives a
+non-causal answer, and a mode slower than the padding wraps around.)
+
+Stability is relative to the record (:func:`growth_limit`): a closed loop
+is *stable on the record* when its fastest-growing mode grows by less than
+a factor two over the record, ``rate < ln 2 / duration`` (0.0099 1/s for
+70 s: a time to double longer than the record, where MIL-F-8785C accepts a
+spiral mode that doubles in 20 s). A fitted plant holds roots a 70 s record
+cannot place to within 1e-2 1/s (see :mod:`hesspipe.plants`), and a loop
+whose slowest mode grows at 1e-4 1/s is, for that record and for the pilot,
+as good as stable; its simulation above is exact all the same. The rate is
+decided from the roots of the closed loop's characteristic polynomial
+(delays as Padé approximants of an order chosen for the delay).
 """
 
 from __future__ import annotations
@@ -33,8 +47,7 @@ import math
 import numpy as np
 import scipy.fft as sfft
 
-from .blocks import (Block, Loop, ONE, Term, from_tf, max_delay, max_real_root, pade_order_for,
-                     stable_poly)
+from .blocks import Block, Loop, ONE, Term, from_tf, max_delay, max_real_root, pade_order_for
 from .effects import EFFECTS, get_effect
 from .errors import HesspipeError
 
@@ -71,8 +84,20 @@ and are not scaled."""
 UNSTABLE_FITNESS = 1.0e12
 """Least fitness given to a parameter set whose closed loop is unstable: finite (optimisers
 and JSON cope) and worse than any stable fit (those are capped at a tenth of it).
-Identification grades it, ``UNSTABLE_FITNESS * (1 + min(growth rate, 1000))``, so that
+Identification grades it, ``UNSTABLE_FITNESS * (1 + min(growth rate - growth_limit, 1000))``
+(:func:`growth_limit`: stability is relative to the record), so that
 an optimiser standing on the unstable side still sees the way back."""
+
+
+def unstable_fitness(rate: float, limit: float = 0.0) -> float:
+    """Finite worst fitness of a loop whose slowest-decaying mode grows at `rate` (1/s).
+
+    ``UNSTABLE_FITNESS * (1 + min(rate - limit, 1000))`` with `limit` the record's
+    growth limit (:func:`growth_limit`); an undecidable (NaN) rate scores the worst.
+    Never NaN, always >= UNSTABLE_FITNESS.
+    """
+    excess = float(rate) - float(limit) if np.isfinite(rate) else 1000.0
+    return UNSTABLE_FITNESS * (1.0 + min(max(excess, 0.0), 1000.0))
 
 
 def table1(k: int = 1) -> dict[str, float]:
@@ -303,7 +328,8 @@ class Simulation:
     error : ndarray
         Displayed error e = r - y.
     stable : bool
-        False if the closed loop is unstable; the arrays are then NaN.
+        False if the closed loop is not stable on the record (:func:`growth_limit`);
+        the arrays are then NaN.
     """
 
     time: np.ndarray
@@ -313,27 +339,23 @@ class Simulation:
     stable: bool = True
 
 
-def plant_pad_factor(plants, duration_s: float, *, decays: float = 5.0, cap: int = 16) -> int:
-    """FFT padding (multiples of the record) that lets the slowest loop dynamics decay.
+#: Growth over one record (a factor 2) below which a closed loop counts as stable.
+RECORD_GROWTH = math.log(2.0)
 
-    The slowest pole or zero of Yc and Yd (zeros too: a high-gain loop puts a
-    closed-loop mode next to a slow zero) or the pilot's proprioceptive washout
-    (1/T1 = 0.01 rad/s in Table 1) sets the longest tail; the grid is made long
-    enough for `decays` of its time constants, at least 4 and at most `cap`
-    records. Identification uses it: an evaluation on a grid whose tail wraps
-    onto the record mis-states the lowest PSD bins and biases the gains.
+
+def growth_limit(duration_s: float) -> float:
+    """Largest closed-loop growth rate (1/s) that counts as stable on a record of `duration_s`.
+
+    ``ln 2 / duration``: the loop's fastest-growing mode at most doubles over
+    the record (0.0099 1/s for 70 s; time to double >= the record). Neither a
+    record nor a pilot flying it can tell such a mode from a slow decaying
+    one, and a plant fitted to that record cannot place its own roots more
+    finely (:mod:`hesspipe.plants` resolves slower roots), so the cohort does
+    not redraw such pilots and identification does not punish them.
     """
-    rates = []
-    for sys in (plants.control_to_output, plants.disturbance_to_output):
-        for poly in (np.squeeze(sys.num[0][0]), np.squeeze(sys.den[0][0])):
-            poly = np.trim_zeros(np.atleast_1d(poly).astype(float), "f")
-            if poly.size > 1:
-                roots = np.abs(np.roots(poly))
-                rates += [r for r in roots if r > 1e-9]
-    # The pilot's own slowest dynamics (Table 1's proprioceptive washout 1/T1) too.
-    rates.append(table1(1)["1/T1"])
-    tail = decays / min(rates)
-    return int(min(cap, max(4, np.ceil(1 + tail / duration_s))))
+    if not (duration_s > 0 and math.isfinite(duration_s)):
+        raise HesspipeError(f"duration: expected a positive finite record length (s), got {duration_s!r}")
+    return RECORD_GROWTH / float(duration_s)
 
 
 class Simulator:
@@ -356,17 +378,25 @@ class Simulator:
         r (default 0).
     noise_seed : int
         Seed of the unit-variance white sequence that remnant shapes.
-    pad_factor : int, optional
-        The record is zero-padded to this many times its length; the
-        response beyond it wraps around onto the record's start. Default:
-        :func:`plant_pad_factor` — at least 4, more when the plants hold
-        modes or zeros slow enough that a closed loop tail would outlast
-        the padding (a pilot's high gain pulls a closed-loop mode onto a
-        slow plant zero).
+    pad_factor : int
+        The record is zero-padded to this many times its length (default 4).
+    decays : float
+        The contour shift ``sigma0`` is chosen so that a mode growing at
+        :attr:`growth_limit` has decayed ``exp(-decays)`` on the weighted
+        grid by the time it would wrap around: ``sigma0 = growth_limit +
+        decays / (nfft dt)``. Its output is un-weighted by at most
+        ``exp(sigma0 duration)`` (about 24 for the defaults).
+
+    Attributes
+    ----------
+    growth_limit : float
+        :func:`growth_limit` of the record (1/s): loops growing slower are stable.
+    sigma0 : float
+        Real part of the evaluation contour (1/s).
     """
 
     def __init__(self, plants, disturbance, dt: float, *, reference=None, noise_seed: int = 0,
-                 pad_factor: int | None = None):
+                 pad_factor: int = 4, decays: float = 10.0):
         w = np.asarray(disturbance, dtype=float)
         if w.ndim != 1 or w.size < 2:
             raise HesspipeError("disturbance: expected a 1-D signal of at least 2 samples")
@@ -374,29 +404,31 @@ class Simulator:
             raise HesspipeError(f"dt: expected a positive sample interval, got {dt!r}")
         self.n = w.size
         self.dt = float(dt)
-        if pad_factor is None:
-            pad_factor = plant_pad_factor(plants, self.n * self.dt)
+        self.growth_limit = growth_limit(self.n * self.dt)
         self.nfft = sfft.next_fast_len(max(int(pad_factor), 2) * self.n, real=True)
+        self.sigma0 = self.growth_limit + float(decays) / (self.nfft * self.dt)
         omega = 2.0 * np.pi * np.fft.rfftfreq(self.nfft, self.dt)
-        # The DC point is evaluated just above zero so that integrating plants
-        # (1/s) give their finite closed-loop limit instead of inf/inf.
-        omega[0] = omega[1] * 1e-6
-        self.s = 1j * omega
+        # sigma0 > 0 also keeps s off the origin, where integrating plants (1/s) are infinite.
+        self.s = self.sigma0 + 1j * omega
+        t = self.dt * np.arange(self.n)
+        self._weight = np.exp(-self.sigma0 * t)
+        self._unweight = np.exp(self.sigma0 * t)
         self._cache: dict = {}
         self._seen: set = set()
         self.yc_block = from_tf(plants.control_to_output)
         self.yd_block = from_tf(plants.disturbance_to_output)
         yd_den = np.asarray(self.yd_block.terms[0].den)
-        if not stable_poly(yd_den, margin=-1e-12):
+        if not max_real_root(yd_den) < self.growth_limit:
             raise HesspipeError("plants: disturbance_to_output has unstable poles "
-                                f"{np.round(np.roots(yd_den), 4).tolist()}; expected a stable Yd")
+                                f"{np.round(np.roots(yd_den), 4).tolist()}; expected a Yd stable on a "
+                                f"{self.n * self.dt:g} s record (growth rate < {self.growth_limit:.3g} 1/s)")
         self.yc = self.yc_block.response(self.s)
-        self.ydw = self.yd_block.response(self.s) * sfft.rfft(w, self.nfft)
+        self.ydw = self.yd_block.response(self.s) * sfft.rfft(w * self._weight, self.nfft)
         r = None if reference is None else np.asarray(reference, dtype=float)
         if r is not None and r.shape != w.shape:
             raise HesspipeError("reference: expected the same length as the disturbance")
         self.r = r if r is not None and np.any(r) else None
-        self.rf = None if self.r is None else sfft.rfft(self.r, self.nfft)
+        self.rf = None if self.r is None else sfft.rfft(self.r * self._weight, self.nfft)
         self.noise_seed = int(noise_seed)
         self._noise = None
 
@@ -411,11 +443,11 @@ class Simulator:
         """Spectrum of the seeded unit-variance white sequence used by remnant."""
         if self._noise is None:
             white = np.random.default_rng(self.noise_seed).standard_normal(self.n)
-            self._noise = sfft.rfft(white, self.nfft)
+            self._noise = sfft.rfft(white * self._weight, self.nfft)
         return self._noise
 
     def growth_rate(self, loop: Loop) -> float:
-        """Largest real part (1/s) of the closed loop's modes; < 0 means stable.
+        """Largest real part (1/s) of the closed loop's modes; below :attr:`growth_limit`: stable.
 
         The remnant shaping filter's poles count too (it feeds the loop).
         """
@@ -428,11 +460,19 @@ class Simulator:
         return rate
 
     def stable(self, loop: Loop) -> bool:
-        """True if the closed loop is asymptotically stable."""
-        return self.growth_rate(loop) < 0.0
+        """True if the closed loop is stable on the record: growth rate below :attr:`growth_limit`."""
+        return self.growth_rate(loop) < self.growth_limit
+
+    def waveform(self, spectrum: np.ndarray) -> np.ndarray:
+        """Time history on the record's samples of a spectrum from :meth:`spectra`."""
+        return sfft.irfft(spectrum, self.nfft)[: self.n] * self._unweight
 
     def spectra(self, loop: Loop, output: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
-        """FFT-grid spectra (control, output) of the closed loop; no stability check.
+        """Spectra (control, output) of the closed loop on the shifted contour; no stability check.
+
+        They are spectra of the *weighted* signals (``exp(-sigma0 t)``);
+        :meth:`waveform` turns them into time histories. Valid for loops
+        growing slower than :attr:`sigma0` (every loop :meth:`stable` accepts).
 
         ``delta = (NM vis R - NM (vis + ves) Yd W + N n) / (1 + NM PF + NM (vis + ves) Yc')``
         """
@@ -500,11 +540,11 @@ class Simulator:
         return total
 
     def control(self, loop: Loop) -> np.ndarray | None:
-        """Simulated control delta, or None if the loop is unstable."""
+        """Simulated control delta, or None if the loop is not stable on the record."""
         if not self.stable(loop):
             return None
         control, _ = self.spectra(loop, output=False)
-        return sfft.irfft(control, self.nfft)[: self.n]
+        return self.waveform(control)
 
     def run(self, loop: Loop) -> Simulation:
         t = self.dt * np.arange(self.n)
@@ -512,8 +552,8 @@ class Simulator:
             nan = np.full(self.n, np.nan)
             return Simulation(t, nan, nan.copy(), nan.copy(), stable=False)
         cf, yf = self.spectra(loop)
-        delta = sfft.irfft(cf, self.nfft)[: self.n]
-        y = sfft.irfft(yf, self.nfft)[: self.n]
+        delta = self.waveform(cf)
+        y = self.waveform(yf)
         r = self.r if self.r is not None else np.zeros(self.n)
         return Simulation(t, delta, y, r - y, stable=True)
 
@@ -541,36 +581,15 @@ def simulate(model, params: Mapping[str, float] | None, plants, disturbance, dt:
     Returns
     -------
     Simulation
-        ``stable=False`` (NaN arrays) for an unstable loop; never raises for it.
+        ``stable=False`` (NaN arrays) for a loop that is not stable on the
+        record (:func:`growth_limit`); never raises for it.
     """
     model = model_from_name(model)
     p = model.complete(params, k)
     loop = model.loop(p)
     sim = Simulator(plants, disturbance, dt, reference=reference,
                     noise_seed=0 if seed is None else int(seed))
-    pad = causal_pad_factor(sim, loop)
-    if pad > sim.nfft / sim.n:
-        sim = Simulator(plants, disturbance, dt, reference=reference,
-                        noise_seed=0 if seed is None else int(seed), pad_factor=pad)
     return sim.run(loop)
-
-
-def causal_pad_factor(sim: Simulator, loop, *, decays: float = 7.0, max_samples: int = 1 << 21) -> int:
-    """Zero-padding factor that makes one FFT simulation of `loop` causal to ``e^-decays``.
-
-    The FFT grid wraps the response around after ``nfft`` samples. A closed loop
-    whose slowest mode outlasts that — a pilot's gain pulls a closed-loop mode
-    next to a slow plant zero, with a time constant of many records — would
-    fold its tail back onto the record's start. A single simulation, synthetic
-    data above all, must be the causal response a time-domain simulator gives,
-    so it pads until that mode has decayed `decays` times (at most
-    `max_samples`). Unstable loops keep the simulator's padding.
-    """
-    rate = sim.growth_rate(loop)
-    if not rate < 0.0:
-        return 4
-    samples = sim.n + decays / (-rate * sim.dt)
-    return int(max(4, math.ceil(min(samples, max_samples) / sim.n)))
 
 
 def synthetic_run(model, params: Mapping[str, float] | None, plants, disturbance, dt: float, *,

@@ -4,10 +4,13 @@ The measured control PSD (:mod:`hesspipe.spectra`) is compared with the PSD
 of the control simulated by the pilot model closed around the plants and
 driven by the measured disturbance (:class:`hesspipe.hess.Simulator`). The
 free parameters are searched by the bit-climbing GA (:mod:`hesspipe.apid`)
-or by a scipy optimiser over the same box. Unstable parameter sets get
-:data:`~hesspipe.hess.UNSTABLE_FITNESS` (1e12) or more, graded by the
-loop's growth rate (finite, worse than any stable fit, which is capped at
-1e11) and never raise.
+or by a scipy optimiser over the same box. Parameter sets whose closed loop
+is not stable on the record (growth rate at or above
+:func:`hesspipe.hess.growth_limit`, ln 2 / duration: a mode that more than
+doubles over the record) get :data:`~hesspipe.hess.UNSTABLE_FITNESS` (1e12)
+or more, graded by the growth rate beyond that limit (finite, worse than any
+stable fit, which is capped at 1e11) and never raise. Slower growth is not
+punished: neither the record nor the pilot can see it.
 
 After the fit, :func:`identifiability` looks at the Jacobian of the
 simulated PSD with respect to the free parameters (relative perturbations):
@@ -23,13 +26,12 @@ from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
-import scipy.fft as sfft
 from scipy.optimize import differential_evolution
 
 from .apid import ClimbResult, Field, bit_climb
 from .crossover import Crossover, CrossoverLimits, loop_crossover
 from .errors import HesspipeError
-from .hess import LOOP_GAINS, STRUCTURAL, UNSTABLE_FITNESS, PilotModel, Simulator, gain_scale, model_from_name
+from .hess import LOOP_GAINS, STRUCTURAL, UNSTABLE_FITNESS, unstable_fitness, PilotModel, Simulator, gain_scale, model_from_name
 from .mcruer import bounded_powell
 from .seeds import check_seed
 
@@ -98,14 +100,15 @@ class SpectralObjective:
         if check_stability and not self.sim.stable(loop):
             return None
         control, _ = self.sim.spectra(loop, output=False)
-        delta = sfft.irfft(control, self.sim.nfft)[: self.sim.n]
+        delta = self.sim.waveform(control)
         if not np.isfinite(delta).all():
             return None
         return psd(delta, self.fs, method=self.psd_method)[1]
 
     def unstable_fitness(self, loop) -> float:
-        """Graded worst fitness: >= UNSTABLE_FITNESS, growing with the loop's growth rate."""
-        return _graded(self.sim.growth_rate(loop))
+        """Graded worst fitness: >= UNSTABLE_FITNESS, growing with the loop's growth rate
+        beyond the record's limit (:func:`hesspipe.hess.growth_limit`)."""
+        return unstable_fitness(self.sim.growth_rate(loop), self.sim.growth_limit)
 
     def score_loop(self, loop, threshold: float | None = None) -> float:
         """Fitness of a loop; unstable: at least UNSTABLE_FITNESS.
@@ -118,8 +121,8 @@ class SpectralObjective:
         self.calls += 1
         if threshold is None:
             rate = self.sim.growth_rate(loop)
-            if not rate < 0.0:
-                return _graded(rate)
+            if not rate < self.sim.growth_limit:
+                return unstable_fitness(rate, self.sim.growth_limit)
         sim = self.loop_psd(loop, check_stability=False)
         if sim is None:
             return self.unstable_fitness(loop)
@@ -140,12 +143,6 @@ class SpectralObjective:
 
     def __call__(self, values: Mapping[str, float], threshold: float | None = None) -> float:
         return self.score_loop(self.model.loop(self.params(values)), threshold)
-
-
-def _graded(rate: float) -> float:
-    """Fitness of an unstable (or undecidable: NaN growth rate) loop: finite, >= UNSTABLE_FITNESS."""
-    rate = float(rate) if np.isfinite(rate) else 1000.0
-    return UNSTABLE_FITNESS * (1.0 + min(max(rate, 0.0), 1000.0))
 
 
 @dataclass(frozen=True)
@@ -501,7 +498,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         bench_fit, bench_par = b.fitness, b.parameters
     return Identification(
         model=model.name, parameters=params, free=free, fixed=fixed,
-        fitness=best if np.isfinite(best) else _graded(float("nan")), benchmark_fitness=bench_fit,
+        fitness=best if np.isfinite(best) else unstable_fitness(float("nan")), benchmark_fitness=bench_fit,
         crossover=cross, evaluations=evaluations, identifiability=ident,
         measured_psd=obj.measured, simulated_psd=sim_psd if stable else np.full_like(obj.measured, np.nan),
         freq_hz=obj.freq_hz, optimizer=optimizer, seed=seed, passes=passes,

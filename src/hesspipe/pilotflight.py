@@ -198,32 +198,21 @@ def pilot_loop(model, params: Mapping[str, float], plants: Plants | None = None)
     return loop
 
 
-def _remnant_gain(model, p, plants, wind, r, dt, noise_seed, share, duration_s) -> float:
+def _remnant_gain(model, p, plants, wind, r, dt, noise_seed, share) -> float:
     """Kn making remnant `share` of the control variance, estimated on the plants' linear loop.
 
     The same white sequence as the flight (the Simulator draws it from the same
-    seed), so the flown share differs from `share` by the plant error only.
-    Like :func:`hesspipe.cohort.remnant_gain`, but it accepts a loop whose
-    slowest mode grows too slowly to matter within the record (growth rate
-    below 0.1 / duration: a high-gain pilot against the fitted 737 plants'
-    slow right-half-plane zero near 0.006 rad/s); its FFT simulation is then
-    padded as for a stable loop.
+    seed), so the flown share differs from `share` by the plant error only. The
+    Simulator accepts a loop whose slowest mode grows too slowly to matter within
+    the record (a high-gain pilot against the fitted 737 plants' slow
+    right-half-plane zero), as the cohort does.
     """
+    from .cohort import remnant_gain_of_loops
     from .hess import Simulator
 
     loop0, loop1 = (pilot_loop(model, {**p, "Kn": kn}, plants) for kn in (0.0, 1.0))
-    sim = Simulator(plants, wind, dt, reference=r, noise_seed=noise_seed, pad_factor=8)
-    if sim.growth_rate(loop0) >= 0.1 / duration_s:
-        raise HesspipeError("remnant gain: the pilot's closed loop around the plants is unstable "
-                            f"(growth rate {sim.growth_rate(loop0):.3g} 1/s); give Kn explicitly")
-    n = len(wind)
-    u0 = np.fft.irfft(sim.spectra(loop0, output=False)[0], sim.nfft)[:n]
-    u1 = np.fft.irfft(sim.spectra(loop1, output=False)[0], sim.nfft)[:n] - u0
-    v0, v1 = float(np.var(u0)), float(np.var(u1))
-    if not (v0 > 0 and v1 > 0):
-        raise HesspipeError("remnant gain: the pilot's noise-free control is zero; expected a "
-                            "disturbance that moves the aircraft")
-    return math.sqrt(share / (1.0 - share) * v0 / v1)
+    sim = Simulator(plants, wind, dt, reference=r, noise_seed=noise_seed)
+    return remnant_gain_of_loops(loop0, loop1, sim, share)
 
 
 def _check_pilot_effects(model) -> None:
@@ -332,8 +321,7 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
             share = DEFAULT_REMNANT_SHARE if remnant_share is None else float(remnant_share)
             if not 0 < share < 1:
                 raise HesspipeError(f"remnant_share: expected a share in (0, 1), got {share!r}")
-            p["Kn"] = _remnant_gain(model, p, plants, lateral, r, dt, remnant_seed, share,
-                                    config.duration_s)
+            p["Kn"] = _remnant_gain(model, p, plants, lateral, r, dt, remnant_seed, share)
     pilot = DiscretePilot(pilot_loop(model, p, plants), dt, sample_lag=SAMPLE_LAG)
 
     jsbsim = _jsbsim()
