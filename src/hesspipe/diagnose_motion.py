@@ -88,3 +88,34 @@ def motion_verdict(run, plants, *, k: int = 1, seed: int = 0, alpha: float = 0.0
     p = float(scipy.stats.chi2.sf(stat, 1))
     dbic = stat - math.log(2 * n)
     return MotionVerdict(bool(p < alpha and dbic > 0), stat, p, dbic, J0, J1, float(v1.get("Km", 0.0)), n)
+
+
+def motion_round(run, plants, problem, current, cands, cfg, seed):
+    """For :func:`hesspipe.discrepancy.diagnose`: motion feedback judged on the describing
+    function's shape (:func:`motion_verdict`): (verdict, step, fit) or None when motion feedback
+    is not a candidate or the run has no describing function. A named motion path is
+    fitted into the model (Km from the verdict's start, on the PSD criterion) so the later
+    rounds extend it; one not named there stays a candidate of the control-PSD rounds."""
+    from .criteria import choose_k
+    from .discrepancy import Step
+
+    if "motion_feedback" not in cands:
+        return None
+    v = motion_verdict(run, plants, k=choose_k(plants)[0], seed=seed, alpha=cfg.motion_alpha)
+    if v.note:
+        return None
+    aug = current.model.with_effect("motion_feedback")
+    fit = problem.fit(aug, {**current.parameters, "Km": max(v.Km, 1e-3)}) if v.named else None
+    fitted = bool(fit is not None and fit.stable)
+    gap = problem.gap(fit.psd) if fitted else float("nan")
+    # The same guard as every named effect: the Eq. 10 gap may not rise. Not significant:
+    # nothing to guard (the control-PSD rounds may still try it).
+    gap_ok = not fitted or gap <= problem.gap(current.psd)
+    step = Step(round=0, candidate="motion_feedback", model=aug.name, status="ok",
+                accepted=bool(v.named and fitted and gap_ok), statistic=v.statistic, dof=1,
+                p_value=v.p_value, threshold=cfg.motion_alpha, delta_bic=v.delta_bic, gap=gap,
+                gap_ok=gap_ok, veto="" if gap_ok else "gap rises",
+                log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
+                parameters=fit.parameters if fitted else {"Km": v.Km},
+                evaluations=fit.evaluations if fit is not None else 0)
+    return v, step, fit

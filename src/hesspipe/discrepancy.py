@@ -20,9 +20,10 @@ Steps
    ratio test on log-spectral residuals (see *The criterion*). The best candidate is
    named only if it is significant after a Bonferroni correction for the number of
    candidates tried in that round, its BIC improves and it is not vetoed: its Eq. 10
-   gap may not rise (see *Two measures*), and an aircraft-side effect (dutch_roll) needs
-   a failed plant check (plants that reproduce the output leave no room for a missing
-   aircraft mode). It is added and the round repeats until nothing significant is left.
+   gap may not rise (see *Two measures*). It is added and the round repeats until nothing
+   significant is left. Aircraft-side effects are not tried here: they are judged on the
+   output, by refits of the plant check (:mod:`hesspipe.diagnose_aircraft`), and motion
+   feedback first on the describing function's shape (:mod:`hesspipe.diagnose_motion`).
 4. **Report.** Gap (SPEC.md Eq. 10 fitness) before and after, the bands that closed.
 
 The criterion
@@ -179,9 +180,10 @@ class DiagnoseConfig:
         Least-squares function-evaluation budget of one fit.
     max_lag : int
         Lags of the residual tests.
-    min_plant_fit : float
-        Plant-check fit percent below which the plants are taken not to describe the
-        data's columns at all (an input error, not a discrepancy).
+    plant_fit_ok : float
+        Plant-check fit percent (initial state refitted) at or above which the plants match;
+        below it, aircraft-side candidates and file errors are tried
+        (:mod:`hesspipe.diagnose_aircraft`).
     resolution_db : float
         Floor of the RMS log-spectral residual, dB: smaller mismatches are not evidence.
     dynamic_range_db : float
@@ -214,7 +216,7 @@ class DiagnoseConfig:
     starts: int = 1
     max_evaluations: int = 20
     max_lag: int = 25
-    min_plant_fit: float = -100.0
+    plant_fit_ok: float = 90.0
     resolution_db: float = 0.1
     dynamic_range_db: float = 40.0
     weighting: str = "random-share"
@@ -249,7 +251,7 @@ class DiagnoseConfig:
                   starts=f.integer("starts", d.starts, min=0, max=50),
                   max_evaluations=f.integer("max_evaluations", d.max_evaluations, min=5),
                   max_lag=f.integer("max_lag", d.max_lag, min=1),
-                  min_plant_fit=f.number("min_plant_fit", d.min_plant_fit),
+                  plant_fit_ok=f.number("plant_fit_ok", d.plant_fit_ok, min=0.0, max=100.0),
                   resolution_db=f.number("resolution_db", d.resolution_db, min=0.0, strict_min=True),
                   dynamic_range_db=f.number("dynamic_range_db", d.dynamic_range_db, min=10.0, max=200.0),
                   weighting=f.string("weighting", d.weighting, choices=("random-share", "uniform")),
@@ -1135,8 +1137,8 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     Raises
     ------
     HesspipeError
-        Unknown candidate id, data too short for the spectra, plants that do not match
-        the data's columns.
+        Unknown candidate id, data too short for the spectra. Plants that do not match the
+        data's columns are a finding (``plant_finding``), not an error.
     """
     cfg = config or DiagnoseConfig()
     base = _resolve_model(model)
@@ -1153,7 +1155,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     # closes it (or the file error it proves) is named and the pilot identified around it.
     from .diagnose_aircraft import corrected, plant_finding
 
-    finding = plant_finding(run, plants, check)
+    finding = plant_finding(run, plants, check, fit_ok=cfg.plant_fit_ok)
     before = None
     if finding.verdict == "aircraft":
         # "Before" is the pilot identified around the plants as given (same measured
@@ -1174,7 +1176,9 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     steps: list[Step] = []
     named: list[str] = [finding.named] if finding.verdict == "aircraft" else []
     n_aircraft = len(named)
-    motion = _motion_round(run, plants, problem, current, cands, cfg, seed)
+    from .diagnose_motion import motion_round
+
+    motion = motion_round(run, plants, problem, current, cands, cfg, seed)
     if motion is not None:
         verdict, step, fit = motion
         steps.append(step)
@@ -1240,8 +1244,11 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         criterion={"name": "likelihood-ratio test on log-spectral residuals over Welch bins "
                            "(Bonferroni per round), delta BIC as the score",
                    "weighting": cfg.weighting,
-                   "vetoes": ["the Eq. 10 gap may not rise",
-                              "aircraft-side effects need a failed plant check"],
+                   "vetoes": ["the Eq. 10 gap may not rise"],
+                   "aircraft_side": "judged on the output by refits of the plant check "
+                                    "(hesspipe.diagnose_aircraft), not on the control spectrum",
+                   "motion_feedback": "judged first on the describing function's shape "
+                                      "(hesspipe.diagnose_motion)",
                    "alpha": cfg.alpha, "n_bins": int(problem.mask.sum()), "n_eff": problem.n_eff,
                    "enbw_bins": problem.enbw, "welch_dof": problem.nu, "resolution_db": cfg.resolution_db,
                    "scatter_db": _DB * math.sqrt(scatter),
@@ -1252,37 +1259,6 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
 
 
 # -- readable report ------------------------------------------------------------------------
-
-def _motion_round(run, plants, problem, current, cands, cfg, seed):
-    """Motion feedback judged on the describing function's shape
-    (:mod:`hesspipe.diagnose_motion`): (verdict, step, fit) or None when motion feedback
-    is not a candidate or the run has no describing function. A named motion path is
-    fitted into the model (Km from the verdict's start, on the PSD criterion) so the later
-    rounds extend it; one not named there stays a candidate of the control-PSD rounds."""
-    from .criteria import choose_k
-    from .diagnose_motion import motion_verdict
-
-    if "motion_feedback" not in cands:
-        return None
-    v = motion_verdict(run, plants, k=choose_k(plants)[0], seed=seed, alpha=cfg.motion_alpha)
-    if v.note:
-        return None
-    aug = current.model.with_effect("motion_feedback")
-    fit = problem.fit(aug, {**current.parameters, "Km": max(v.Km, 1e-3)}) if v.named else None
-    fitted = bool(fit is not None and fit.stable)
-    gap = problem.gap(fit.psd) if fitted else float("nan")
-    # The same guard as every named effect: the Eq. 10 gap may not rise. Not significant:
-    # nothing to guard (the control-PSD rounds may still try it).
-    gap_ok = not fitted or gap <= problem.gap(current.psd)
-    step = Step(round=0, candidate="motion_feedback", model=aug.name, status="ok",
-                accepted=bool(v.named and fitted and gap_ok), statistic=v.statistic, dof=1,
-                p_value=v.p_value, threshold=cfg.motion_alpha, delta_bic=v.delta_bic, gap=gap,
-                gap_ok=gap_ok, veto="" if gap_ok else "gap rises",
-                log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
-                parameters=fit.parameters if fitted else {"Km": v.Km},
-                evaluations=fit.evaluations if fit is not None else 0)
-    return v, step, fit
-
 
 def format_report(d: Diagnosis) -> str:
     """A plain-text report of a diagnosis (what disagreed, what was tried, what was named)."""
@@ -1319,7 +1295,7 @@ def format_report(d: Diagnosis) -> str:
         verdict = f"DISAGREES: {b.direction}" if b.disagrees else "agrees within chance"
         out.append(f"  {b.lo_hz:5.2f}-{b.hi_hz:<5.2f} {b.level_db:9.1f} {b.rms_db:7.1f} {b.share:6.0%}  {verdict}")
     out.append(f"Candidates (score = delta BIC; named if p < alpha/m, delta BIC > 0 and not vetoed: "
-               f"Eq. 10 gap must not rise, aircraft effects need a failed plant check; "
+               f"Eq. 10 gap must not rise; "
                f"alpha={d.config.alpha:g}):")
     for s in d.steps:
         if s.status != "ok":
