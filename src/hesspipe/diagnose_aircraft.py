@@ -42,7 +42,7 @@ FIT_OK = 90.0
 CLOSE_SHARE = 0.5
 #: Residual power a simpler aircraft candidate may leave, relative to the best one's, and
 #: still be preferred.
-PARSIMONY = 1.5
+PARSIMONY = 1.2
 _N_PARAMETERS = {"actuator_lag": 1, "rate_limit": 1, "roll_mode": 2, "dutch_roll": 6}
 #: A path gain beyond this factor (either way) is a units error, not an aircraft change.
 SCALE_RATIO = 3.0
