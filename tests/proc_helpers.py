@@ -3,6 +3,7 @@ cannot write where permission bits say it may not (also as root)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 
@@ -53,3 +54,43 @@ def alive(pid: int) -> bool:
     except OSError:
         return False
     return state != "Z"
+
+
+def sigterm_when_ready(argv: list[str], err_file: Path, ready, *, timeout_s: float = 60.0,
+                       settle_s: float = 0.0) -> tuple[int, list[int]]:
+    """Run `argv`, send SIGTERM once ``ready(workers, stderr_text)`` holds; (exit code, orphans).
+
+    stderr goes to `err_file` (a file, not a pipe: orphans must not block the test). Orphans
+    are the worker processes still alive 5 s after the command exited; whatever this call
+    started is killed before it returns, so a failing test leaves nothing behind.
+    """
+    import signal
+    import subprocess
+    import time
+
+    workers: set[int] = set()
+    with open(err_file, "w") as err_fh:
+        proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=err_fh)
+    try:
+        deadline = time.monotonic() + timeout_s
+        while not ready(workers, err_file.read_text()):
+            assert proc.poll() is None, err_file.read_text()
+            assert time.monotonic() < deadline, "the worker processes did not appear"
+            time.sleep(0.05)
+            workers = descendants(proc.pid)
+        if settle_s:
+            time.sleep(settle_s)
+            workers = descendants(proc.pid)
+        proc.send_signal(signal.SIGTERM)
+        code = proc.wait(timeout=30)
+        deadline = time.monotonic() + 5
+        while any(alive(p) for p in workers) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        orphans = [p for p in workers if alive(p)]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        for pid in workers:  # only the processes this call started
+            if alive(pid):
+                os.kill(pid, signal.SIGKILL)
+    return code, orphans

@@ -48,7 +48,7 @@ from hesspipe.formats import Run, write_plants, write_run
 from hesspipe.io import MARKER, STAGING_PREFIX, TMP_PREFIX
 
 from pilot_data import plants as paper_plants
-from proc_helpers import alive, descendants, drop_write_override
+from proc_helpers import drop_write_override, sigterm_when_ready
 
 
 # -- inputs ------------------------------------------------------------------------------------
@@ -564,32 +564,10 @@ def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
     for i in range(4):  # real identifications: several seconds each, so the pool is busy
         shutil.copy(inputs / "runs" / "p0.csv", runs / f"p{i}.csv")
     err_file = tmp_path / "stderr.txt"
-    workers: set[int] = set()
-    with open(err_file, "w") as err_fh:  # a file, not a pipe: orphans must not block the test
-        proc = subprocess.Popen([sys.executable, "-m", "hesspipe.cli", "compare-pilots", str(runs),
-                                 "--plants", str(inputs / "plants.json"), "--workers", "2", "--json",
-                                 str(tmp_path / "c.json")], stdout=subprocess.DEVNULL, stderr=err_fh)
-    try:
-        deadline = time.monotonic() + 60
-        while len(workers) < 2:
-            assert proc.poll() is None, err_file.read_text()
-            assert time.monotonic() < deadline, "no worker processes appeared"
-            time.sleep(0.05)
-            workers = descendants(proc.pid)
-        time.sleep(0.3)
-        workers = descendants(proc.pid)
-        proc.send_signal(signal.SIGTERM)
-        code = proc.wait(timeout=30)
-        deadline = time.monotonic() + 5
-        while any(alive(p) for p in workers) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        orphans = [p for p in workers if alive(p)]
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-        for pid in workers:  # only the processes this test started
-            if alive(pid):
-                os.kill(pid, signal.SIGKILL)
+    code, orphans = sigterm_when_ready(
+        [sys.executable, "-m", "hesspipe.cli", "compare-pilots", str(runs), "--plants",
+         str(inputs / "plants.json"), "--workers", "2", "--json", str(tmp_path / "c.json")],
+        err_file, lambda workers, err: len(workers) >= 2, settle_s=0.3)
     err = err_file.read_text()
     assert not orphans, "worker processes outlived the command"
     assert code == 128 + signal.SIGTERM, err

@@ -306,3 +306,12 @@ def test_known_aircraft_and_loading():
     assert ac.model == "737" and ac.approach == Approach() and ac.record_terrain_ft == 0.0
     with pytest.raises(HesspipeError, match="unknown aircraft"):
         load_aircraft("nope")
+
+
+def test_figures_are_optional(tmp_path):
+    fly("737", SHORT, tmp_path / "with", seed=0)
+    fly("737", SHORT, tmp_path / "without", seed=0, figures=False)
+    assert (tmp_path / "with" / "flight_wind.png").is_file()
+    assert not list((tmp_path / "without").glob("*.png"))
+    for name in ("wind.csv", "aileron.csv", "trim.json"):
+        assert (tmp_path / "with" / name).read_bytes() == (tmp_path / "without" / name).read_bytes()

@@ -291,14 +291,15 @@ def test_fitness_is_finite_even_where_growth_rate_is_undefined(data, monkeypatch
 
 
 def test_unstable_optimum_reports_finite_fitness(data):
-    """README: unstable sets score a finite value >= 1e12, never NaN (a double integrator
-    with the k = 1 structure: no stable loop in the box)."""
+    """README: unstable sets score a finite value >= 1e12, never NaN (1/((s - 2) s^2) with
+    the k = 1 structure: every loop in the box grows at >= 1.37 1/s, far beyond the
+    record's limit)."""
     import control as ct
 
     from hesspipe.formats import Plants
 
     pl, _, run = data
-    di = Plants(ct.tf([1.0], [1.0, 0.0, 0.0]), pl.disturbance_to_output)
+    di = Plants(ct.tf([1.0], [1.0, -2.0, 0.0, 0.0]), pl.disturbance_to_output)
     res = identify(run, di, "original", free=["Ke"], optimizer="scipy", passes=1, with_benchmark=False,
-                   k=1)  # k = 1 on purpose: Hess's rule would choose 2 for a double integrator
+                   k=1)  # k = 1 on purpose: Hess's rule would choose 2 for this plant
     assert not res.stable and np.isfinite(res.fitness) and res.fitness >= UNSTABLE_FITNESS

@@ -166,34 +166,14 @@ def test_a_csv_put_beside_the_cohort_is_not_diagnosed(reference, tmp_path, capsy
 
 
 def test_sigterm_during_the_pilots_stage_leaves_no_worker_and_no_half_stage(tmp_path):
-    from proc_helpers import alive, descendants
+    from proc_helpers import sigterm_when_ready
 
     cfg = tmp_path / "two.toml"
     cfg.write_text(SMALL.replace("workers = 1", "workers = 2").replace("passes = 4", "passes = 10"))
     out, err_file = tmp_path / "out", tmp_path / "stderr.txt"
-    workers: set[int] = set()
-    with open(err_file, "w") as err_fh:  # a file, not a pipe: orphans must not block the test
-        proc = subprocess.Popen([sys.executable, "-m", "hesspipe.cli", "run", "--config", str(cfg), "--out",
-                                 str(out)], stdout=subprocess.DEVNULL, stderr=err_fh)
-    try:
-        deadline = time.monotonic() + 120
-        while len(workers) < 2 or "pilots: running" not in err_file.read_text():
-            assert proc.poll() is None, err_file.read_text()
-            assert time.monotonic() < deadline, "the pilots stage's workers did not appear"
-            time.sleep(0.05)
-            workers = descendants(proc.pid)
-        proc.send_signal(signal.SIGTERM)
-        code = proc.wait(timeout=30)
-        deadline = time.monotonic() + 5
-        while any(alive(p) for p in workers) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        orphans = [p for p in workers if alive(p)]
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-        for pid in workers:  # only processes this test started
-            if alive(pid):
-                os.kill(pid, signal.SIGKILL)
+    code, orphans = sigterm_when_ready(
+        [sys.executable, "-m", "hesspipe.cli", "run", "--config", str(cfg), "--out", str(out)], err_file,
+        lambda workers, err: len(workers) >= 2 and "pilots: running" in err, timeout_s=120)
     err = err_file.read_text()
     assert not orphans and code == 128 + signal.SIGTERM, err
     assert err.strip().splitlines()[-1] == "hesspipe: terminated" and "Traceback" not in err

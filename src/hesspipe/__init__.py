@@ -15,4 +15,34 @@ except PackageNotFoundError:  # running from a source tree without install
 
 from .errors import HesspipeError
 
-__all__ = ["HesspipeError", "__version__"]
+#: The researcher's API: name -> module that defines it. Loaded on first use, so that
+#: ``import hesspipe`` (and the command line's start-up) stays light.
+_API = {
+    "read_run": "formats", "write_run": "formats", "read_plants": "formats",
+    "write_plants": "formats", "Run": "formats", "Plants": "formats",
+    "fly": "flight", "FlightConfig": "flight",
+    "fly_pilot": "pilotflight",
+    "fit_plants": "plants",
+    "PilotModel": "hess", "simulate": "hess",
+    "identify": "identify",
+    "estimate_frf": "frf",
+    "compare_pilots": "compare",
+    "diagnose": "discrepancy",
+}
+
+__all__ = ["HesspipeError", "__version__", *_API]
+
+
+def __getattr__(name: str):
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module 'hesspipe' has no attribute {name!r}")
+    from importlib import import_module
+
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))

@@ -16,17 +16,28 @@ from typing import Any, Mapping, Sequence
 
 from .errors import HesspipeError
 
-#: Root of the source tree (holds ``aircraft/`` and ``pipeline/``).
+#: Root of the source tree (holds ``aircraft/`` and ``pipeline/``) when hesspipe runs
+#: from a checkout (an editable install); meaningless for an installed wheel.
 PROJECT_ROOT = Path(__file__).resolve().parents[2]
+
+#: Where a built package carries copies of ``aircraft/`` and ``pipeline/`` (setup.py).
+PACKAGED_DATA = Path(__file__).resolve().parent / "_data"
 
 
 def data_dir(name: str) -> Path:
-    """Return the project folder `name` (``"aircraft"`` or ``"pipeline"``)."""
-    path = PROJECT_ROOT / name
-    if not path.is_dir():
-        raise HesspipeError(f"{path}: folder not found; expected the hesspipe source tree "
-                            "(install with 'pip install -e .' from a checkout)")
-    return path
+    """Return the configuration folder `name` (``"aircraft"`` or ``"pipeline"``).
+
+    From a checkout, the checkout's own folder (the one users edit); from an
+    installed package, the copy the build placed in ``hesspipe/_data``.
+    """
+    checkout = PROJECT_ROOT / name
+    if (PROJECT_ROOT / "pyproject.toml").is_file() and checkout.is_dir():
+        return checkout
+    packaged = PACKAGED_DATA / name
+    if packaged.is_dir():
+        return packaged
+    raise HesspipeError(f"{packaged}: folder not found; expected hesspipe's '{name}' folder "
+                        "(reinstall hesspipe: the package is incomplete)")
 
 
 def aircraft_file(name_or_path: str | Path) -> Path:

@@ -457,7 +457,8 @@ def _csv_text(df: pd.DataFrame, comments: list[str]) -> str:
     return head + df.to_csv(index=False, float_format="%.10g", lineterminator="\n")
 
 
-def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: int = 0) -> FlightResult:
+def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: int = 0, *,
+        figures: bool = True) -> FlightResult:
     """Stage one: trim `aircraft`, fly the wind and aileron records, write them to `out_dir`.
 
     Writes ``trim.json``, ``wind.csv``, ``aileron.csv``, ``flight_wind.png``,
@@ -472,6 +473,8 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
         Output folder (created if needed).
     seed : int
         Seed of the excitation signals; the same seed gives identical files.
+    figures : bool
+        Also draw ``flight_wind.png`` and ``flight_aileron.png`` (matplotlib).
 
     Raises
     ------
@@ -479,8 +482,6 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
         Unknown or unsupported aircraft, trim failure, ground contact or
         speed excursion; nothing is written then.
     """
-    from .viz.flight import plot_record
-
     ac = load_aircraft(aircraft)
     seed = _check_seed(seed)
     out_dir = Path(out_dir)
@@ -511,10 +512,13 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
         write_json(stage / "trim.json", trim)
         write_text(stage / "wind.csv", _csv_text(wind, wind_comments))
         write_text(stage / "aileron.csv", _csv_text(aileron, ail_comments))
-        plot_record(wind, stage / "flight_wind.png", kind="wind", title=f"{ac.name}: side-wind record "
-                    f"({config.wind_excitation.kind} excitation, seed {seed})")
-        plot_record(aileron, stage / "flight_aileron.png", kind="aileron", title=f"{ac.name}: aileron record "
-                    f"({config.aileron_excitation.kind} excitation, seed {seed})")
+        if figures:
+            from .viz.flight import plot_record  # matplotlib only when figures are asked for
+
+            plot_record(wind, stage / "flight_wind.png", kind="wind", title=f"{ac.name}: side-wind "
+                        f"record ({config.wind_excitation.kind} excitation, seed {seed})")
+            plot_record(aileron, stage / "flight_aileron.png", kind="aileron", title=f"{ac.name}: "
+                        f"aileron record ({config.aileron_excitation.kind} excitation, seed {seed})")
         write_json(stage / "manifest.json", {
             "stage": "flight",
             "aircraft": ac.name,

@@ -370,6 +370,21 @@ def write_run(path: str | Path, run: Run, comments: tuple[str, ...] | list[str] 
     """Write `run` in the measured-run format, atomically.
 
     A synthetic run always carries a ``# synthetic`` comment line.
+
+    Parameters
+    ----------
+    path : path
+        The CSV file to write (replaced atomically).
+    run : Run
+        Time (s), disturbance (input of Yd), output (controlled variable),
+        control (input of Yc) and reference, in the units the run carries.
+    comments : sequence of str
+        Extra ``#`` comment lines written before the header.
+
+    Returns
+    -------
+    Path
+        `path`.
     """
     lines = list(comments) or list(run.comments)
     if run.synthetic and not any("synthetic" in c.lower() for c in lines):
@@ -445,7 +460,25 @@ def _read_tf(obj, path, key) -> ct.TransferFunction:
 
 
 def read_plants(path: str | Path) -> Plants:
-    """Read a plants JSON file (SPEC.md format) into :class:`Plants`."""
+    """Read a plants JSON file (SPEC.md format) into :class:`Plants`.
+
+    Parameters
+    ----------
+    path : path
+        JSON with ``control_to_output`` and ``disturbance_to_output`` (continuous
+        time, coefficients in descending powers of s); other keys are kept as
+        :attr:`Plants.meta`.
+
+    Returns
+    -------
+    Plants
+
+    Raises
+    ------
+    HesspipeError
+        Naming the file and the field: unreadable JSON, a missing or malformed
+        transfer function, a discrete-time one (``dt`` other than 0 or null).
+    """
     path = Path(path)
     try:
         obj = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -468,7 +501,23 @@ def read_plants(path: str | Path) -> Plants:
 
 
 def write_plants(path: str | Path, plants: Plants, **extra) -> Path:
-    """Write `plants` in the SPEC.md JSON format, atomically; `extra` keys are added."""
+    """Write `plants` in the SPEC.md JSON format, atomically.
+
+    Parameters
+    ----------
+    path : path
+        The JSON file to write.
+    plants : Plants
+        Yc (control → output) and Yd (disturbance → output); its ``meta`` keys
+        are written too.
+    **extra
+        Further top-level keys (units, orders, fit, source ...).
+
+    Returns
+    -------
+    Path
+        `path`.
+    """
     obj = {"control_to_output": tf_coefficients(plants.control_to_output),
            "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}
     obj.update(plants.meta)

@@ -478,7 +478,26 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
               run_id: str = "pilot", figure: bool = True) -> PilotFlight:
     """Fly one pilot in JSBSim and write ``<run_id>.csv``, ``.truth.json`` and ``.png`` to `out_dir`.
 
-    All files or none (staged output); see :func:`fly_pilot_record` for the arguments.
+    All files or none (staged output).
+
+    Parameters
+    ----------
+    aircraft : str
+        Aircraft flown (a name in ``aircraft/``), not necessarily the plants'.
+    plants : Plants
+        The plants the pilot's gains are scaled to; their optional
+        ``motion_path`` drives the pilot's vestibular channel.
+    out_dir : path
+        Output folder (new, empty, or a fly-pilot folder hesspipe wrote).
+    model, params, seed, config, aircraft_effects, remnant_share, max_bank_deg, run_id
+        As in :func:`fly_pilot_record`.
+    figure : bool
+        Also draw ``<run_id>.png``.
+
+    Returns
+    -------
+    PilotFlight
+        The record (SYNTHETIC) and its truth.
     """
     # Checked before the flight: a folder that cannot take the output loses no result.
     out_dir = check_output_dir(out_dir, "fly-pilot")

@@ -587,6 +587,25 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
     ``plants_validation.png``, ``plants_bode.png``, ``plants_residuals.png`` and
     ``manifest.json`` into `out_dir`, all or none.
 
+    Parameters
+    ----------
+    flight_dir : path
+        A stage-one folder holding ``wind.csv`` and ``aileron.csv``
+        (lateral wind ft/s, aileron command normalised, roll rate rad/s).
+    out_dir : path
+        Output folder (new, empty, or a plants folder hesspipe wrote).
+    config : PlantsConfig, optional
+        Decimation, hold-out share, order ranges, slow-root handling
+        (default: ``PlantsConfig()``).
+    figures : bool
+        Also draw the validation, Bode and residual figures.
+
+    Returns
+    -------
+    PlantsResult
+        The fitted plants (continuous transfer functions, rad/s per input
+        unit) with their validation.
+
     Raises
     ------
     HesspipeError

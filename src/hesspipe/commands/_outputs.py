@@ -13,3 +13,12 @@ def check_file_outputs(*, json: str | None = None, figure: str | None = None) ->
         from ..viz import check_figure_path
 
         check_figure_path(figure)
+
+
+def write_result_json(path: str, result, **inputs) -> None:
+    """Write ``result.to_dict()`` to `path`, with the input files it came from (`inputs`: key → path)."""
+    from ..io import write_json
+
+    obj = result.to_dict()
+    obj.update({key: str(value) for key, value in inputs.items()})
+    write_json(path, obj)

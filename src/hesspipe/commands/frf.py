@@ -80,9 +80,8 @@ def _model_curves(path) -> dict:
 def run(args) -> int:
     from ..formats import read_plants, read_run
     from ..frf import estimate_frf
-    from ..io import write_json
     from ._options import run_options
-    from ._outputs import check_file_outputs
+    from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
@@ -91,10 +90,7 @@ def run(args) -> int:
     result = estimate_frf(rec, plants, seed=args.seed)
     print(format_table(result))
     if args.json:
-        obj = result.to_dict()
-        obj["run"] = str(args.run)
-        obj["plants"] = str(args.plants)
-        write_json(args.json, obj)
+        write_result_json(args.json, result, run=args.run, plants=args.plants)
     if args.figure:
         from ..viz.frf import frf_figure
 

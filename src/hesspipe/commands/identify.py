@@ -144,10 +144,13 @@ def format_table(result) -> str:
         lines.append(f"nonparametric      {frf}")
     elif frf is not None:
         n = frf.crossover
-        lines.append(f"nonparametric      crossover {n.frequency_rad_s:.3f} +- {n.frequency_std:.3f} rad/s, "
-                     f"phase margin {n.phase_margin_deg:.1f} +- {n.phase_margin_std_deg:.1f} deg "
-                     f"({frf.method}; remnant {100 * frf.remnant_share:.0f} % of control power)"
-                     + (f"; {n.note}" if n.note else ""))
+        where = f"({frf.method}; remnant {100 * frf.remnant_share:.0f} % of control power)"
+        if math.isfinite(n.frequency_rad_s):
+            lines.append(f"nonparametric      crossover {n.frequency_rad_s:.3f} +- {n.frequency_std:.3f} "
+                         f"rad/s, phase margin {n.phase_margin_deg:.1f} +- {n.phase_margin_std_deg:.1f} deg "
+                         + where + (f"; {n.note}" if n.note else ""))
+        else:
+            lines.append(f"nonparametric      crossover not found {where}: {n.note or 'no crossing'}")
     lines.append(f"evaluations        {result.evaluations}")
     ident = result.identifiability
     lines.append(f"identifiability    {ident.get('summary', ident.get('method'))}")
@@ -161,9 +164,8 @@ def format_table(result) -> str:
 def run(args) -> int:
     from ..formats import read_plants, read_run
     from ..identify import identify
-    from ..io import write_json
     from ..spectra import PaperWelch
-    from ._outputs import check_file_outputs
+    from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
@@ -189,10 +191,7 @@ def run(args) -> int:
                       criterion=args.criterion)
     print(format_table(result))
     if args.json:
-        obj = result.to_dict()
-        obj["run"] = str(args.run)
-        obj["plants"] = str(args.plants)
-        write_json(args.json, obj)
+        write_result_json(args.json, result, run=args.run, plants=args.plants)
     if args.figure and result.criterion == "paper":
         from ..viz.pilots import identification_figure
 

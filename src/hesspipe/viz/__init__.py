@@ -1,21 +1,26 @@
 """Figures, one module per concept (flight, plants, pilots, diagnose).
 
 Plotting is kept out of the numerical modules; every figure is saved
-atomically with :func:`save_figure` on the non-interactive Agg backend.
+atomically with :func:`save_figure`. Figures are built with matplotlib's object
+API (:class:`matplotlib.figure.Figure`, no pyplot): importing hesspipe never
+switches the backend of a notebook or an application that uses it.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from ..io import atomic_path  # noqa: E402
+from ..io import atomic_path
 
 SYNTHETIC_LABEL = "SYNTHETIC DATA"
+
+
+def subplots(*args, figsize=None, **kwargs):
+    """``(figure, axes)`` like ``pyplot.subplots``, outside pyplot's global state."""
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(*args, **kwargs)
 
 
 def check_figure_path(path: str | Path) -> Path:
@@ -36,7 +41,7 @@ def check_figure_path(path: str | Path) -> Path:
 
 
 def save_figure(fig, path: str | Path, *, synthetic: bool = False, dpi: int = 110) -> Path:
-    """Save `fig` to `path` atomically and close it.
+    """Save `fig` to `path` atomically.
 
     If `synthetic`, the figure is stamped "SYNTHETIC DATA" so it can never be
     mistaken for measured data.
@@ -46,5 +51,4 @@ def save_figure(fig, path: str | Path, *, synthetic: bool = False, dpi: int = 11
                  fontsize=9, fontweight="bold")
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=Path(path).suffix.lstrip(".").lower() or "png")
-    plt.close(fig)
     return Path(path)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import plt, save_figure
+from . import save_figure, subplots
 
 
 def plot_diagnosis(diagnosis, path: str | Path) -> Path:
@@ -20,7 +20,7 @@ def plot_diagnosis(diagnosis, path: str | Path) -> Path:
     d = diagnosis
     f = np.asarray(d.freq_hz)
     m = (f > 0) & (f <= d.config.band_hz[1]) & (f >= d.config.band_hz[0])
-    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(8.0, 6.5), sharex=True,
+    fig, (ax, ax2) = subplots(2, 1, figsize=(8.0, 6.5), sharex=True,
                                   gridspec_kw={"height_ratios": [2, 1]})
     for before, after in zip(d.bands_before, d.bands_after):
         if before.disagrees:

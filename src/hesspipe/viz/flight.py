@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 
-from . import save_figure
+from . import save_figure, subplots
 
 _INPUTS = {"wind": ("wind_lateral_fps", "lateral wind, ft/s (+ = towards right)"),
            "aileron": ("aileron_cmd", "aileron command, normalised")}
@@ -21,7 +20,7 @@ def plot_record(record, path: str | Path, *, kind: str, title: str = "") -> Path
     """
     column, label = _INPUTS[kind]
     t = record["time"]
-    fig, axes = plt.subplots(5, 1, figsize=(9, 10), sharex=True)
+    fig, axes = subplots(5, 1, figsize=(9, 10), sharex=True)
     axes[0].plot(t, record[column], lw=0.8, color="tab:red" if kind == "aileron" else "tab:blue",
                  label=label)
     axes[0].set_ylabel("input")

@@ -7,7 +7,7 @@ from typing import Mapping
 
 import numpy as np
 
-from . import plt, save_figure
+from . import save_figure, subplots
 
 _COLORS = ("r", "g", "m", "c", "orange")
 
@@ -26,7 +26,7 @@ def frf_figure(path: str | Path, frf, models: Mapping[str, object] | None = None
     w = resp.freq_rad_s
     mag = np.abs(resp.H)
     rel = np.clip(resp.sigma / np.maximum(mag, 1e-300), 0, 0.999)
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.0, 6.0), sharex=True)
+    fig, (a1, a2) = subplots(2, 1, figsize=(7.0, 6.0), sharex=True)
     db = 20 * np.log10(mag)
     db_err = [db - 20 * np.log10(mag * (1 - rel)), 20 * np.log10(mag * (1 + rel)) - db]
     ph = np.degrees(np.unwrap(np.angle(resp.H)))

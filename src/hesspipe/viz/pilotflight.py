@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 
-from . import save_figure
+from . import save_figure, subplots
 
 
 def plot_pilot_flight(flight, path: str | Path) -> Path:
@@ -19,7 +18,7 @@ def plot_pilot_flight(flight, path: str | Path) -> Path:
     """
     rec, tr = flight.record, flight.truth
     t = rec["time"]
-    fig, axes = plt.subplots(5, 1, figsize=(9, 10), sharex=True)
+    fig, axes = subplots(5, 1, figsize=(9, 10), sharex=True)
     axes[0].plot(t, rec["disturbance"], lw=0.8, label="lateral wind, ft/s (+ = towards right)")
     axes[1].plot(t, rec["output"], lw=0.8, label="roll rate p, rad/s")
     axes[1].plot(t, rec["reference"], lw=0.8, label="reference r, rad/s")

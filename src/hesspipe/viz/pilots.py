@@ -7,7 +7,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from . import plt, save_figure
+from . import save_figure, subplots
 
 _STYLES = [dict(color="k", ls=":", lw=1.8), dict(color="m", ls="-.", lw=1.5),
            dict(color="r", ls="--", lw=1.5), dict(color="g", ls="-", lw=1.0),
@@ -37,7 +37,7 @@ def plot_psd_comparison(freq_hz, measured, simulated: Mapping[str, np.ndarray], 
     matplotlib.figure.Figure
     """
     if ax is None:
-        fig, ax = plt.subplots(figsize=(7.0, 4.2))
+        fig, ax = subplots(figsize=(7.0, 4.2))
     else:
         fig = ax.figure
     f = np.asarray(freq_hz)

@@ -6,13 +6,13 @@ from pathlib import Path
 
 import numpy as np
 
-from . import plt, save_figure
+from . import save_figure, subplots
 from ..d2c import frequency_response
 
 
 def plot_validation(fits: dict, path: str | Path, *, synthetic: bool = False) -> Path:
     """Measured vs simulated roll rate for each channel; validation tail shaded."""
-    fig, axes = plt.subplots(len(fits), 1, figsize=(9, 3.2 * len(fits)), squeeze=False)
+    fig, axes = subplots(len(fits), 1, figsize=(9, 3.2 * len(fits)), squeeze=False)
     for ax, fit in zip(axes[:, 0], fits.values()):
         t = fit.time
         ax.plot(t, fit.output, color="k", lw=1.0, label="recorded")
@@ -35,7 +35,7 @@ def plot_bode(fits: dict, path: str | Path, *, synthetic: bool = False, referenc
     `reference` (a continuous tf, e.g. the paper's Eq. 16) is drawn on the
     wind channel for comparison.
     """
-    fig, axes = plt.subplots(2, len(fits), figsize=(5.5 * len(fits), 6), squeeze=False, sharex="col")
+    fig, axes = subplots(2, len(fits), figsize=(5.5 * len(fits), 6), squeeze=False, sharex="col")
     for j, (key, fit) in enumerate(fits.items()):
         nyq = 0.5 / fit.model.dt
         f = np.logspace(-2.5, np.log10(nyq * 0.999), 500)
@@ -66,7 +66,7 @@ def plot_bode(fits: dict, path: str | Path, *, synthetic: bool = False, referenc
 
 def plot_residuals(fits: dict, path: str | Path, *, synthetic: bool = False) -> Path:
     """Residual autocorrelation and residual/input cross-correlation with bounds."""
-    fig, axes = plt.subplots(len(fits), 2, figsize=(10, 3 * len(fits)), squeeze=False)
+    fig, axes = subplots(len(fits), 2, figsize=(10, 3 * len(fits)), squeeze=False)
     for i, fit in enumerate(fits.values()):
         r = fit.residuals
         a, c = axes[i, 0], axes[i, 1]
@@ -87,7 +87,7 @@ def plot_residuals(fits: dict, path: str | Path, *, synthetic: bool = False) -> 
 def plot_analytic(ap, path: str | Path) -> Path:
     """Bode of the analytic aircraft: full model and rolling approximation, both inputs."""
     f = np.logspace(-3, 1, 500)
-    fig, axes = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
+    fig, axes = subplots(2, 2, figsize=(11, 6), sharex=True)
     pairs = (("aileron (rad) -> roll rate", ap.full_control, ap.rolling_control),
              ("lateral wind (ft/s) -> roll rate", ap.full_disturbance, ap.rolling_disturbance))
     for j, (title, full, rolling) in enumerate(pairs):

@@ -1,0 +1,31 @@
+"""``import hesspipe`` gives the researcher's API, documented, without loading the heavy parts."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import hesspipe
+
+REQUIRED = ("read_run", "read_plants", "fly", "fit_plants", "PilotModel", "simulate", "identify",
+            "compare_pilots", "diagnose")
+
+
+def test_api_names_are_exported_and_documented():
+    for name in REQUIRED:
+        assert name in hesspipe.__all__
+        obj = getattr(hesspipe, name)
+        doc = obj.__doc__ or ""
+        assert doc.strip(), name
+        if callable(obj) and not isinstance(obj, type):
+            assert "Parameters" in doc, f"{name}: no numpydoc Parameters section"
+    for name in hesspipe.__all__:
+        getattr(hesspipe, name)  # every exported name resolves
+
+
+def test_import_is_light():
+    code = ("import sys, hesspipe\n"
+            "print(sorted(m for m in ('scipy', 'control', 'jsbsim', 'matplotlib') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
