@@ -63,6 +63,10 @@ def test_hidden_effect_is_named_first_and_gap_shrinks(diagnoses, effect):
     assert d.gap_after < 0.5 * d.gap_before
     assert d.log_rms_db_after < d.log_rms_db_before
     accepted = [s for s in d.steps if s.accepted]
+    if effect == "dutch_roll":
+        # Aircraft side: named from the output (the plant check), not from a pilot round.
+        assert d.plant_finding["verdict"] == "aircraft" and not accepted
+        return
     assert [s.candidate for s in accepted] == [effect]
     assert accepted[0].p_value < accepted[0].threshold and accepted[0].delta_bic > 0
 
@@ -71,7 +75,9 @@ def test_baseline_only_data_names_nothing(diagnoses):
     d = diagnoses[None]
     assert d.named_effects == ()
     assert d.gap_after == d.gap_before
-    assert {s.candidate for s in d.steps} == set(REQUIRED)
+    # aircraft-side candidates are judged on the output (the plant check), which matches
+    assert {s.candidate for s in d.steps} == set(REQUIRED) - {"dutch_roll"}
+    assert d.plant_finding["verdict"] == "match"
     assert not any(s.accepted for s in d.steps)
     # no candidate is even close: the data are the baseline model's own
     assert min(s.p_value for s in d.steps) > 10 * FAST.alpha / len(REQUIRED)
@@ -332,14 +338,18 @@ def test_cli_too_short(files, capsys, runs):
            "expected at least 1024")
 
 
-def test_cli_plants_that_do_not_match_the_columns(files, capsys, runs):
+def test_cli_plants_that_do_not_match_the_columns_is_a_finding(files, capsys, runs):
     tmp, _, plants_path = files
     r = runs["extra_delay"]
     swapped = replace(r, control=r.disturbance, disturbance=r.control)
     write_run(tmp / "swapped.csv", swapped)
-    _fails(["diagnose", str(tmp / "swapped.csv"), "--plants", str(plants_path), "--json",
-            str(tmp / "y.json")], capsys, "plants do not match")
-    assert not (tmp / "y.json").exists()
+    rc = main(["diagnose", str(tmp / "swapped.csv"), "--plants", str(plants_path), "--json",
+               str(tmp / "y.json"), "--candidates", "extra_delay", "--max-effects", "1"])
+    out = capsys.readouterr().out
+    assert rc == 0 and "WRONG PLANTS FILE OR COLUMNS" in out
+    finding = json.loads((tmp / "y.json").read_text())["plant_finding"]
+    assert finding["verdict"] == "wrong_file"
+    assert finding["parameters"]["columns"] == ["disturbance", "control", "output"]
 
 
 def test_independence_test_is_calibrated_for_a_smooth_input(runs):

@@ -246,13 +246,13 @@ def test_differential_evolution_is_seeded(data):
 
 
 def test_psd_figure_is_reusable(data, tmp_path):
-    from hesspipe.viz import plt, save_figure
+    from hesspipe.viz import save_figure, subplots
     from hesspipe.viz.pilots import plot_psd_comparison
 
     pl, _, run = data
     res = identify(run, pl, "original", free=["Ke"], optimizer="scipy", with_benchmark=False,
                    with_identifiability=False)
-    fig, (a, b) = plt.subplots(1, 2)
+    fig, (a, b) = subplots(1, 2)
     plot_psd_comparison(res.freq_hz, res.measured_psd,
                         {"original": res.simulated_psd, "unstable": np.full_like(res.measured_psd, np.nan)},
                         ax=a, fitness={"original": res.fitness})

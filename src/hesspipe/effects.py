@@ -8,7 +8,9 @@ fields and a short physical description. Parameter names are unique across
 effects and the core.
 
 Registry ids (SPEC.md "The discrepancy workflow"): ``motion_feedback``,
-``extra_delay``, ``remnant``, ``dutch_roll``, plus ``otoliths``.
+``extra_delay``, ``remnant``, ``dutch_roll``, plus ``otoliths`` and the aircraft-side
+``roll_mode`` and ``actuator_lag`` (tried on the plant check by
+:mod:`hesspipe.diagnose_aircraft`, with the nonlinear ``rate_limit``).
 """
 
 from __future__ import annotations
@@ -93,13 +95,35 @@ def _remnant(loop: Loop, p) -> Loop:
     return loop.replace(noise=loop.noise + gain(p["Kn"]) * tf([1.0], [p["Tn"], 1.0]))
 
 
+def dutch_roll_factor(w_dr: float, z_dr: float, r_dr: float):
+    """Factor of the control plant for a Dutch-roll pair: poles (w_dr rad/s, z_dr), zeros at
+    r_dr * w_dr with the same damping, unit DC gain so the rolling approximation's gain is kept."""
+    wphi = r_dr * w_dr
+    return tf([1.0, 2 * z_dr * wphi, wphi ** 2], [1.0, 2 * z_dr * w_dr, w_dr ** 2]) * gain(1.0 / r_dr ** 2)
+
+
+def roll_mode_factor(K_rm: float, a_rm: float, p_rm: float):
+    """Factor moving the plant's roll-mode pole from -p_rm to -a_rm * p_rm (rad/s) and scaling
+    its high-frequency gain by K_rm: ``K_rm (s + p_rm) / (s + a_rm p_rm)``."""
+    return gain(K_rm) * tf([1.0, p_rm], [1.0, a_rm * p_rm])
+
+
+def actuator_lag_factor(tau_a: float):
+    """First-order actuator ``1 / (tau_a s + 1)`` between the pilot's control and the
+    aircraft (tau_a in s; 0 = none)."""
+    return tf([1.0], [tau_a, 1.0]) if tau_a > 0 else gain(1.0)
+
+
 def _dutch_roll(loop: Loop, p) -> Loop:
-    wd, zd, r = p["w_dr"], p["z_dr"], p["r_dr"]
-    wphi = r * wd
-    # Pole pair with a nearby zero pair (ratio r), unit DC gain so the
-    # rolling approximation's gain is kept.
-    mode = tf([1.0, 2 * zd * wphi, wphi ** 2], [1.0, 2 * zd * wd, wd ** 2]) * gain(1.0 / r ** 2)
-    return loop.replace(plant=loop.plant * mode)
+    return loop.replace(plant=loop.plant * dutch_roll_factor(p["w_dr"], p["z_dr"], p["r_dr"]))
+
+
+def _roll_mode(loop: Loop, p) -> Loop:
+    return loop.replace(plant=loop.plant * roll_mode_factor(p["K_rm"], p["a_rm"], p["p_rm"]))
+
+
+def _actuator_lag(loop: Loop, p) -> Loop:
+    return loop.replace(plant=loop.plant * actuator_lag_factor(p["tau_a"]))
 
 
 EFFECTS: dict[str, Effect] = {e.id: e for e in (
@@ -127,7 +151,24 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in (
            {"w_dr": (0.74, 0.1, 4.195), "z_dr": (0.05, 0.0, 1.023), "r_dr": (0.9, 0.5, 1.523)},
            {"w_dr": (12, 1000.0, 0.1), "z_dr": (10, 1000.0, 0.0), "r_dr": (10, 1000.0, 0.5)},
            {"w_dr": "rad/s", "z_dr": "1", "r_dr": "1"}, _dutch_roll),
+    Effect("roll_mode", "aircraft",
+           "A roll mode other than the plants': the pole moves from -p_rm to -a_rm p_rm (rad/s) and "
+           "the control power scales by K_rm (a different L_p or L_da than the model's).",
+           {"K_rm": (1.0, 0.2, 5.0), "a_rm": (1.0, 0.2, 5.0), "p_rm": (1.0, 0.01, 20.0)},
+           {"K_rm": (10, 200.0, 0.2), "a_rm": (10, 200.0, 0.2), "p_rm": (12, 200.0, 0.01)},
+           {"K_rm": "1", "a_rm": "1", "p_rm": "rad/s"}, _roll_mode),
+    Effect("actuator_lag", "aircraft",
+           "A first-order actuator 1 / (tau_a s + 1) between the pilot's control and the aircraft "
+           "that the plants omit.",
+           {"tau_a": (0.1, 0.0, 0.5)}, {"tau_a": (10, 2000.0, 0.0)}, {"tau_a": "s"}, _actuator_lag),
 )}
+
+#: Aircraft-side findings that are not a linear change of the loop (no :class:`Effect`):
+#: named by :mod:`hesspipe.diagnose_aircraft` from the plant check alone.
+NONLINEAR_AIRCRAFT = {
+    "rate_limit": "The control surface cannot move faster than a limit: the actuator follows the "
+                  "pilot's command at a bounded rate (command units per s).",
+}
 
 
 def get_effect(effect_id: str) -> Effect:

@@ -8,9 +8,11 @@ from dataclasses import replace
 def register(sub) -> None:
     p = sub.add_parser(
         "diagnose", help="locate model/data disagreement, name missing effects, show the gap shrink",
-        description="Identify the baseline pilot model on RUN.csv, locate where its control PSD "
-                    "disagrees with the measurement, try each candidate effect, name the significant "
-                    "ones and report the gap before and after.")
+        description="Check the plants against RUN.csv's output (a failed check is a finding: the "
+                    "aircraft-side effect or the file error that closes it is named), judge motion "
+                    "feedback on the describing function, identify the baseline pilot model, locate "
+                    "where its control PSD disagrees with the measurement, try each candidate effect, "
+                    "name the significant ones and report the gap before and after.")
     p.add_argument("run", metavar="RUN.csv", help="measured run (time, disturbance, output, control)")
     p.add_argument("--plants", metavar="PLANTS.json", required=True, help="plants file (Yc, Yd)")
     p.add_argument("--model", default="original", help="baseline model: original or expanded "
