@@ -54,12 +54,12 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from .aircraft import AircraftConfig, load_aircraft
-from .blocks import Block, Loop, gain, tf
-from .effects import CANALS, EFFECTS, MOTION
+from .blocks import Loop
 from .errors import HesspipeError
 from .flight import FlightConfig, _check_seed, _jsbsim, _load, _quiet_logger, _sanitised_aircraft, _trim
 from .formats import Plants, Run, tf_coefficients, write_run
 from .io import check_output_dir, staged_output, write_json
+from .motion import motion_block, with_motion_path
 from .pilotdiscrete import DiscretePilot
 from .provenance import versions
 from .seeds import derive_seed
@@ -148,54 +148,12 @@ class PilotFlight:
 
 # --------------------------------------------------------------------------- pilot
 
-def motion_path(plants: Plants) -> Block | None:
-    """The plants' ``motion_path`` (controlled output → cab angular velocity) or None.
-
-    Raises
-    ------
-    HesspipeError
-        A ``motion_path`` that is not ``{"num": [...], "den": [...]}`` of a proper TF.
-    """
-    obj = getattr(plants, "motion_path", None)
-    if obj is None:
-        obj = plants.meta.get("motion_path") if isinstance(plants.meta, Mapping) else None
-    if obj is None:
-        return None
-    if hasattr(obj, "num") and hasattr(obj, "den") and not isinstance(obj, Mapping):
-        from .blocks import from_tf
-        return from_tf(obj)
-    try:
-        num = [float(v) for v in obj["num"]]
-        den = [float(v) for v in obj["den"]]
-    except (KeyError, TypeError, ValueError):
-        raise HesspipeError(f"plants: field 'motion_path': expected {{\"num\": [...], \"den\": [...]}}, "
-                            f"got {obj!r}") from None
-    if not (num and den and all(map(math.isfinite, num + den)) and any(den)):
-        raise HesspipeError(f"plants: field 'motion_path': expected finite coefficients and a "
-                            f"non-zero denominator, got {obj!r}")
-    if len(np.trim_zeros(num, "f")) > len(np.trim_zeros(den, "f")):
-        raise HesspipeError("plants: field 'motion_path': not proper; expected a proper transfer function")
-    return tf(num, den)
-
-
 def pilot_loop(model, params: Mapping[str, float], plants: Plants | None = None) -> Loop:
-    """The loop of `model` with complete `params`, its motion path taken from `plants`.
-
-    Identical to ``model.loop(params)`` except that ``motion_feedback`` uses
-    ``Km x canals x motion_path`` when the plants carry one.
-    """
-    mp = motion_path(plants) if plants is not None else None
-    if mp is None or "motion_feedback" not in model.effects:
-        return model.loop(params)
-    from .hess import core_loop
-
-    loop = core_loop(params)
-    for e in model.effects:
-        if e == "motion_feedback":
-            loop = loop.replace(vestibular=loop.vestibular + gain(params["Km"]) * CANALS * mp)
-        else:
-            loop = EFFECTS[e].apply(loop, params)
-    return loop
+    """The loop of `model` with complete `params`, its vestibular feedback acting through
+    the plants' ``motion_path`` (:func:`hesspipe.motion.with_motion_path`; absent: the
+    paper's platform × washout)."""
+    loop = model.loop(params)
+    return loop if plants is None else with_motion_path(loop, motion_block(plants))
 
 
 def _remnant_gain(model, p, plants, wind, r, dt, noise_seed, share) -> float:
@@ -363,7 +321,7 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
         "remnant_share": share,
         "aircraft_effects": dict(aircraft_effects.to_dict(),
                                  **({"yaw_damper_inputs_removed": damper} if damper else {})),
-        "motion_path": ("plants" if motion_path(plants) is not None else "platform x washout (paper)")
+        "motion_path": ("plants" if plants.motion_path is not None else "platform x washout (paper)")
         if "motion_feedback" in model.effects else None,
         "seed": seed,
         "seeds": {"gust": gust_seed, "remnant": remnant_seed},
