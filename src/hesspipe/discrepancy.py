@@ -629,7 +629,8 @@ class _Problem:
 
     # model pieces -----------------------------------------------------------------------
     def loop(self, model, params):
-        return model.loop(model.complete(params))
+        # Through the plants' motion path, as the Simulator sees it (remnant_density too).
+        return self.sim.prepare(model.loop(model.complete(params)))
 
     def stochastic(self, model, params) -> bool:
         """Whether the model's loop has a remnant."""
