@@ -20,11 +20,10 @@ import numpy as np
 import scipy.signal
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from pilot_data import DT, N, YC, YD, broadband, plants  # noqa: E402
-
 from hesspipe.apid import Field, bit_climb  # noqa: E402
 from hesspipe.hess import PilotModel, synthetic_run, table1  # noqa: E402
 from hesspipe.identify import SpectralObjective, identify  # noqa: E402
+from pilot_data import DT, YC, YD, N, broadband, plants  # noqa: E402
 
 
 def straightforward(values, base, t, w, measured, pade_order=5):

@@ -79,7 +79,7 @@ def main(argv=None) -> int:
             i += 1
             try:
                 run, plants, truth, pilot = trial_run(plant, i, args.seed)
-            except Exception as exc:  # the generator found no pilot in range for this draw
+            except Exception:  # the generator found no pilot in range for this draw
                 skipped += 1
                 if skipped > 3 * args.n:
                     raise

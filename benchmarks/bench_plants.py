@@ -65,10 +65,9 @@ def main(argv=None) -> int:
             print(f"  decimate {q}: {key:21s} {v:6.2f} %")
 
         # Known answer: the analytic aircraft's full model, synthetic records, several seeds.
-        from test_plants import _write_synthetic_flight  # the tests' generator, not duplicated
-
         from hesspipe import analytic
         from hesspipe.d2c import frequency_response
+        from test_plants import _write_synthetic_flight  # the tests' generator, not duplicated
 
         truth = analytic.analytic_transfer_functions(analytic.load_analytic("roskam"))
         f = np.logspace(np.log10(0.02), np.log10(2.0), 200)

@@ -23,10 +23,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from pilot_data import DT, broadband, plants  # noqa: E402
-
 from hesspipe.hess import synthetic_run, table1  # noqa: E402
 from hesspipe.identify import identify  # noqa: E402
+from pilot_data import DT, broadband, plants  # noqa: E402
 
 PILOTS = [  # Ke, K1, K2, Km, remnant Kn (Tn = 0.3 s)
     (12.0, 3.0, 1.5, 1.0, 0.1),

@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from hesspipe.compare import compare_pilots
-from hesspipe.formats import read_plants
 from hesspipe.errors import HesspipeError
+from hesspipe.formats import read_plants
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.seeds import derive_seed
 

@@ -8,8 +8,8 @@ import pytest
 
 from hesspipe import analytic
 from hesspipe.cli import main
-from hesspipe.errors import HesspipeError
 from hesspipe.config import aircraft_file
+from hesspipe.errors import HesspipeError
 from hesspipe.formats import read_plants
 
 

@@ -24,9 +24,9 @@ import io
 import json
 import os
 import re
+import shutil
 import signal
 import socket
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -46,10 +46,8 @@ from hesspipe.commands import COMMANDS
 from hesspipe.errors import HesspipeError
 from hesspipe.formats import Run, write_plants, write_run
 from hesspipe.io import MARKER, STAGING_PREFIX, TMP_PREFIX
-
 from pilot_data import plants as paper_plants
 from proc_helpers import drop_write_override, sigterm_when_ready
-
 
 # -- inputs ------------------------------------------------------------------------------------
 

@@ -13,8 +13,7 @@ import pytest
 from hesspipe import compare as compare_mod
 from hesspipe.batch import run_batch
 from hesspipe.cli import main
-from hesspipe.compare import (CONFIGURATIONS, Comparison, PilotComparison, PilotsConfig, compare_pilots,
-                              list_runs)
+from hesspipe.compare import CONFIGURATIONS, Comparison, PilotComparison, PilotsConfig, compare_pilots, list_runs
 from hesspipe.errors import HesspipeError
 from hesspipe.formats import Plants, Run, write_plants, write_run
 from hesspipe.io import to_json

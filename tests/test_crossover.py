@@ -6,7 +6,6 @@ import pytest
 
 from hesspipe.crossover import CrossoverLimits, crossover
 from hesspipe.hess import table1
-
 from pilot_data import plants
 
 

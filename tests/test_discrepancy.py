@@ -11,9 +11,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from hesspipe.arx import independence_test
-
 from hesspipe import discrepancy as D
+from hesspipe.arx import independence_test
 from hesspipe.cli import main
 from hesspipe.errors import HesspipeError
 from hesspipe.formats import write_plants, write_run

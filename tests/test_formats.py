@@ -179,8 +179,7 @@ def test_bad_plants(tmp_path, obj, words):
 
 # -- issue 10: real time columns, implausible values, plants dt, record length, seeds ---------
 
-def _time_csv(path, times, n=None):
-    n = len(times)
+def _time_csv(path, times):
     rows = [(t, 0.5 * i, 0.01 * i, -0.2 * i) for i, t in enumerate(times)]
     return _csv(path, ("time", "disturbance", "output", "control"), rows)
 

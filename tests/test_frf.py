@@ -102,7 +102,6 @@ def test_record_not_a_whole_number_of_periods():
 def test_broadband_falls_back_to_welch():
     rng = np.random.default_rng(5)
     d = _apply(rng.standard_normal(4 * N), lambda s: 5 / (s + 5))
-    FSr = FS
     f = estimate_frf(_run(d, np.zeros(d.size), noise=0.05))
     assert f.method == "welch" and f.reference is None
     w = f.feedback.freq_rad_s

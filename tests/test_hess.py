@@ -9,11 +9,9 @@ from hesspipe.crossover import crossover
 from hesspipe.effects import CANALS, EFFECTS, PLATFORM, WASHOUT, get_effect
 from hesspipe.errors import HesspipeError
 from hesspipe.formats import Plants
-from hesspipe.hess import (PARAMETERS, PilotModel, Simulator, model_from_name, simulate,
-                           synthetic_run, table1)
+from hesspipe.hess import PARAMETERS, PilotModel, Simulator, model_from_name, simulate, synthetic_run, table1
 from hesspipe.spectra import psd
-
-from pilot_data import DT, N, YC, broadband, multisine, plants, reference_control
+from pilot_data import DT, YC, N, broadband, multisine, plants, reference_control
 
 
 def test_table1_defaults_for_both_plant_types():

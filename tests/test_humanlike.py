@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 from hesspipe.errors import HesspipeError
-from hesspipe.humanlike import (closed_loop, csv_bytes, draw_trial, make_plant, make_trials,
-                                simulate_trial, write_trial)
+from hesspipe.humanlike import closed_loop, csv_bytes, draw_trial, make_plant, make_trials, simulate_trial, write_trial
 from hesspipe.humanlike.pilots import loop_metrics
 
 SHORT = dict(T_m=15.0, run_in=10.0)     # 900 samples at 60 Hz: fast, whole periods

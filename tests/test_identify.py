@@ -33,7 +33,6 @@ from hesspipe.errors import HesspipeError
 from hesspipe.formats import Run, write_plants, write_run
 from hesspipe.hess import UNSTABLE_FITNESS, PilotModel, synthetic_run, table1
 from hesspipe.identify import SpectralObjective, identify
-
 from pilot_data import DT, broadband, plants
 
 TRUE = dict(table1(1), Ke=12.0, K1=3.0, K2=1.5)

@@ -1,13 +1,11 @@
 """The Hess pilot model flying JSBSim in closed loop (hesspipe.pilotflight, hesspipe.pilotdiscrete)."""
 
 import json
-import math
-from pathlib import Path
 
+import control as ct
 import numpy as np
 import pytest
 
-from hesspipe.blocks import tf
 from hesspipe.cli import main
 from hesspipe.effects import PLATFORM, WASHOUT
 from hesspipe.errors import HesspipeError
@@ -17,8 +15,6 @@ from hesspipe.hess import PilotModel, gain_scale
 from hesspipe.io import MARKER
 from hesspipe.pilotdiscrete import DiscretePilot, continuous_paths
 from hesspipe.pilotflight import AircraftEffects, fly_pilot_record, pilot_loop
-
-import control as ct
 
 DT = 1.0 / 120.0
 # The JSBSim 737's plants as stage two fits them (flight seed 1, ARX(4,6,1) / ARX(3,5,1)).

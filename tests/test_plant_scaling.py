@@ -19,8 +19,7 @@ from hesspipe.compare import CompareSettings, compare_run
 from hesspipe.crossover import crossover
 from hesspipe.errors import HesspipeError
 from hesspipe.formats import Plants
-from hesspipe.hess import (LOOP_GAINS, PilotModel, gain_scale, reference_crossover, simulate,
-                           table1)
+from hesspipe.hess import LOOP_GAINS, PilotModel, gain_scale, reference_crossover, simulate, table1
 from hesspipe.identify import default_fields, identify
 
 SHORT = CohortSpec(duration_s=24.0)  # 1200 samples: one spectral segment and a bit

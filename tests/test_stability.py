@@ -20,10 +20,9 @@ from hesspipe import arx
 from hesspipe.cohort import CohortSpec, pilot_ids, synth_pilot
 from hesspipe.formats import Plants
 from hesspipe.hess import PilotModel, Simulator, growth_limit, simulate, table1
-from hesspipe.slow_roots import reflect_slow_roots
 from hesspipe.seeds import derive_seed
-
-from pilot_data import DT, N, YD, multisine, reference_control
+from hesspipe.slow_roots import reflect_slow_roots
+from pilot_data import DT, YD, N, multisine, reference_control
 
 #: Yc (aileron -> roll rate) and Yd (lateral wind -> roll rate) fitted for seed S (num, den).
 FITTED_737 = {

@@ -5,8 +5,17 @@ import pytest
 
 from hesspipe.config import Fields
 from hesspipe.errors import HesspipeError
-from hesspipe.wind import (Excitation, SideWind, filtered_noise, heading_to_ned, multisine,
-                           ned_to_heading, prbs, relative_wind, taper)
+from hesspipe.wind import (
+    Excitation,
+    SideWind,
+    filtered_noise,
+    heading_to_ned,
+    multisine,
+    ned_to_heading,
+    prbs,
+    relative_wind,
+    taper,
+)
 
 DT = 1.0 / 120.0
 T = np.arange(int(70 / DT)) * DT

@@ -6,7 +6,8 @@ ARX plants from the records, and closes the Hess structural pilot model
 extending AIAA 2009-6032 (Zaychik, Cardullo, George, Kelly).
 """
 
-from importlib.metadata import PackageNotFoundError, version as _version
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _version
 
 try:
     __version__ = _version("hesspipe")

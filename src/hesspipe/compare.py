@@ -34,10 +34,10 @@ import numpy as np
 
 from .batch import run_batch
 from .config import Fields
+from .criteria import CRITERIA, DEFAULT_CRITERION, check_criterion
 from .errors import HesspipeError
 from .formats import Plants, Run, _parse_columns, read_run, record_samples
 from .io import write_json, write_text
-from .criteria import CRITERIA, DEFAULT_CRITERION, check_criterion
 from .seeds import MAX_SEED, check_seed, derive_seed
 from .verdict import safe_motion_test, verdict_lines
 

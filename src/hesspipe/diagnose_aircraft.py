@@ -366,8 +366,9 @@ def corrected(run, plants, finding: PlantFinding):
     """(run, plants) with the finding applied, for the pilot's identification: the fitted
     aircraft factor in both paths (``rate_limit`` has no linear form: plants unchanged),
     or the columns and path gains of a wrong-file verdict."""
-    import control as ct
     from dataclasses import replace
+
+    import control as ct
 
     from .blocks import tf
     from .effects import actuator_lag_factor, dutch_roll_factor, roll_mode_factor

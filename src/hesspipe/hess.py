@@ -39,15 +39,14 @@ decided from the roots of the closed loop's characteristic polynomial
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass, replace
 from typing import Mapping
-
-import math
 
 import numpy as np
 import scipy.fft as sfft
 
-from .blocks import Block, Loop, ONE, Term, from_tf, max_delay, max_real_root, pade_order_for
+from .blocks import ONE, Block, Loop, Term, from_tf, max_delay, max_real_root, pade_order_for
 from .effects import EFFECTS, get_effect
 from .errors import HesspipeError
 from .motion import motion_block, with_motion_path

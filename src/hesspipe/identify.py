@@ -31,7 +31,16 @@ from scipy.optimize import differential_evolution
 from .apid import ClimbResult, Field, bit_climb
 from .crossover import Crossover, CrossoverLimits, loop_crossover
 from .errors import HesspipeError
-from .hess import LOOP_GAINS, STRUCTURAL, UNSTABLE_FITNESS, unstable_fitness, PilotModel, Simulator, gain_scale, model_from_name
+from .hess import (
+    LOOP_GAINS,
+    STRUCTURAL,
+    UNSTABLE_FITNESS,
+    PilotModel,
+    Simulator,
+    gain_scale,
+    model_from_name,
+    unstable_fitness,
+)
 from .mcruer import bounded_powell
 from .seeds import check_seed
 

@@ -22,7 +22,6 @@ import numpy as np
 
 from .errors import HesspipeError
 
-
 #: Name prefixes of the temporary files and folders hesspipe makes beside its outputs; with
 #: the process id after them they are recognisably hesspipe's, so a later run can remove
 #: those a killed run left (and nothing else).

@@ -77,17 +77,16 @@ import numpy as np
 from scipy import signal
 
 from . import arx as _arx
-from .analytic import (AnalyticPlants, analytic_transfer_functions,
-                       dimensional_derivatives, load_analytic, modes)
+from .analytic import AnalyticPlants, analytic_transfer_functions, dimensional_derivatives, load_analytic, modes
 from .config import Fields, aircraft_file
 from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
 from .errors import HesspipeError
 from .formats import Plants, read_csv_columns, sample_interval, tf_coefficients, write_plants
 from .hess import growth_limit
-from .slow_roots import SlowRoots, phase_change, reflect_slow_roots
 from .io import staged_output, write_json, write_text
 from .motion import paper_motion_path
 from .provenance import file_hash, versions
+from .slow_roots import SlowRoots, phase_change, reflect_slow_roots
 
 #: The paper's Eq. 16: lateral wind → roll rate of its Boeing 757 (ARX, units as printed).
 PAPER_EQ16 = ((-0.2554, 14.4, -272.6, 25.72), (1.0, 84.37, 452.2, 1510.0, 628.8))

@@ -207,7 +207,8 @@ def _diagnose_run(ctx) -> Path:
 
 
 def diagnose(ctx) -> None:
-    from .discrepancy import SEGMENT, DiagnoseConfig, diagnose as run_diagnose, format_report
+    from .discrepancy import SEGMENT, DiagnoseConfig, format_report
+    from .discrepancy import diagnose as run_diagnose
     from .formats import read_plants, read_run
     from .io import write_json, write_text
     from .viz.diagnose import plot_diagnosis

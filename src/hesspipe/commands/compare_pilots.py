@@ -42,10 +42,10 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
+    from ..batch import check_scheduler_address
     from ..compare import compare_pilots
     from ..errors import HesspipeError
     from ..formats import read_plants
-    from ..batch import check_scheduler_address
     from ..io import check_output_dir, check_output_file, staged_output, write_json
     from ._options import cli_message, run_options
 

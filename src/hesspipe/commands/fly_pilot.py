@@ -70,12 +70,11 @@ def _params(path: Path) -> dict:
 
 def _run(args) -> int:
     from ..config import load_toml
+    from ..errors import HesspipeError
     from ..flight import FlightConfig
     from ..formats import read_plants
     from ..hess import model_from_name
     from ..pilotflight import AircraftEffects, fly_pilot
-
-    from ..errors import HesspipeError
 
     for flag, value, ok, want in (
             ("--actuator-lag", args.actuator_lag, lambda v: v >= 0, "a time constant >= 0 s"),

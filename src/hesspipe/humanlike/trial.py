@@ -16,7 +16,7 @@ import numpy as np
 from ..errors import HesspipeError
 from ..seeds import derive_seed
 from . import forcing, pilots
-from .lti import discretise, freqresp, ss_from_tf, zoh
+from .lti import discretise, ss_from_tf, zoh
 from .plants import Plant, make_plant
 from .simulate import Wiring, delay_steps
 
@@ -334,8 +334,8 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     HesspipeError
         If the simulated loop diverges (it should not for a drawn pilot).
     """
-    from .truth import build_truth
     from .simulate import compile_loop
+    from .truth import build_truth
 
     o = spec.options
     fs, ratio = float(o["fs"]), int(fine_ratio or o["fine_ratio"])

@@ -30,8 +30,8 @@ import numpy as np
 
 from ..errors import HesspipeError
 from ..io import atomic_path, to_json, write_json
-from .plants import ANGLE_MOTION, PLATFORM, WASHOUT
 from .lti import series
+from .plants import ANGLE_MOTION, PLATFORM, WASHOUT
 
 TIME_STYLES = ("g9", "ms", "epoch_ms", "epoch_us", "g17")
 COLUMNS = ("time", "disturbance", "output", "control", "reference")

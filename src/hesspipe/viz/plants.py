@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import save_figure, subplots
 from ..d2c import frequency_response
+from . import save_figure, subplots
 
 
 def plot_validation(fits: dict, path: str | Path, *, synthetic: bool = False) -> Path:
