@@ -62,7 +62,7 @@ def test_run_batch_keeps_item_order_for_any_worker_count():
     items = list(range(7))
     assert run_batch(_square, items, workers=1) == [i * i for i in items]
     assert run_batch(_square, items, workers=2) == [i * i for i in items]
-    with pytest.raises(HesspipeError, match="--workers: expected an integer >= 1, got 0"):
+    with pytest.raises(HesspipeError, match="^workers: expected an integer >= 1, got 0"):
         run_batch(_square, items, workers=0)
 
 
@@ -97,7 +97,7 @@ def test_dask_local_cluster_gives_the_local_results(tmp_path, capsys, monkeypatc
 
 def test_unreachable_scheduler_is_a_one_line_error():
     pytest.importorskip("distributed")
-    with pytest.raises(HesspipeError, match=r"--scheduler tcp://127.0.0.1:9: cannot connect"):
+    with pytest.raises(HesspipeError, match=r"^scheduler tcp://127.0.0.1:9: cannot connect"):
         run_batch(_square, [1], scheduler="tcp://127.0.0.1:9", connect_timeout=1)
 
 
@@ -358,3 +358,16 @@ def test_scheduler_without_dask_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)  # import fails as if not installed
     with pytest.raises(HesspipeError, match=r"pip install 'hesspipe\[dask\]'"):
         run_batch(_square, [1], scheduler="tcp://127.0.0.1:8786")
+
+
+def test_compare_pilots_command_spells_the_librarys_settings_as_its_flags():
+    # The library says "workers:" / "scheduler ADDRESS:"; the command's messages name its flags.
+    from hesspipe.cli import build_parser
+    from hesspipe.commands._options import cli_message
+
+    args = build_parser().parse_args(["compare-pilots", "runs", "--plants", "p.json"])
+    assert cli_message("workers: expected an integer >= 1, got 0", args) == \
+        "--workers: expected an integer >= 1, got 0"
+    assert cli_message("scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (x)", args) == \
+        "--scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (x)"
+    assert cli_message("runs/p1.csv: column 'control' missing", args) == "runs/p1.csv: column 'control' missing"

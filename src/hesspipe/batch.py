@@ -82,7 +82,7 @@ def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
     if workers is None:
         workers = default_workers()
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise HesspipeError(f"--workers: expected an integer >= 1, got {workers!r}")
+        raise HesspipeError(f"workers: expected an integer >= 1, got {workers!r}")
     workers = min(workers, max(len(items), 1))
     results: list = [None] * len(items)
     with progress_bar(len(items), desc, enable=progress, unit=unit) as bar:
@@ -173,15 +173,15 @@ def _connect(address: str, timeout: float):
         return box["client"]
     why = (f"{type(box['error']).__name__}: {box['error']}" if "error" in box
            else f"no Dask answer within {timeout:g} s; is a Dask scheduler listening there?")
-    raise HesspipeError(f"--scheduler {address}: cannot connect to a Dask scheduler ({why})")
+    raise HesspipeError(f"scheduler {address}: cannot connect to a Dask scheduler ({why})")
 
 
 def _run_dask(func, items, address, desc, unit, progress, timeout) -> list:
-    address = check_scheduler_address(address, "--scheduler")
+    address = check_scheduler_address(address)
     try:
         from distributed import as_completed as dask_completed
     except ImportError:
-        raise HesspipeError(f"--scheduler {address}: Dask distributed is not installed; "
+        raise HesspipeError(f"scheduler {address}: Dask distributed is not installed; "
                             "install it with pip install 'hesspipe[dask]'") from None
     client = _connect(address, timeout)
     with client, progress_bar(len(items), desc, enable=progress, unit=unit) as bar:

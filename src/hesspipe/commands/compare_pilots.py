@@ -20,9 +20,11 @@ def register(sub) -> None:
                    help="Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 (needs hesspipe[dask])")
     p.add_argument("--json", metavar="OUT.json", help="write the comparison as JSON")
     p.add_argument("--figures", metavar="DIR", help="write a PSD figure per pilot into DIR")
-    from ._options import add_run_options, add_seed
+    from ._options import add_run_options, add_seed, add_terms
 
     add_run_options(p)
+    # The library names its settings (workers, scheduler); this command spells them as flags.
+    add_terms(p, {r"(^|: )workers: ": r"\1--workers: ", r"(^|: )scheduler ": r"\1--scheduler "})
     add_seed(p, 0, "base seed")
     p.add_argument("--optimizer", choices=("apid", "scipy", "differential_evolution"), default="apid",
                    help="identification optimizer (default: %(default)s, the paper's)")
