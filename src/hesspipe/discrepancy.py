@@ -323,21 +323,17 @@ def forced_response(sys, u: np.ndarray, dt: float, *, pad_factor: int = 4,
     python-control's time-domain solver.
     """
     import control as ct
-    import scipy.fft as sfft
 
     from .blocks import from_tf, max_real_root
-    from .hess import growth_limit
+    from .hess import Contour
 
     u = np.asarray(u, dtype=float)
     block = from_tf(sys)
-    t = dt * np.arange(u.size)
-    nfft = sfft.next_fast_len(pad_factor * u.size, real=True)
-    sigma0 = growth_limit(u.size * dt) + decays / (nfft * dt)
-    if not all(max_real_root(term.den) < growth_limit(u.size * dt) for term in block.terms):
+    c = Contour.for_record(u.size, dt, pad_factor=pad_factor, decays=decays)
+    if not all(max_real_root(term.den) < c.growth_limit for term in block.terms):
+        t = dt * np.arange(u.size)
         return np.asarray(ct.forced_response(sys, T=t, U=u).outputs, dtype=float).reshape(-1)
-    s = sigma0 + 2j * np.pi * np.fft.rfftfreq(nfft, dt)
-    y = sfft.irfft(block.response(s) * sfft.rfft(u * np.exp(-sigma0 * t), nfft), nfft)[: u.size]
-    return y * np.exp(sigma0 * t)
+    return c.waveform(block.response(c.s) * c.spectrum(u))
 
 
 def plant_check(run: Run, plants: Plants, *, max_lag: int = 25, edge_s: float = 1.0) -> PlantCheck:

@@ -358,6 +358,60 @@ def growth_limit(duration_s: float) -> float:
     return RECORD_GROWTH / float(duration_s)
 
 
+@dataclass(frozen=True, eq=False)
+class Contour:
+    """The FFT grid of a record on the shifted contour ``s = sigma0 + j w``.
+
+    Signals are weighted by ``exp(-sigma0 t)`` before the transform and the
+    result un-weighted after it: exact for a causal linear system, and every
+    mode slower than ``sigma0`` (slow decaying modes, and slowly growing ones
+    the record cannot tell from stable) has decayed on the weighted grid
+    before it could wrap around. The one convention of :class:`Simulator` and
+    :func:`hesspipe.discrepancy.forced_response`.
+
+    Attributes
+    ----------
+    n, nfft : int
+        Record and FFT length (samples).
+    dt : float
+        Sample interval, s.
+    growth_limit : float
+        :func:`growth_limit` of the record (1/s).
+    sigma0 : float
+        ``growth_limit + decays / (nfft dt)`` (1/s).
+    s : ndarray
+        The contour's points (rad/s, complex), one per rfft bin.
+    """
+
+    n: int
+    dt: float
+    nfft: int
+    growth_limit: float
+    sigma0: float
+    s: np.ndarray
+    weight: np.ndarray
+    unweight: np.ndarray
+
+    @classmethod
+    def for_record(cls, n: int, dt: float, *, pad_factor: int = 4, decays: float = 10.0) -> "Contour":
+        """The contour of `n` samples at `dt` s, zero-padded to `pad_factor` records."""
+        limit = growth_limit(n * dt)
+        nfft = sfft.next_fast_len(max(int(pad_factor), 2) * n, real=True)
+        sigma0 = limit + float(decays) / (nfft * dt)
+        # sigma0 > 0 also keeps s off the origin, where integrating plants (1/s) are infinite.
+        s = sigma0 + 2j * np.pi * np.fft.rfftfreq(nfft, dt)
+        t = dt * np.arange(n)
+        return cls(n, float(dt), nfft, limit, sigma0, s, np.exp(-sigma0 * t), np.exp(sigma0 * t))
+
+    def spectrum(self, x: np.ndarray) -> np.ndarray:
+        """Transform of the weighted samples `x` (length n)."""
+        return sfft.rfft(np.asarray(x, dtype=float) * self.weight, self.nfft)
+
+    def waveform(self, spectrum: np.ndarray) -> np.ndarray:
+        """Samples on the record of a spectrum on this contour (un-weighted)."""
+        return sfft.irfft(spectrum, self.nfft)[: self.n] * self.unweight
+
+
 class Simulator:
     """Closed-loop simulation prepared for one record: call it with many loops.
 
@@ -402,17 +456,9 @@ class Simulator:
             raise HesspipeError("disturbance: expected a 1-D signal of at least 2 samples")
         if not (dt > 0 and np.isfinite(dt)):
             raise HesspipeError(f"dt: expected a positive sample interval, got {dt!r}")
-        self.n = w.size
-        self.dt = float(dt)
-        self.growth_limit = growth_limit(self.n * self.dt)
-        self.nfft = sfft.next_fast_len(max(int(pad_factor), 2) * self.n, real=True)
-        self.sigma0 = self.growth_limit + float(decays) / (self.nfft * self.dt)
-        omega = 2.0 * np.pi * np.fft.rfftfreq(self.nfft, self.dt)
-        # sigma0 > 0 also keeps s off the origin, where integrating plants (1/s) are infinite.
-        self.s = self.sigma0 + 1j * omega
-        t = self.dt * np.arange(self.n)
-        self._weight = np.exp(-self.sigma0 * t)
-        self._unweight = np.exp(self.sigma0 * t)
+        self.contour = c = Contour.for_record(w.size, float(dt), pad_factor=pad_factor, decays=decays)
+        self.n, self.dt, self.nfft = c.n, c.dt, c.nfft
+        self.growth_limit, self.sigma0, self.s = c.growth_limit, c.sigma0, c.s
         self._cache: dict = {}
         self._seen: set = set()
         self.yc_block = from_tf(plants.control_to_output)
@@ -423,12 +469,12 @@ class Simulator:
                                 f"{np.round(np.roots(yd_den), 4).tolist()}; expected a Yd stable on a "
                                 f"{self.n * self.dt:g} s record (growth rate < {self.growth_limit:.3g} 1/s)")
         self.yc = self.yc_block.response(self.s)
-        self.ydw = self.yd_block.response(self.s) * sfft.rfft(w * self._weight, self.nfft)
+        self.ydw = self.yd_block.response(self.s) * c.spectrum(w)
         r = None if reference is None else np.asarray(reference, dtype=float)
         if r is not None and r.shape != w.shape:
             raise HesspipeError("reference: expected the same length as the disturbance")
         self.r = r if r is not None and np.any(r) else None
-        self.rf = None if self.r is None else sfft.rfft(self.r * self._weight, self.nfft)
+        self.rf = None if self.r is None else c.spectrum(self.r)
         self.noise_seed = int(noise_seed)
         self._noise = None
         self.cab = motion_block(plants)   # None: the paper's platform x washout
@@ -448,7 +494,7 @@ class Simulator:
         """Spectrum of the seeded unit-variance white sequence used by remnant."""
         if self._noise is None:
             white = np.random.default_rng(self.noise_seed).standard_normal(self.n)
-            self._noise = sfft.rfft(white * self._weight, self.nfft)
+            self._noise = self.contour.spectrum(white)
         return self._noise
 
     def growth_rate(self, loop: Loop) -> float:
@@ -471,7 +517,7 @@ class Simulator:
 
     def waveform(self, spectrum: np.ndarray) -> np.ndarray:
         """Time history on the record's samples of a spectrum from :meth:`spectra`."""
-        return sfft.irfft(spectrum, self.nfft)[: self.n] * self._unweight
+        return self.contour.waveform(spectrum)
 
     def spectra(self, loop: Loop, output: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         """Spectra (control, output) of the closed loop on the shifted contour; no stability check.
