@@ -29,3 +29,13 @@ def test_import_is_light():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+def test_command_line_start_up_loads_no_numeric_module():
+    code = ("import sys\n"
+            "from hesspipe.cli import build_parser\n"
+            "build_parser()\n"
+            "print(sorted(m for m in ('numpy', 'scipy', 'control', 'jsbsim', 'matplotlib') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"

@@ -29,14 +29,10 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from .choices import CRITERIA, DEFAULT_CRITERION  # noqa: F401  (re-exported)
 from .errors import HesspipeError
 
-# Importing this module stays light (the command line reads CRITERIA at start-up):
 # scipy and the model modules are imported where they are used.
-
-CRITERIA = ("paper", "df", "output")
-DEFAULT_CRITERION = "df"
-"""Chosen by measurement on the independent generator (benchmarks/bench_frf_identify.py, README)."""
 
 LITERATURE_BOUNDS = {"tau0": (0.05, 0.5), "wn": (4.0, 25.0), "zn": (0.05, 1.0)}
 """Bounds of freed Table 1 parameters in the phase-aware fits (McRuer & Jex; van Paassen)."""

@@ -12,8 +12,7 @@ two seeds a user can give ever select the same random streams.
 from __future__ import annotations
 
 import hashlib
-
-import numpy as np
+import numbers
 
 from .errors import HesspipeError
 
@@ -30,7 +29,7 @@ def check_seed(seed, what: str = "seed") -> int:
         Naming `what` (the parameter or field) and the rule; a negative or too
         large seed is refused, never wrapped onto another seed.
     """
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed <= MAX_SEED:
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or not 0 <= seed <= MAX_SEED:
         raise HesspipeError(f"{what}: expected an integer 0 <= seed < 2**63, got {seed!r}")
     return int(seed)
 
@@ -42,6 +41,8 @@ def derive_seed(base: int, *keys: str) -> int:
     process) and mixed with `base` by :class:`numpy.random.SeedSequence`.
     `base` must satisfy :func:`check_seed`.
     """
+    import numpy as np  # here, not at import: the command line checks seeds at start-up
+
     base = check_seed(base)
     words = [base & 0xFFFFFFFF, base >> 32]
     for key in keys:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from ..criteria import CRITERIA, DEFAULT_CRITERION
+from ..choices import CRITERIA, DEFAULT_CRITERION
 
 
 def register(sub) -> None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
 
 def register(subparsers) -> None:
@@ -41,7 +41,7 @@ def format_table(frf) -> str:
         lines.append(f"reference lines: {frf.reference.freq_rad_s.size} (their own response, in the JSON)")
     lines.append(f"remnant share of control power  {frf.remnant_share:.3f}")
     c = frf.crossover
-    if np.isfinite(c.frequency_rad_s):
+    if math.isfinite(c.frequency_rad_s):
         lines.append(f"crossover (nonparametric)      {c.frequency_rad_s:.3f} +- {c.frequency_std:.3f} "
                      f"rad/s, phase margin {c.phase_margin_deg:.1f} +- {c.phase_margin_std_deg:.1f} deg")
     else:

@@ -5,9 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-import numpy as np
-
-from ..criteria import CRITERIA, DEFAULT_CRITERION
+from ..choices import CRITERIA, DEFAULT_CRITERION
 from ..errors import HesspipeError
 from ._options import add_run_options, add_seed, add_terms, run_options
 
@@ -135,7 +133,7 @@ def format_table(result) -> str:
         lines.append("crossover          none found (the open loop's gain never crosses 1), within "
                      "limits: no " + limits)
     pc = result.primary_crossover
-    if pc is not None and np.isfinite(pc.frequency_rad_s) and pc.frequency_rad_s != c.frequency_rad_s:
+    if pc is not None and math.isfinite(pc.frequency_rad_s) and pc.frequency_rad_s != c.frequency_rad_s:
         lines.append(f"primary crossover  {pc.frequency_rad_s:.3f} rad/s, phase margin "
                      f"{pc.phase_margin_deg:.1f} deg (|L| first falls through 1 here and rises "
                      "above 1 again higher up)")
