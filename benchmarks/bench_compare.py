@@ -30,10 +30,10 @@ from pathlib import Path
 import control as ct
 import numpy as np
 
-from hesspipe.cohort import CohortSpec, synth_cohort
-from hesspipe.compare import compare_pilots
-from hesspipe.formats import Plants, read_plants
-from hesspipe.io import to_json
+from hesspipe.core.formats import Plants, read_plants
+from hesspipe.core.io import to_json
+from hesspipe.pilots.cohort import CohortSpec, synth_cohort
+from hesspipe.pilots.compare import compare_pilots
 
 
 def paper_plants() -> Plants:
@@ -72,7 +72,7 @@ def main() -> None:
     ap.add_argument("--out", help="folder for the cohorts (default: a temporary folder)")
     ap.add_argument("--restarts", type=int, default=2, help="APID climbs per identification")
     ap.add_argument("--start", choices=("warm", "random"), default="warm",
-                    help="where the expanded search starts (see hesspipe.compare.CompareSettings)")
+                    help="where the expanded search starts (see hesspipe.pilots.compare.CompareSettings)")
     ap.add_argument("--plants", help="plants JSON (default: SPEC.md's analytic roll plants)")
     ap.add_argument("--remnant-share", type=float, default=CohortSpec().remnant_share,
                     help="remnant share of the pilots' control power (default: %(default)s)")

@@ -37,11 +37,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hesspipe.discrepancy import diagnose
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import read_plants, read_run
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_plants, read_run
+from hesspipe.core.seeds import derive_seed
+from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
-from hesspipe.seeds import derive_seed
 
 EFFECTS = ("none", "motion_feedback", "extra_delay", "remnant", "dutch_roll", "actuator_lag",
            "extra_delay+dutch_roll")

@@ -20,9 +20,11 @@ import numpy as np
 import scipy.signal
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from hesspipe.apid import Field, bit_climb  # noqa: E402
-from hesspipe.hess import PilotModel, synthetic_run, table1  # noqa: E402
-from hesspipe.identify import SpectralObjective, identify  # noqa: E402
+from hesspipe.identification.apid import Field, bit_climb  # noqa: E402
+from hesspipe.identification.fit import identify  # noqa: E402
+from hesspipe.identification.problem import SpectralObjective  # noqa: E402
+from hesspipe.pilot.hess import PilotModel, table1
+from hesspipe.pilot.simulation import synthetic_run  # noqa: E402
 from pilot_data import DT, YC, YD, N, broadband, plants  # noqa: E402
 
 

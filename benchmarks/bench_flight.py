@@ -1,6 +1,6 @@
 """Benchmark of stage one: wall time of trim + both records, and excitation strength.
 
-For each aircraft: the wall time of :func:`hesspipe.flight.fly_records` (load,
+For each aircraft: the wall time of :func:`hesspipe.flight.approach.fly_records` (load,
 trim and fly the wind and the aileron record, in memory, no files), the best
 of a few repeats; then the RMS roll rate of each record against the RMS roll
 rate of a calm-air record with no wind and no excitation (the numerical
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hesspipe.flight import FlightConfig, fly_records
+from hesspipe.flight.approach import FlightConfig, fly_records
 
 
 def _rms(x) -> float:

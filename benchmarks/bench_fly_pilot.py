@@ -6,20 +6,20 @@ Prints
    median of several) against JSBSim alone in the same process (stage one's open-loop
    record, the same load/trim/steps without a pilot), as a ratio;
 2. envelope: over N cohort pilots (drawn exactly as the pipeline's cohort,
-   hesspipe.cohort.synth_pilot) the airspeed range, the least height AGL, the largest
+   hesspipe.pilots.cohort.synth_pilot) the airspeed range, the least height AGL, the largest
    |bank| and the failures (a limit left);
 3. identification: the same pilots' JSBSim-flown runs (40 Hz) identified with the
-   *fitted* plants (hesspipe.identify, expanded model) — relative errors of Ke, Km and the
+   *fitted* plants (hesspipe.identification.fit, expanded model) — relative errors of Ke, Km and the
    crossover; beside them the same pilots simulated by the linear frequency-domain model
    around the same plants with the same disturbance and remnant ("fft"), which separates
    what JSBSim adds (plant error, nonlinearity) from what the identification itself
    cannot resolve. Two free sets: the default (Ke, K1, K2, Km) and Ke, Km alone (K1, K2 at
    the truth);
-4. diagnose (hesspipe.discrepancy, baseline "original") on JSBSim-flown runs of pilots
+4. diagnose (hesspipe.diagnose.workflow, baseline "original") on JSBSim-flown runs of pilots
    with a hidden motion feedback, a hidden extra delay, and none (baseline flights):
    how often the hidden effect is named, and what is named on baseline flights.
 
-The plants are fitted by stages one and two (hesspipe.flight / hesspipe.plants) in a
+The plants are fitted by stages one and two (hesspipe.flight.approach / hesspipe.plants.fit) in a
 temporary folder first. Everything is seeded; the numbers are reproducible.
 
 Usage::
@@ -39,16 +39,17 @@ from pathlib import Path
 
 import numpy as np
 
-from hesspipe.cohort import CohortSpec, synth_pilot
-from hesspipe.crossover import crossover
-from hesspipe.errors import HesspipeError
-from hesspipe.flight import FlightConfig, fly, fly_records
-from hesspipe.formats import Run, read_plants
-from hesspipe.hess import Simulator, gain_scale, model_from_name
-from hesspipe.identify import identify
-from hesspipe.pilotflight import fly_pilot_record, pilot_loop
-from hesspipe.plants import PlantsConfig, fit_plants
-from hesspipe.seeds import derive_seed
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Run, read_plants
+from hesspipe.core.seeds import derive_seed
+from hesspipe.flight.approach import FlightConfig, fly, fly_records
+from hesspipe.flight.closed_loop import fly_pilot_record, pilot_loop
+from hesspipe.identification.fit import identify
+from hesspipe.pilot.crossover import crossover, gain_scale
+from hesspipe.pilot.hess import model_from_name
+from hesspipe.pilot.simulation import Simulator
+from hesspipe.pilots.cohort import CohortSpec, synth_pilot
+from hesspipe.plants.fit import PlantsConfig, fit_plants
 
 EVERY = 3  # 120 Hz -> 40 Hz records, as the pipeline's JSBSim cohort
 RESTARTS, PASSES = 2, 10  # the pipeline's APID budget (--restarts/--passes change it)
@@ -89,8 +90,8 @@ def linear_td_run(plants, model, params, flown: Run, noise_seed: int) -> Run:
     It checks the closed-loop machinery: identification on it should match the
     frequency-domain reproduction ("fft"), leaving JSBSim vs plants as the only difference.
     """
-    from hesspipe.pilotdiscrete import DiscretePilot, _run_sections, tustin_sections
-    from hesspipe.pilotflight import SAMPLE_LAG
+    from hesspipe.flight.closed_loop import SAMPLE_LAG
+    from hesspipe.pilot.discrete import DiscretePilot, _run_sections, tustin_sections
 
     dt = flown.dt / EVERY
     n = len(flown) * EVERY
@@ -226,7 +227,7 @@ DIAG_CASES = {
 
 
 def section_diagnose(plants, work: Path, seeds: int) -> None:
-    from hesspipe.discrepancy import diagnose
+    from hesspipe.diagnose.workflow import diagnose
 
     print(f"\n== 4. diagnose (baseline 'original') on JSBSim-flown runs, {seeds} seeds per case")
     g = gain_scale(plants)
@@ -285,7 +286,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     globals().update(RESTARTS=args.restarts, PASSES=args.passes)
     skip = set(args.skip.split(","))
-    print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737 (hesspipe.pilotflight)")
+    print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737 (hesspipe.flight.closed_loop)")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         t0 = time.perf_counter()

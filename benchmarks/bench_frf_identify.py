@@ -6,7 +6,7 @@ process (arrays as simulated, 60 Hz, 45 s measurement window after a run-in).
 For each plant, N trials (half "precision" pilots, half "hess" pilots, disturbance
 task: sum-of-sines at the plant input), and prints:
 
-* nonparametric crossover / phase margin (hesspipe.frf) against the generator's truth;
+* nonparametric crossover / phase margin (hesspipe.identification.frf) against the generator's truth;
 * per criterion (paper, df, output): identified crossover ratio and PM error against
   the truth (the model's primary crossover, the first fall of |L| through 1; in brackets
   the share that also holds for SPEC's highest crossing), the identified crossover against the nonparametric one, the fit relative
@@ -31,12 +31,12 @@ import time
 import control as ct
 import numpy as np
 
-from hesspipe.criteria import DEFAULT_CRITERION
-from hesspipe.formats import Plants, Run
-from hesspipe.frf import estimate_frf
+from hesspipe.core.formats import Plants, Run
+from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, plants_dict, simulate_trial
-from hesspipe.identify import identify
-from hesspipe.seeds import derive_seed
+from hesspipe.identification.criteria import DEFAULT_CRITERION
+from hesspipe.identification.fit import identify
+from hesspipe.identification.frf import estimate_frf
 
 
 def trial_run(plant: str, i: int, seed: int):

@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from hesspipe.errors import HesspipeError
-from hesspipe.flight import FlightConfig, fly
-from hesspipe.plants import PlantsConfig, fit_plants
+from hesspipe.core.errors import HesspipeError
+from hesspipe.flight.approach import FlightConfig, fly
+from hesspipe.plants.fit import PlantsConfig, fit_plants
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
@@ -65,8 +65,8 @@ def main(argv=None) -> int:
             print(f"  decimate {q}: {key:21s} {v:6.2f} %")
 
         # Known answer: the analytic aircraft's full model, synthetic records, several seeds.
-        from hesspipe import analytic
-        from hesspipe.d2c import frequency_response
+        from hesspipe.plants import analytic
+        from hesspipe.plants.d2c import frequency_response
         from test_plants import _write_synthetic_flight  # the tests' generator, not duplicated
 
         truth = analytic.analytic_transfer_functions(analytic.load_analytic("roskam"))

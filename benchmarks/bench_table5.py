@@ -23,8 +23,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from hesspipe.hess import synthetic_run, table1  # noqa: E402
-from hesspipe.identify import identify  # noqa: E402
+from hesspipe.identification.fit import identify  # noqa: E402
+from hesspipe.pilot.hess import table1  # noqa: E402
+from hesspipe.pilot.simulation import synthetic_run
 from pilot_data import DT, broadband, plants  # noqa: E402
 
 PILOTS = [  # Ke, K1, K2, Km, remnant Kn (Tn = 0.3 s)

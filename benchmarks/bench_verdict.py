@@ -23,11 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hesspipe.compare import compare_pilots
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import read_plants
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_plants
+from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
-from hesspipe.seeds import derive_seed
+from hesspipe.pilots.compare import compare_pilots
 
 
 def cohort(folder: Path, plant: str, n: int, seed: int, effects, task: str, T: float, fs: float) -> int:

@@ -19,7 +19,7 @@ import re
 import sys
 import time
 
-from hesspipe.errors import HesspipeError
+from hesspipe.core.errors import HesspipeError
 from hesspipe.humanlike import EFFECTS, make_trials
 
 DEFAULT_PLANTS = ("1/s", "1/(s(s+1))", "K/s2")

@@ -10,7 +10,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
-from hesspipe.formats import Plants
+from hesspipe.core.formats import Plants
 
 DT = 0.02
 N = 3500

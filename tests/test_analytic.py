@@ -6,11 +6,11 @@ import control as ct
 import numpy as np
 import pytest
 
-from hesspipe import analytic
 from hesspipe.cli import main
-from hesspipe.config import aircraft_file
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import read_plants
+from hesspipe.core.config import aircraft_file
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_plants
+from hesspipe.plants import analytic
 
 
 @pytest.fixture(scope="module")

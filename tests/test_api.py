@@ -8,7 +8,7 @@ import sys
 import hesspipe
 
 REQUIRED = ("read_run", "read_plants", "fly", "fit_plants", "PilotModel", "simulate", "identify",
-            "compare_pilots", "diagnose")
+            "compare_pilots", "DiagnoseConfig")
 
 
 def test_api_names_are_exported_and_documented():
@@ -21,6 +21,16 @@ def test_api_names_are_exported_and_documented():
             assert "Parameters" in doc, f"{name}: no numpydoc Parameters section"
     for name in hesspipe.__all__:
         getattr(hesspipe, name)  # every exported name resolves
+
+
+def test_each_stage_is_a_package_with_its_entry_point_documented():
+    import importlib
+
+    for package, name in (("flight", "fly"), ("plants", "fit_plants"), ("pilots", "compare_pilots"),
+                          ("diagnose", "diagnose"), ("identification", "identify"), ("pilot", "simulate")):
+        module = importlib.import_module(f"hesspipe.{package}")
+        assert name in module.__all__, (package, name)
+        assert "Parameters" in (getattr(module, name).__doc__ or ""), (package, name)
 
 
 def test_import_is_light():

@@ -2,8 +2,8 @@
 
 import pytest
 
-from hesspipe.apid import Field, bit_climb, gray_to_int, int_to_gray
-from hesspipe.errors import HesspipeError
+from hesspipe.core.errors import HesspipeError
+from hesspipe.identification.apid import Field, bit_climb, gray_to_int, int_to_gray
 
 
 def test_field_decoding_and_bounds():

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from hesspipe import arx, d2c
-from hesspipe.errors import HesspipeError
+from hesspipe.core.errors import HesspipeError
+from hesspipe.plants import arx, d2c
 
 # A known discrete system: A = 1 - 1.5 q^-1 + 0.7 q^-2, B = 0.5 + 0.3 q^-1, nk = 1
 # (poles 0.75 ± 0.37j, |z| = 0.84).

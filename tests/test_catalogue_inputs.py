@@ -23,8 +23,9 @@ import pytest
 
 import pilot_data as pdm
 from hesspipe.cli import main
-from hesspipe.formats import write_plants, write_run
-from hesspipe.hess import PilotModel, synthetic_run
+from hesspipe.core.formats import write_plants, write_run
+from hesspipe.pilot.hess import PilotModel
+from hesspipe.pilot.simulation import synthetic_run
 
 N = 1100  # > one spectral segment (1024), small enough to keep every row fast
 FAST = ["--free", "Ke", "--optimizer", "scipy", "--passes", "1", "--no-benchmark", "--criterion", "paper"]
@@ -245,7 +246,7 @@ def test_unstable_optimum_json_is_finite(inputs, capsys):
 
 def test_synth_pilots_sixty_hertz_reads_back(inputs, capsys, tmp_path):
     """The tool's own synth-pilots --dt 1/60 output is accepted, with dt from the whole record."""
-    from hesspipe.formats import read_run
+    from hesspipe.core.formats import read_run
 
     out = tmp_path / "c60"
     assert main(["synth-pilots", "--plants", str(inputs / "plants.json"), "--n", "1",
@@ -271,8 +272,8 @@ def test_messages_name_only_options_the_reader_has():
     """The library names settings; each command (or the configuration) spells them its way."""
     import argparse
 
-    from hesspipe.commands._options import add_run_options, cli_message
-    from hesspipe.stages import _config_terms
+    from hesspipe.cli._options import add_run_options, cli_message
+    from hesspipe.pipeline.stages import _config_terms
 
     msg = ("a.csv: column 'time': expected uniform sampling ...; set resample to interpolate onto a "
            "uniform grid")

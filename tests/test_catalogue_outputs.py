@@ -9,7 +9,7 @@ that was there is still there with the same bytes).
 
 The CLI property (:func:`test_every_command_refuses_a_read_only_folder` and
 :func:`test_every_command_refuses_a_file_as_output_folder`) runs every command of
-``hesspipe.commands.COMMANDS``: a command without an argument builder in
+``hesspipe.cli.COMMANDS``: a command without an argument builder in
 :data:`BUILDERS` fails the test, so commands added later are covered.
 
 Read-only folders: as root, ``chmod`` does not stop writes, so the command runs in a
@@ -41,11 +41,10 @@ import numpy as np
 import pytest
 
 import hesspipe.viz  # noqa: F401  - matplotlib configured before any fork (no cache warning in a child)
-from hesspipe.cli import build_parser, main
-from hesspipe.commands import COMMANDS
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import Run, write_plants, write_run
-from hesspipe.io import MARKER, STAGING_PREFIX, TMP_PREFIX
+from hesspipe.cli import COMMANDS, build_parser, main
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Run, write_plants, write_run
+from hesspipe.core.io import MARKER, STAGING_PREFIX, TMP_PREFIX
 from pilot_data import plants as paper_plants
 from proc_helpers import drop_write_override, sigterm_when_ready
 
@@ -54,7 +53,7 @@ from proc_helpers import drop_write_override, sigterm_when_ready
 @pytest.fixture(scope="module")
 def inputs():
     """Small valid inputs of every command, in a folder any user may read."""
-    from hesspipe.flight import FlightConfig, fly
+    from hesspipe.flight.approach import FlightConfig, fly
 
     base = Path(tempfile.mkdtemp(prefix="hesspipe-catalogue-"))
     os.chmod(base, 0o755)
@@ -274,7 +273,7 @@ def _user_folder(tmp: Path) -> Path:
 
 
 def _user_pilot_in_cohort(tmp: Path, inputs: Path) -> list[str]:
-    from hesspipe.io import _write_marker
+    from hesspipe.core.io import _write_marker
 
     cohort = tmp / "cohort"
     cohort.mkdir()
@@ -355,7 +354,7 @@ CASES = [
 
 def _run_root(tmp: Path, manifest: bytes | None = None) -> Path:
     """A pipeline root as `hesspipe run` leaves it (marker and stage folders, no science)."""
-    from hesspipe.io import _write_marker
+    from hesspipe.core.io import _write_marker
 
     root = tmp / "out"
     root.mkdir()
@@ -429,7 +428,7 @@ def test_only_hesspipe_leftovers_of_dead_runs_are_removed(inputs, tmp_path):
 
 def test_pipeline_stage_keeps_user_hidden_files(tmp_path):
     """The engine's stage start no longer sweeps `.*.tmp*` and `.staging-*` of the output tree."""
-    from hesspipe.pipeline import Pipeline, Stage
+    from hesspipe.pipeline.engine import Pipeline, Stage
 
     def write(ctx):
         (ctx.out_dir / "out.txt").write_text("x")
@@ -464,14 +463,14 @@ def test_synth_pilots_into_an_old_cohort_leaves_no_stale_pilot(inputs, tmp_path)
     assert sorted(p.name for p in out.glob("*.csv")) == ["pilot01.csv", "pilot02.csv"]
     assert not (out / "pilot03.truth.json").exists()
     assert (out / "notes.txt").read_text() == "mine"
-    from hesspipe.compare import list_runs
+    from hesspipe.pilots.compare import list_runs
 
     assert [p.name for p in list_runs(out)] == ["pilot01.csv", "pilot02.csv"]
 
 
 def test_diagnose_stage_reads_the_run_the_pilots_stage_declared(tmp_path):
     """A CSV put by hand beside the cohort is not diagnosed (the run is taken by id)."""
-    from hesspipe.stages import _diagnose_run
+    from hesspipe.pipeline.stages import _diagnose_run
 
     pilots = tmp_path / "pilots"
     (pilots / "cohort").mkdir(parents=True)
@@ -494,12 +493,12 @@ def test_diagnose_stage_reads_the_run_the_pilots_stage_declared(tmp_path):
 # -- item 6: results are not lost, the file system's refusals are one line ---------------------
 
 def test_outputs_are_checked_before_identifying(inputs, tmp_path, monkeypatch):
-    import hesspipe.identify
+    import hesspipe.identification.fit
 
     def boom(*a, **k):
         raise AssertionError("identification ran before the output path was checked")
 
-    monkeypatch.setattr(hesspipe.identify, "identify", boom)
+    monkeypatch.setattr(hesspipe.identification.fit, "identify", boom)
     blocker = tmp_path / "f"
     blocker.write_text("")
     code, out, err = _call(BUILDERS["identify"](inputs, blocker))
@@ -509,7 +508,7 @@ def test_outputs_are_checked_before_identifying(inputs, tmp_path, monkeypatch):
 def test_unforeseen_os_error_is_one_line(monkeypatch, tmp_path):
     import errno
 
-    import hesspipe.commands.status as status_cmd
+    import hesspipe.cli.status as status_cmd
 
     def full(args):
         raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "x.json"))
@@ -523,7 +522,7 @@ def test_write_refused_mid_way_is_a_one_line_error_naming_the_file(tmp_path, mon
     """A write that fails after the checks (disk full) names the file; nothing is left."""
     import errno
 
-    from hesspipe.io import write_text
+    from hesspipe.core.io import write_text
 
     def full(self, *a, **k):
         raise OSError(errno.ENOSPC, "No space left on device")
@@ -537,7 +536,7 @@ def test_write_refused_mid_way_is_a_one_line_error_naming_the_file(tmp_path, mon
 def test_scheduler_that_is_not_dask_times_out(monkeypatch):
     """A port where something else listens accepts the connection and never answers."""
     pytest.importorskip("distributed")
-    from hesspipe.batch import run_batch
+    from hesspipe.pilots.batch import run_batch
 
     server = socket.socket()
     server.bind(("127.0.0.1", 0))
@@ -575,9 +574,9 @@ def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
 
 @pytest.mark.parametrize("where", ["read-only", "file"])
 def test_a_write_without_a_prior_check_is_still_one_line(where, ro_folder, tmp_path):
-    """The root of every write (hesspipe.io.atomic_path) turns the file system's refusal
+    """The root of every write (hesspipe.core.io.atomic_path) turns the file system's refusal
     into one line naming the file, for writers that do not check up front."""
-    from hesspipe.io import write_json
+    from hesspipe.core.io import write_json
 
     if where == "file":
         blocker = tmp_path / "a-file"
@@ -611,7 +610,7 @@ def test_a_write_without_a_prior_check_is_still_one_line(where, ro_folder, tmp_p
 
 def test_an_output_folder_of_an_older_hesspipe_is_still_recognised(tmp_path):
     """Folders written before markers existed are known by their manifests naming the stage."""
-    from hesspipe.pipeline import Pipeline, Stage
+    from hesspipe.pipeline.engine import Pipeline, Stage
 
     def write(ctx):
         (ctx.out_dir / "out.txt").write_text(str(ctx.section))

@@ -8,13 +8,14 @@ import control as ct
 import numpy as np
 import pytest
 
-from hesspipe import cohort as cohort_mod
 from hesspipe.cli import main
-from hesspipe.cohort import CohortSpec, disturbance, draw_parameters, pilot_ids, synth_cohort
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import Plants, read_run, write_plants
-from hesspipe.hess import PilotModel, gain_scale, table1
-from hesspipe.spectra import psd
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Plants, read_run, write_plants
+from hesspipe.identification.spectra import psd
+from hesspipe.pilot.crossover import gain_scale
+from hesspipe.pilot.hess import PilotModel, table1
+from hesspipe.pilots import cohort as cohort_mod
+from hesspipe.pilots.cohort import CohortSpec, disturbance, draw_parameters, pilot_ids, synth_cohort
 
 SHORT = CohortSpec(duration_s=24.0)  # 1200 samples at 50 Hz: one spectral segment and a bit
 

@@ -10,14 +10,14 @@ import control as ct
 import numpy as np
 import pytest
 
-from hesspipe import compare as compare_mod
-from hesspipe.batch import run_batch
 from hesspipe.cli import main
-from hesspipe.compare import CONFIGURATIONS, Comparison, PilotComparison, PilotsConfig, compare_pilots, list_runs
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import Plants, Run, write_plants, write_run
-from hesspipe.io import to_json
-from hesspipe.seeds import derive_seed
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Plants, Run, write_plants, write_run
+from hesspipe.core.io import to_json
+from hesspipe.core.seeds import derive_seed
+from hesspipe.pilots import compare as compare_mod
+from hesspipe.pilots.batch import run_batch
+from hesspipe.pilots.compare import CONFIGURATIONS, Comparison, PilotComparison, PilotsConfig, compare_pilots, list_runs
 
 
 def paper_plants() -> Plants:
@@ -219,7 +219,7 @@ def test_improvement_stats_ignore_nan():
 
 @pytest.fixture(scope="module")
 def cohorts(tmp_path_factory):
-    from hesspipe.cohort import CohortSpec, synth_cohort
+    from hesspipe.pilots.cohort import CohortSpec, synth_cohort
 
     root = tmp_path_factory.mktemp("cohorts")
     # 1200 samples (one spectral segment, fast) and little remnant (2 % of the control power), so
@@ -234,7 +234,7 @@ def test_motion_feedback_cohort_pattern(cohorts):
     # A light search (1 climb of 6 passes + polish) keeps the test fast; the benchmark uses defaults.
     result = compare_pilots(cohorts / "mf", paper_plants(), workers=2, seed=0, restarts=1, passes=6)
     assert result.ok and result.synthetic and len(result.pilots) == 3
-    from hesspipe.hess import gain_scale
+    from hesspipe.pilot.crossover import gain_scale
 
     km_fixed = 0.1 * gain_scale(paper_plants())  # Table 1's, scaled to the plants like every loop gain
     assert result.settings.km_fixed == pytest.approx(km_fixed)
@@ -277,7 +277,7 @@ def test_cli_end_to_end_with_figures(cohorts, tmp_path, capsys):
 
 
 def test_short_run_is_reported_not_fatal(tmp_path):
-    from hesspipe.spectra import PaperWelch
+    from hesspipe.identification.spectra import PaperWelch
 
     assert compare_mod.MIN_SAMPLES == PaperWelch().nperseg
     folder = _write_runs(tmp_path / "runs", n=2)
@@ -298,7 +298,7 @@ def test_seeds_are_stable_and_distinct():
 def test_progress_is_quiet_when_not_a_terminal(capsys):
     import io
 
-    from hesspipe.progress import progress_bar, progress_enabled
+    from hesspipe.core.progress import progress_bar, progress_enabled
 
     assert not progress_enabled(io.StringIO())
     with progress_bar(3, "pilots") as bar:  # stderr is captured here: not a tty
@@ -308,7 +308,7 @@ def test_progress_is_quiet_when_not_a_terminal(capsys):
 
 
 def test_run_study_writes_the_pilots_stage_outputs(tmp_path):
-    from hesspipe.compare import run_study
+    from hesspipe.pilots.compare import run_study
 
     config = PilotsConfig.from_table({"n": 2, "duration_s": 21.0, "passes": 2, "restarts": 1, "workers": 1,
                                       "effects": ["motion_feedback"]}, "test.toml")
@@ -363,7 +363,7 @@ def test_scheduler_without_dask_names_the_extra(monkeypatch):
 def test_compare_pilots_command_spells_the_librarys_settings_as_its_flags():
     # The library says "workers:" / "scheduler ADDRESS:"; the command's messages name its flags.
     from hesspipe.cli import build_parser
-    from hesspipe.commands._options import cli_message
+    from hesspipe.cli._options import cli_message
 
     args = build_parser().parse_args(["compare-pilots", "runs", "--plants", "p.json"])
     assert cli_message("workers: expected an integer >= 1, got 0", args) == \

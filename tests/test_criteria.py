@@ -1,4 +1,4 @@
-"""Phase-aware identification (hesspipe.criteria) on independent generated trials.
+"""Phase-aware identification (hesspipe.identification.criteria) on independent generated trials.
 
 Trials come from hesspipe.humanlike, the independent fine-step time-domain generator
 (SYNTHETIC data; it shares no modelling code with the identification).
@@ -8,11 +8,11 @@ import control as ct
 import numpy as np
 import pytest
 
-from hesspipe.criteria import DEFAULT_CRITERION, choose_k
-from hesspipe.formats import Plants, Run
-from hesspipe.frf import estimate_frf
+from hesspipe.core.formats import Plants, Run
 from hesspipe.humanlike import draw_trial, plants_dict, simulate_trial
-from hesspipe.identify import identify
+from hesspipe.identification.criteria import DEFAULT_CRITERION, choose_k
+from hesspipe.identification.fit import identify
+from hesspipe.identification.frf import estimate_frf
 
 
 def _trial(plant, seed, pilot="precision", task="disturbance", **kw):
@@ -79,9 +79,9 @@ def test_paper_criterion_is_the_default_of_the_library_and_unchanged():
 
 
 def test_criterion_reaches_compare_and_the_pipeline(monkeypatch, tmp_path):
-    import hesspipe.identify as ident
-    from hesspipe.compare import PilotsConfig, compare_pilots
-    from hesspipe.formats import write_run
+    import hesspipe.identification.fit as ident
+    from hesspipe.core.formats import write_run
+    from hesspipe.pilots.compare import PilotsConfig, compare_pilots
 
     run, plants, _ = _trial("1/s", 105, T_m=24.0, run_in=5.0)
     write_run(tmp_path / "p1.csv", run, ("synthetic: hesspipe.humanlike",))

@@ -4,8 +4,8 @@ import control as ct
 import numpy as np
 import pytest
 
-from hesspipe.crossover import CrossoverLimits, crossover
-from hesspipe.hess import table1
+from hesspipe.pilot.crossover import CrossoverLimits, crossover
+from hesspipe.pilot.hess import table1
 from pilot_data import plants
 
 

@@ -6,8 +6,8 @@ tests fail when a default changes in one place and not the other.
 
 import pytest
 
-from hesspipe.config import data_dir, load_toml
-from hesspipe.stages import SECTIONS, load_config
+from hesspipe.core.config import data_dir, load_toml
+from hesspipe.pipeline.stages import SECTIONS, load_config
 
 DEFAULT = data_dir("pipeline") / "default.toml"
 
@@ -22,7 +22,7 @@ def test_every_section_is_present(table):
 
 
 def test_flight(table):
-    from hesspipe.flight import FlightConfig
+    from hesspipe.flight.approach import FlightConfig
 
     section = {k: v for k, v in table["flight"].items() if k != "aircraft"}
     assert FlightConfig.from_table(section, DEFAULT) == FlightConfig.from_table({}, DEFAULT)
@@ -30,14 +30,14 @@ def test_flight(table):
 
 
 def test_plants_and_analytic(table):
-    from hesspipe.plants import AnalyticConfig, PlantsConfig
+    from hesspipe.plants.fit import AnalyticConfig, PlantsConfig
 
     assert PlantsConfig.from_table(table["plants"], DEFAULT) == PlantsConfig()
     assert AnalyticConfig.from_table(table["analytic"], DEFAULT) == AnalyticConfig()
 
 
 def test_pilots(table):
-    from hesspipe.compare import PilotsConfig
+    from hesspipe.pilots.compare import PilotsConfig
 
     assert PilotsConfig.from_table(table["pilots"], DEFAULT) == PilotsConfig()
     # the default cohort flies JSBSim; the linear frequency-domain cohort is the option
@@ -46,7 +46,7 @@ def test_pilots(table):
 
 
 def test_diagnose(table):
-    from hesspipe.discrepancy import DiagnoseConfig
+    from hesspipe.diagnose.workflow import DiagnoseConfig
 
     section = {k: v for k, v in table["diagnose"].items() if k not in ("run", "model")}
     assert DiagnoseConfig.from_table(section, DEFAULT) == DiagnoseConfig()

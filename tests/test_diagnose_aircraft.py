@@ -9,9 +9,9 @@ from dataclasses import replace
 
 import pytest
 
-from hesspipe.diagnose_aircraft import plant_finding
-from hesspipe.discrepancy import DiagnoseConfig, diagnose, plant_check
-from hesspipe.formats import read_plants, read_run
+from hesspipe.core.formats import read_plants, read_run
+from hesspipe.diagnose.aircraft import plant_finding
+from hesspipe.diagnose.workflow import DiagnoseConfig, diagnose, plant_check
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 
 PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay", "remnant")
@@ -74,7 +74,7 @@ def test_clean_plants_match_and_baseline_names_no_pilot_effect(clean):
 def test_motion_feedback_run_is_named_on_the_describing_function(tmp_path_factory):
     # One run of bench_diagnose's paper/rate/disturbance case (seed 0); how often the
     # verdict is right across pilots is the benchmark's business, not this test's.
-    from hesspipe.seeds import derive_seed
+    from hesspipe.core.seeds import derive_seed
 
     seed = derive_seed(0, "bench-diagnose", "paper", "rate", "disturbance", "motion_feedback")
     run, plants = _trial(tmp_path_factory, "paper", ("motion_feedback",), seed, disturbance="wind")

@@ -1,4 +1,4 @@
-"""Stage one: JSBSim trim, records, safety and bad input (hesspipe.flight)."""
+"""Stage one: JSBSim trim, records, safety and bad input (hesspipe.flight.approach)."""
 
 import json
 import math
@@ -9,12 +9,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hesspipe import flight
-from hesspipe.aircraft import AircraftConfig, Approach, known_aircraft, load_aircraft
 from hesspipe.cli import main
-from hesspipe.errors import HesspipeError
-from hesspipe.flight import COLUMNS, FlightConfig, fly, fly_records
-from hesspipe.wind import heading_to_ned
+from hesspipe.core.errors import HesspipeError
+from hesspipe.flight import approach as flight
+from hesspipe.flight.aircraft import AircraftConfig, Approach, known_aircraft, load_aircraft
+from hesspipe.flight.approach import COLUMNS, FlightConfig, fly, fly_records
+from hesspipe.flight.wind import heading_to_ned
 
 OUTPUTS = {"trim.json", "wind.csv", "aileron.csv", "manifest.json", "flight_wind.png",
            "flight_aileron.png"}
@@ -262,7 +262,7 @@ def test_bad_config_values(text, needles, tmp_path, capsys):
 
 
 def test_negative_seed_and_file_as_out(tmp_path, capsys):
-    # The one seed rule (hesspipe.seeds.check_seed) is a usage error on every command: exit 2.
+    # The one seed rule (hesspipe.core.seeds.check_seed) is a usage error on every command: exit 2.
     with pytest.raises(SystemExit) as info:
         main(["flight", "--out", str(tmp_path / "o"), "--seed", "-1"])
     err = capsys.readouterr().err

@@ -9,8 +9,8 @@ import control as ct
 import numpy as np
 import pytest
 
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import Plants, Run, read_plants, read_run, write_plants, write_run
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Plants, Run, read_plants, read_run, write_plants, write_run
 
 
 def _run(n=200, dt=0.02, synthetic=False, run_id="p1"):
@@ -253,7 +253,7 @@ def test_plants_dt_key(tmp_path, dt, ok):
 
 
 def test_record_samples_bounds_before_allocating():
-    from hesspipe.formats import MAX_SAMPLES, record_samples
+    from hesspipe.core.formats import MAX_SAMPLES, record_samples
 
     assert record_samples(70.0, 0.02) == 3500
     for args, words in [((float("inf"), 0.02), "duration_s: expected a finite number > 0, got inf"),
@@ -269,7 +269,7 @@ def test_record_samples_bounds_before_allocating():
 
 
 def test_seed_rule_no_wrap_around():
-    from hesspipe.seeds import MAX_SEED, check_seed, derive_seed
+    from hesspipe.core.seeds import MAX_SEED, check_seed, derive_seed
 
     assert check_seed(0) == 0 and check_seed(np.int64(5)) == 5 and check_seed(MAX_SEED) == MAX_SEED
     for bad in (-1, MAX_SEED + 1, 2 ** 64, 1.0, True, "3", None):

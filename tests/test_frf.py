@@ -1,4 +1,4 @@
-"""Nonparametric describing function (hesspipe.frf): lines, sets, fallback, bad input.
+"""Nonparametric describing function (hesspipe.identification.frf): lines, sets, fallback, bad input.
 
 The records here are built in the test from known linear responses applied on a
 whole-period FFT grid (no pilot model, no hesspipe simulator), so the true U/E
@@ -8,9 +8,9 @@ at every line is known exactly. Synthetic.
 import numpy as np
 import pytest
 
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import Run
-from hesspipe.frf import estimate_frf
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Run
+from hesspipe.identification.frf import estimate_frf
 
 FS, T = 50.0, 40.0
 N = int(FS * T)
@@ -113,7 +113,7 @@ def test_broadband_falls_back_to_welch():
 def test_crossover_of_L_against_the_known_loop():
     import control as ct
 
-    from hesspipe.crossover import loop_crossover  # noqa: F401  (same definition: L = H Yc)
+    from hesspipe.pilot.crossover import loop_crossover  # noqa: F401  (same definition: L = H Yc)
 
     d = _multisine(np.unique(np.geomspace(2, 150, 25).astype(int)), 6)
     f = estimate_frf(_run(d, np.zeros(N), noise=0.01), ct.tf([1], [1, 0]))
@@ -164,7 +164,7 @@ def test_cli_frf_one_line_errors_and_json(tmp_path, capsys):
     import json
 
     from hesspipe.cli import main
-    from hesspipe.formats import write_run
+    from hesspipe.core.formats import write_run
 
     plants = tmp_path / "p.json"
     plants.write_text('{"control_to_output": {"num": [1], "den": [1, 0]}, '

@@ -4,13 +4,14 @@ import control as ct
 import numpy as np
 import pytest
 
-from hesspipe.blocks import from_tf
-from hesspipe.crossover import crossover
-from hesspipe.effects import CANALS, EFFECTS, PLATFORM, WASHOUT, get_effect
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import Plants
-from hesspipe.hess import PARAMETERS, PilotModel, Simulator, model_from_name, simulate, synthetic_run, table1
-from hesspipe.spectra import psd
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Plants
+from hesspipe.identification.spectra import psd
+from hesspipe.pilot.blocks import from_tf
+from hesspipe.pilot.crossover import crossover
+from hesspipe.pilot.effects import CANALS, EFFECTS, PLATFORM, WASHOUT, get_effect
+from hesspipe.pilot.hess import PARAMETERS, PilotModel, model_from_name, table1
+from hesspipe.pilot.simulation import Simulator, simulate, synthetic_run
 from pilot_data import DT, YC, N, broadband, multisine, plants, reference_control
 
 

@@ -28,11 +28,13 @@ import numpy as np
 import pytest
 
 from hesspipe.cli import main
-from hesspipe.crossover import crossover
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import Run, write_plants, write_run
-from hesspipe.hess import UNSTABLE_FITNESS, PilotModel, synthetic_run, table1
-from hesspipe.identify import SpectralObjective, identify
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Run, write_plants, write_run
+from hesspipe.identification.fit import identify
+from hesspipe.identification.problem import SpectralObjective
+from hesspipe.pilot.crossover import crossover
+from hesspipe.pilot.hess import PilotModel, table1
+from hesspipe.pilot.simulation import UNSTABLE_FITNESS, synthetic_run
 from pilot_data import DT, broadband, plants
 
 TRUE = dict(table1(1), Ke=12.0, K1=3.0, K2=1.5)
@@ -295,7 +297,7 @@ def test_unstable_optimum_reports_finite_fitness(data):
     record's limit)."""
     import control as ct
 
-    from hesspipe.formats import Plants
+    from hesspipe.core.formats import Plants
 
     pl, _, run = data
     di = Plants(ct.tf([1.0], [1.0, -2.0, 0.0, 0.0]), pl.disturbance_to_output)

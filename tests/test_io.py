@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from hesspipe.config import Fields, load_toml, merge
-from hesspipe.errors import HesspipeError
-from hesspipe.io import atomic_path, staged_output, to_json, write_json
+from hesspipe.core.config import Fields, load_toml, merge
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.io import atomic_path, staged_output, to_json, write_json
 
 
 def test_atomic_path_leaves_nothing_on_failure(tmp_path):

@@ -14,12 +14,13 @@ import numpy as np
 import pytest
 
 from hesspipe.cli import main
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import Plants, read_plants, read_run, write_plants
-from hesspipe.hess import simulate, table1
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Plants, read_plants, read_run, write_plants
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.humanlike.truth import realised_pilot
-from hesspipe.motion import ANGLE_NO_WASHOUT, paper_motion_path
+from hesspipe.pilot.hess import table1
+from hesspipe.pilot.motion import ANGLE_NO_WASHOUT, paper_motion_path
+from hesspipe.pilot.simulation import simulate
 
 ROLL = Plants(ct.tf([2.436], [1.0, 1.0496]), ct.tf([0.1], [1.0, 1.0496]))
 
@@ -73,9 +74,9 @@ def test_paper_motion_path_reproduces_default_exactly():
 
 
 def test_another_motion_path_is_the_cab_behind_the_pilots_sensation():
-    from hesspipe.effects import CANALS, OTOLITHS
-    from hesspipe.hess import PilotModel
-    from hesspipe.motion import motion_block, with_motion_path
+    from hesspipe.pilot.effects import CANALS, OTOLITHS
+    from hesspipe.pilot.hess import PilotModel
+    from hesspipe.pilot.motion import motion_block, with_motion_path
 
     cab = ct.tf(*ANGLE_NO_WASHOUT)
     p = PilotModel(("motion_feedback", "otoliths")).complete({"Km": 3.0, "Ko": 0.5})

@@ -1,6 +1,6 @@
 """A plain (non-editable) install works from any folder: the configuration folders
 ``aircraft/`` and ``pipeline/`` travel inside the wheel (setup.py) and
-:func:`hesspipe.config.data_dir` finds them there."""
+:func:`hesspipe.core.config.data_dir` finds them there."""
 
 from __future__ import annotations
 
@@ -55,7 +55,7 @@ def test_wheel_carries_the_configuration_folders(installed):
 
 def test_installed_package_finds_its_data_and_flies_from_another_folder(installed, tmp_path):
     site, _ = installed
-    where = _run(site, tmp_path, "-c", "import hesspipe.config as c; print(c.__file__); "
+    where = _run(site, tmp_path, "-c", "import hesspipe.core.config as c; print(c.__file__); "
                                       "print(c.data_dir('aircraft'))")
     assert where.returncode == 0, where.stderr
     module, folder = where.stdout.split()

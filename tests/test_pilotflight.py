@@ -1,4 +1,4 @@
-"""The Hess pilot model flying JSBSim in closed loop (hesspipe.pilotflight, hesspipe.pilotdiscrete)."""
+"""The Hess pilot model flying JSBSim in closed loop (hesspipe.flight.closed_loop, hesspipe.pilot.discrete)."""
 
 import json
 
@@ -7,14 +7,15 @@ import numpy as np
 import pytest
 
 from hesspipe.cli import main
-from hesspipe.effects import PLATFORM, WASHOUT
-from hesspipe.errors import HesspipeError
-from hesspipe.flight import FlightConfig
-from hesspipe.formats import Plants, read_run, write_plants
-from hesspipe.hess import PilotModel, gain_scale
-from hesspipe.io import MARKER
-from hesspipe.pilotdiscrete import DiscretePilot, continuous_paths
-from hesspipe.pilotflight import AircraftEffects, fly_pilot_record, pilot_loop
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Plants, read_run, write_plants
+from hesspipe.core.io import MARKER
+from hesspipe.flight.approach import FlightConfig
+from hesspipe.flight.closed_loop import AircraftEffects, fly_pilot_record, pilot_loop
+from hesspipe.pilot.crossover import gain_scale
+from hesspipe.pilot.discrete import DiscretePilot, continuous_paths
+from hesspipe.pilot.effects import PLATFORM, WASHOUT
+from hesspipe.pilot.hess import PilotModel
 
 DT = 1.0 / 120.0
 # The JSBSim 737's plants as stage two fits them (flight seed 1, ARX(4,6,1) / ARX(3,5,1)).
@@ -209,9 +210,9 @@ def test_bad_params_file_is_one_line(tmp_path, plants_file, capsys):
 
 
 def test_cohort_is_the_synthetic_cohorts_draw_flown_in_jsbsim(tmp_path):
-    from hesspipe.cohort import CohortSpec, synth_pilot
-    from hesspipe.pilotflight import fly_cohort
-    from hesspipe.seeds import derive_seed
+    from hesspipe.core.seeds import derive_seed
+    from hesspipe.pilots.cohort import CohortSpec, synth_pilot
+    from hesspipe.pilots.flown import fly_cohort
 
     paths = fly_cohort(PLANTS, 2, 11, ["motion_feedback"], tmp_path / "cohort", config=SHORT)
     cohort = json.loads((tmp_path / "cohort" / "cohort.json").read_text())

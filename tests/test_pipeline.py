@@ -10,8 +10,8 @@ import json
 
 import pytest
 
-from hesspipe.errors import HesspipeError
-from hesspipe.pipeline import Pipeline, Stage, load_stages
+from hesspipe.core.errors import HesspipeError
+from hesspipe.pipeline.engine import Pipeline, Stage, load_stages
 
 CALLS = []
 

@@ -8,12 +8,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hesspipe import analytic
 from hesspipe.cli import main
-from hesspipe.d2c import frequency_response
-from hesspipe.errors import HesspipeError
-from hesspipe.formats import read_plants
-from hesspipe.plants import PlantsConfig, fit_plants
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_plants
+from hesspipe.plants import analytic
+from hesspipe.plants.d2c import frequency_response
+from hesspipe.plants.fit import PlantsConfig, fit_plants
 
 DT = 1 / 120
 
@@ -207,7 +207,7 @@ def test_bad_config_file(synthetic_flight, tmp_path, capsys):
 
 @pytest.mark.parametrize("aircraft", ["737", "B747"])
 def test_jsbsim_plants_meet_the_bar(aircraft, tmp_path):
-    from hesspipe.flight import FlightConfig, fly
+    from hesspipe.flight.approach import FlightConfig, fly
 
     fly(aircraft, FlightConfig(), tmp_path / "flight", seed=1)
     result = fit_plants(tmp_path / "flight", tmp_path / "plants", figures=False)
@@ -234,8 +234,8 @@ def test_paper_wind_profile_alone_is_not_persistently_exciting(tmp_path, capsys)
     # SPEC.md: the slow turning wind alone barely excites roll; stage two must refuse it.
     from dataclasses import replace
 
-    from hesspipe.flight import FlightConfig, fly
-    from hesspipe.wind import Excitation
+    from hesspipe.flight.approach import FlightConfig, fly
+    from hesspipe.flight.wind import Excitation
 
     fly("737", replace(FlightConfig(), wind_excitation=Excitation(kind="none")), tmp_path / "f", seed=1)
     assert main(["plants", "--flight", str(tmp_path / "f"), "--out", str(tmp_path / "p")]) == 1

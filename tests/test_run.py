@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from hesspipe.cli import main
-from hesspipe.pipeline import MANIFEST
+from hesspipe.pipeline.engine import MANIFEST
 
 SMALL = """
 seed = 3

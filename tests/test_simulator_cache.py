@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from hesspipe.hess import Simulator, model_from_name
+from hesspipe.pilot.hess import model_from_name
+from hesspipe.pilot.simulation import Simulator
 from pilot_data import DT, N, broadband, plants
 
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from hesspipe.errors import HesspipeError
-from hesspipe.spectra import PaperWelch, band_mask, fitness, psd
+from hesspipe.core.errors import HesspipeError
+from hesspipe.identification.spectra import PaperWelch, band_mask, fitness, psd
 
 FS = 50.0
 

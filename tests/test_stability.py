@@ -16,12 +16,13 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from hesspipe import arx
-from hesspipe.cohort import CohortSpec, pilot_ids, synth_pilot
-from hesspipe.formats import Plants
-from hesspipe.hess import PilotModel, Simulator, growth_limit, simulate, table1
-from hesspipe.seeds import derive_seed
-from hesspipe.slow_roots import reflect_slow_roots
+from hesspipe.core.formats import Plants
+from hesspipe.core.seeds import derive_seed
+from hesspipe.pilot.hess import PilotModel, table1
+from hesspipe.pilot.simulation import Simulator, growth_limit, simulate
+from hesspipe.pilots.cohort import CohortSpec, pilot_ids, synth_pilot
+from hesspipe.plants import arx
+from hesspipe.plants.slow_roots import reflect_slow_roots
 from pilot_data import DT, YD, N, multisine, reference_control
 
 #: Yc (aileron -> roll rate) and Yd (lateral wind -> roll rate) fitted for seed S (num, den).
@@ -145,7 +146,7 @@ def test_reflecting_slow_roots_keeps_the_gain_and_moves_only_them():
 def test_plant_check_response_of_a_near_integrating_plant_matches_time_domain():
     # B747 seed 4's fitted Yc holds a pole at -1.3e-5 1/s: on s = j w with 4 records of
     # padding its tail wrapped around and diagnose's plant check read -465 %.
-    from hesspipe.discrepancy import forced_response
+    from hesspipe.diagnose.workflow import forced_response
 
     sys = ct.tf([2.0, 1.0], np.polymul([1.0, 1.3e-5], [1.0, 0.85, 1.0]))
     t = DT * np.arange(N)
@@ -159,8 +160,8 @@ def test_plant_check_response_of_a_near_integrating_plant_matches_time_domain():
 
 
 def test_slow_roots_setting_is_checked():
-    from hesspipe.errors import HesspipeError
-    from hesspipe.plants import PlantsConfig
+    from hesspipe.core.errors import HesspipeError
+    from hesspipe.plants.fit import PlantsConfig
 
     assert PlantsConfig().slow_roots == "keep"
     assert PlantsConfig.from_table({"slow_roots": "reflect"}).slow_roots == "reflect"

@@ -1,4 +1,4 @@
-"""Motion verdict (hesspipe.verdict) and target tracking, on SYNTHETIC data from the
+"""Motion verdict (hesspipe.pilots.verdict) and target tracking, on SYNTHETIC data from the
 independent generator hesspipe.humanlike (fine-step time-domain, no hesspipe pilot code)."""
 
 from __future__ import annotations
@@ -10,10 +10,11 @@ import math
 import numpy as np
 import pytest
 
-from hesspipe.formats import read_plants, read_run
-from hesspipe.hess import PilotModel, gain_scale
+from hesspipe.core.formats import read_plants, read_run
 from hesspipe.humanlike import make_trials
-from hesspipe.verdict import cohort_verdict, forcing_lines, motion_test
+from hesspipe.pilot.crossover import gain_scale
+from hesspipe.pilot.hess import PilotModel
+from hesspipe.pilots.verdict import cohort_verdict, forcing_lines, motion_test
 
 FAST = dict(T_m=30.0, fs=50.0, style="plain")
 
@@ -80,7 +81,7 @@ def test_tracking_target_lines_drive_the_motion_test(tmp_path):
 
 
 def test_identify_uses_the_reference_of_a_tracking_trial(tmp_path):
-    from hesspipe.identify import identify
+    from hesspipe.identification.fit import identify
 
     paths = make_trials(tmp_path, "roll", 1, 5, task="tracking", pilot="hess", **FAST)
     run, plants = read_run(paths[0]), read_plants(tmp_path / "plants.json")
@@ -95,7 +96,7 @@ def test_identify_uses_the_reference_of_a_tracking_trial(tmp_path):
 
 
 def test_report_carries_the_verdict_at_the_top(tmp_path):
-    from hesspipe.report import build_report
+    from hesspipe.pipeline.report import build_report
 
     v = cohort_verdict({"a": {"available": True, "p_value": 0.001, "lr": 9.0, "gain": 0.6,
                               "Km": 1.0, "Km_se": 0.1, "significant": True}})

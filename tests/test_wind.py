@@ -1,11 +1,11 @@
-"""Wind profile, frames and excitation signals (hesspipe.wind)."""
+"""Wind profile, frames and excitation signals (hesspipe.flight.wind)."""
 
 import numpy as np
 import pytest
 
-from hesspipe.config import Fields
-from hesspipe.errors import HesspipeError
-from hesspipe.wind import (
+from hesspipe.core.config import Fields
+from hesspipe.core.errors import HesspipeError
+from hesspipe.flight.wind import (
     Excitation,
     SideWind,
     filtered_noise,

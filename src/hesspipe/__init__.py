@@ -14,36 +14,23 @@ try:
 except PackageNotFoundError:  # running from a source tree without install
     __version__ = "0.0.0+unknown"
 
-from .errors import HesspipeError
+from .core.errors import HesspipeError
+from .core.lazy import attach
 
 #: The researcher's API: name -> module that defines it. Loaded on first use, so that
-#: ``import hesspipe`` (and the command line's start-up) stays light.
+#: ``import hesspipe`` (and the command line's start-up) stays light. Each stage is also a
+#: package of the same name (``hesspipe.flight``, ``hesspipe.plants``, ``hesspipe.pilots``,
+#: ``hesspipe.diagnose``: the diagnosis itself is ``hesspipe.diagnose.diagnose``).
 _API = {
-    "read_run": "formats", "write_run": "formats", "read_plants": "formats",
-    "write_plants": "formats", "Run": "formats", "Plants": "formats",
-    "fly": "flight", "FlightConfig": "flight",
-    "fly_pilot": "pilotflight",
-    "fit_plants": "plants",
-    "PilotModel": "hess", "simulate": "hess",
-    "identify": "identify",
-    "estimate_frf": "frf",
-    "compare_pilots": "compare",
-    "diagnose": "discrepancy",
+    "read_run": "core.formats", "write_run": "core.formats", "read_plants": "core.formats",
+    "write_plants": "core.formats", "Run": "core.formats", "Plants": "core.formats",
+    "fly": "flight", "FlightConfig": "flight", "fly_pilot": "flight",
+    "fit_plants": "plants", "PlantsConfig": "plants",
+    "PilotModel": "pilot", "simulate": "pilot", "Simulator": "pilot",
+    "identify": "identification", "estimate_frf": "identification",
+    "compare_pilots": "pilots", "PilotsConfig": "pilots",
+    "DiagnoseConfig": "diagnose", "Diagnosis": "diagnose",
 }
 
-__all__ = ["HesspipeError", "__version__", *_API]
-
-
-def __getattr__(name: str):
-    module = _API.get(name)
-    if module is None:
-        raise AttributeError(f"module 'hesspipe' has no attribute {name!r}")
-    from importlib import import_module
-
-    value = getattr(import_module(f".{module}", __name__), name)
-    globals()[name] = value  # later look-ups skip this function
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_API))
+__getattr__, __dir__, _exported = attach(__name__, _API)
+__all__ = ["HesspipeError", "__version__", *_exported]

@@ -9,7 +9,7 @@ extra delay, elevated remnant, Dutch roll, actuator lag, rate limit), written
 the way real loggers write files, each with a ``*.truth.json``.
 
 It shares no modelling code with the rest of hesspipe (it imports only
-``hesspipe.errors``, ``hesspipe.io`` and ``hesspipe.seeds``), so a result
+``hesspipe.core.errors``, ``hesspipe.core.io`` and ``hesspipe.core.seeds``), so a result
 measured on its output is not a result of the code under test agreeing with
 itself.
 
@@ -25,10 +25,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..seeds import derive_seed
+from ..core.seeds import derive_seed
 from .plants import Plant, make_plant
-from .trial import EFFECTS, GENERATOR, RANGES, Trial, TrialSpec, draw_trial, simulate_trial
-from .truth import closed_loop, pilot_frf
+from .trial import EFFECTS, RANGES, Trial, TrialSpec, draw_trial, simulate_trial
+from .truth import GENERATOR, closed_loop, pilot_frf
 from .writer import csv_bytes, plants_dict, write_trial
 
 __all__ = ["EFFECTS", "GENERATOR", "RANGES", "Plant", "Trial", "TrialSpec", "closed_loop",

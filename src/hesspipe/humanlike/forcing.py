@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import HesspipeError
+from ..core.errors import HesspipeError
 
 
 @dataclass(frozen=True)

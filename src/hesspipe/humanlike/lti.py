@@ -15,7 +15,7 @@ import numpy as np
 import scipy.linalg
 import scipy.signal
 
-from ..errors import HesspipeError
+from ..core.errors import HesspipeError
 
 
 def tf(num, den, what: str = "transfer function") -> tuple[np.ndarray, np.ndarray]:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import HesspipeError
+from ..core.errors import HesspipeError
 from .lti import StateSpace, freqresp, series, ss_from_tf, stack_inputs, tf
 
 # Paper Table 4 (Roskam's wide-body transport, approach), SPEC "analytic aircraft".

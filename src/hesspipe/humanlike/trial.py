@@ -13,14 +13,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import HesspipeError
-from ..seeds import derive_seed
+from ..core.errors import HesspipeError
+from ..core.seeds import derive_seed
 from . import forcing, pilots
 from .lti import discretise, ss_from_tf, zoh
 from .plants import Plant, make_plant
 from .simulate import Wiring, delay_steps
+from .truth import build_truth, outer_holds
 
-GENERATOR = "hesspipe.humanlike 1"
 EFFECTS = ("motion_feedback", "extra_delay", "remnant", "dutch_roll", "actuator_lag", "rate_limit")
 
 # Literature ranges (SPEC "Describing functions"; McRuer crossover model), deliberately
@@ -271,11 +271,6 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
                      remnant=remnant, actuator=actuator, motion_tf=motion_tf, style=style)
 
 
-def outer_holds(spec: TrialSpec) -> int:
-    """Zero-order holds on the outer loop: pilot input, plant input, actuator input."""
-    return 2 + (1 if spec.actuator["tau"] > 0 else 0)
-
-
 def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
     p = spec.pilot
     rem = ss_from_tf([1.0], [spec.remnant["Tn"], 1.0])
@@ -335,7 +330,6 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
         If the simulated loop diverges (it should not for a drawn pilot).
     """
     from .simulate import compile_loop
-    from .truth import build_truth
 
     o = spec.options
     fs, ratio = float(o["fs"]), int(fine_ratio or o["fine_ratio"])

@@ -22,6 +22,15 @@ from . import pilots
 from .lti import freqresp
 from .simulate import delay_steps
 
+#: Name and version of this generator, written in every truth file.
+GENERATOR = "hesspipe.humanlike 1"
+
+
+def outer_holds(spec) -> int:
+    """Zero-order holds on the outer loop: pilot input, plant input, actuator input."""
+    return 2 + (1 if spec.actuator["tau"] > 0 else 0)
+
+
 
 def _points(w, h) -> dict:
     h = np.asarray(h, dtype=complex)
@@ -36,7 +45,6 @@ def _tf_dict(t) -> dict:
 
 def realised_pilot(spec, h: float) -> dict:
     """Pilot parameters with the visual (and vestibular) delay the stepper realised."""
-    from .trial import outer_holds
     p = dict(spec.pilot)
     holds = outer_holds(spec)
     p["tau"] = (delay_steps(p["tau"], h, holds) + holds / 2.0) * h
@@ -74,8 +82,6 @@ def closed_loop(spec, w, h: float | None = None) -> dict:
 
 def build_truth(spec, sim: dict) -> dict:
     """The truth dict written beside each trial (JSON-ready; see module doc)."""
-    from .trial import GENERATOR
-
     h = sim["h"]
     p = realised_pilot(spec, h)
     lines = []

@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import HesspipeError
-from ..io import atomic_path, to_json, write_json
+from ..core.errors import HesspipeError
+from ..core.io import atomic_path, to_json, write_json
 from .lti import series
 from .plants import ANGLE_MOTION, PLATFORM, WASHOUT
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from ..io import atomic_path
+from ..core.io import atomic_path
 
 SYNTHETIC_LABEL = "SYNTHETIC DATA"
 
@@ -26,8 +26,8 @@ def subplots(*args, figsize=None, **kwargs):
 def check_figure_path(path: str | Path) -> Path:
     """Raise unless `path` names an image format matplotlib writes and can be written
     (checked before computing); no suffix means PNG."""
-    from ..errors import HesspipeError
-    from ..io import check_output_file
+    from ..core.errors import HesspipeError
+    from ..core.io import check_output_file
 
     path = Path(path)
     from matplotlib.backends.backend_agg import FigureCanvasAgg

@@ -18,7 +18,7 @@ def plot_pilot(pilot, path: str | Path) -> Path:
 
     Parameters
     ----------
-    pilot : hesspipe.compare.PilotComparison
+    pilot : hesspipe.pilots.compare.PilotComparison
     path : path
         Image file (format from the suffix); stamped "SYNTHETIC DATA" if the run is synthetic.
     """

@@ -11,7 +11,7 @@ _INPUTS = {"wind": ("wind_lateral_fps", "lateral wind, ft/s (+ = towards right)"
 
 
 def plot_record(record, path: str | Path, *, kind: str, title: str = "") -> Path:
-    """Plot one flight record (columns of :data:`hesspipe.flight.COLUMNS`) to `path`.
+    """Plot one flight record (columns of :data:`hesspipe.flight.approach.COLUMNS`) to `path`.
 
     Panels: the record's input (`kind` ``"wind"``: lateral wind, ft/s;
     ``"aileron"``: aileron command), roll and yaw rate (rad/s), bank and

@@ -18,7 +18,7 @@ def frf_figure(path: str | Path, frf, models: Mapping[str, object] | None = None
 
     Parameters
     ----------
-    frf : hesspipe.frf.Frf
+    frf : hesspipe.identification.frf.Frf
     models : mapping, optional
         Label → callable ``H(s)`` (complex describing function U/E at ``s = j w``).
     """

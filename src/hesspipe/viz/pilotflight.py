@@ -8,7 +8,7 @@ from . import save_figure, subplots
 
 
 def plot_pilot_flight(flight, path: str | Path) -> Path:
-    """Plot :class:`hesspipe.pilotflight.PilotFlight` to `path`, stamped SYNTHETIC DATA.
+    """Plot :class:`hesspipe.flight.closed_loop.PilotFlight` to `path`, stamped SYNTHETIC DATA.
 
     Panels: lateral wind (ft/s), roll rate and reference (rad/s), the pilot's
     aileron command and the command JSBSim got after any hidden actuator

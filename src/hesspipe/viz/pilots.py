@@ -64,7 +64,7 @@ def identification_figure(path: str | Path, identifications: Sequence, *, title:
                           labels: Sequence[str] | None = None) -> Path:
     """Save a Fig. 8-style figure of one run's identifications (same run, several models).
 
-    `identifications` are :class:`hesspipe.identify.Identification` results
+    `identifications` are :class:`hesspipe.identification.fit.Identification` results
     sharing the measured spectrum; the figure is stamped synthetic if the run is.
     """
     first = identifications[0]

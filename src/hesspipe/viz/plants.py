@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..d2c import frequency_response
+from ..plants.d2c import frequency_response
 from . import save_figure, subplots
 
 

@@ -1,0 +1,76 @@
+"""Command-line interface: a thin layer over the library.
+
+Each sub-command lives in :mod:`hesspipe.cli` as a module with
+``register(subparsers)``, which adds its parser and sets ``func(args) -> int``.
+User mistakes (:class:`~hesspipe.core.errors.HesspipeError`) become one line on
+stderr and exit status 1; argparse usage errors exit with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+
+from .. import __version__
+from ..core.errors import HesspipeError
+from .commands import COMMANDS
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, not the whole usage block
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="hesspipe", description=(
+        "Does the pilot need motion cues? Fly a JSBSim transport on the approach, identify ARX "
+        "plants, fit the Hess structural pilot model (original and with motion feedback) to pilot "
+        "data, compare pilots and diagnose what a model misses. Start with 'hesspipe run'."))
+    parser.add_argument("--version", action="version", version=f"hesspipe {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for module in COMMANDS:
+        module.register(sub)
+    return parser
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so it unwinds like Ctrl-C: worker pools are
+    stopped, staging folders removed, nothing half-published."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
+    try:
+        return int(args.func(args) or 0)
+    except HesspipeError as exc:
+        from ._options import cli_message  # library setting names -> this command's options
+
+        print(f"hesspipe: error: {cli_message(str(exc), args)}", file=sys.stderr)
+        return 1
+    except Terminated:
+        print("hesspipe: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
+    except KeyboardInterrupt:
+        print("hesspipe: interrupted", file=sys.stderr)
+        return 130
+    except OSError as exc:
+        # Last resort: the file system refused something no check foresaw (a disk that
+        # filled up, a folder made read-only mid-run). One line naming the path.
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"hesspipe: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 1
+    finally:
+        if in_main_thread and previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+

@@ -1,0 +1,72 @@
+"""Options shared by several commands, and the mapping of library wording to them.
+
+The library names its own settings in messages ("set resample to interpolate",
+"map other names with columns control=NAME", "free: ..."), never a
+command-line flag. Each command declares, with :func:`add_terms`, how those
+settings are spelled on its command line; :func:`cli_message` rewrites a
+message accordingly, so no message suggests an option the command lacks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+
+from ..core.errors import HesspipeError
+from ..core.seeds import check_seed
+
+#: Library wording → command-line wording of the options added by :func:`add_run_options`.
+RUN_TERMS = {
+    r"\bset resample\b": "pass --resample",
+    r"\bwith columns\b": "with --columns",
+    r"(^|: )columns: ": r"\1--columns: ",
+}
+
+
+def add_terms(parser: argparse.ArgumentParser, terms: dict[str, str]) -> None:
+    """Declare that `parser`'s command spells library settings as in `terms` (regex → text)."""
+    parser.set_defaults(_terms={**(parser.get_default("_terms") or {}), **terms})
+
+
+def cli_message(message: str, args: argparse.Namespace | None) -> str:
+    """`message` with the library's setting names replaced by the command's options."""
+    for pattern, text in (getattr(args, "_terms", None) or {}).items():
+        message = re.sub(pattern, text, message)
+    return message
+
+
+def add_run_options(parser: argparse.ArgumentParser) -> None:
+    """``--columns`` and ``--resample`` for a command that reads measured runs.
+
+    Pass them on with ``read_run(path, **run_options(args))``.
+    """
+    parser.add_argument("--columns", metavar="ROLE=NAME,...",
+                        help="map other column names, e.g. control=stick,output=p")
+    parser.add_argument("--resample", action="store_true",
+                        help="interpolate a non-uniform time column onto a uniform grid "
+                             "(default: refuse it)")
+    add_terms(parser, RUN_TERMS)
+
+
+def run_options(args: argparse.Namespace) -> dict:
+    """Keyword arguments of :func:`hesspipe.core.formats.read_run` from :func:`add_run_options`."""
+    return {"columns": args.columns, "resample": bool(args.resample)}
+
+
+def seed_arg(text: str) -> int:
+    """argparse type of every ``--seed``: the one rule of :func:`hesspipe.core.seeds.check_seed`."""
+    try:
+        value = int(text.strip())
+    except ValueError:
+        value = text
+    try:
+        return check_seed(value, "seed")
+    except HesspipeError:
+        raise argparse.ArgumentTypeError(f"expected an integer 0 <= seed < 2**63, got {text!r}") from None
+
+
+def add_seed(parser: argparse.ArgumentParser, default: int | None = 0, help: str = "random seed") -> None:
+    """``--seed`` with the one seed rule."""
+    tail = f" (default: {default})" if default is not None else ""
+    parser.add_argument("--seed", type=seed_arg, default=default, metavar="N",
+                        help=f"{help}, an integer 0 <= N < 2**63{tail}")

@@ -1,0 +1,90 @@
+"""``hesspipe compare-pilots``: original vs expanded Hess model on a folder of pilot runs."""
+
+from __future__ import annotations
+
+import sys
+
+from ..core.choices import CRITERIA, DEFAULT_CRITERION
+
+
+def register(sub) -> None:
+    p = sub.add_parser("compare-pilots", help="identify original / expanded-fixed-Km / expanded models per pilot",
+                       description="For each run CSV in DIR (the file stem is the pilot id) identify the "
+                                   "original Hess model, the expanded model with Km fixed, and the expanded "
+                                   "model with Km identified; print a table and the mean improvement "
+                                   "1 - expanded/original fitness.")
+    p.add_argument("dir", metavar="DIR", help="folder of run CSVs (or one CSV)")
+    p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants JSON (Yc, Yd)")
+    p.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 (needs hesspipe[dask])")
+    p.add_argument("--json", metavar="OUT.json", help="write the comparison as JSON")
+    p.add_argument("--figures", metavar="DIR", help="write a PSD figure per pilot into DIR")
+    from ._options import add_run_options, add_seed, add_terms
+
+    add_run_options(p)
+    # The library names its settings (workers, scheduler); this command spells them as flags.
+    add_terms(p, {r"(^|: )workers: ": r"\1--workers: ", r"(^|: )scheduler ": r"\1--scheduler "})
+    add_seed(p, 0, "base seed")
+    p.add_argument("--optimizer", choices=("apid", "scipy", "differential_evolution"), default="apid",
+                   help="identification optimizer (default: %(default)s, the paper's)")
+    p.add_argument("--passes", type=int, default=10, help="APID pass budget (default: %(default)s)")
+    p.add_argument("--restarts", type=int, default=2, help="APID climbs per identification, best kept "
+                                                           "(default: %(default)s)")
+    p.add_argument("--benchmark", action="store_true",
+                   help="also fit the McRuer precision model per pilot (the paper's benchmark score)")
+    p.add_argument("--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
+                   help=f"fit criterion (default {DEFAULT_CRITERION}, as identify): paper = Eq. 10 "
+                        "control PSD; df = describing-function error; output = control output error")
+    p.add_argument("--start", choices=("warm", "random"), default="warm",
+                   help="warm (default): the expanded search starts from the original's optimum "
+                        "plus fixed Km and the models exchange optima, so improvements measure Km, "
+                        "not search luck; random: each model searched from random chromosomes")
+    p.set_defaults(func=_run)
+
+
+def _run(args) -> int:
+    from ..core.errors import HesspipeError
+    from ..core.formats import read_plants
+    from ..core.io import check_output_dir, check_output_file, staged_output, write_json
+    from ..pilots.batch import check_scheduler_address
+    from ..pilots.compare import compare_pilots
+    from ._options import cli_message, run_options
+
+    # Every output and the scheduler address are checked before any work.
+    if args.json:
+        check_output_file(args.json)
+    if args.figures:
+        check_output_dir(args.figures, "figures")
+    if args.scheduler is not None:
+        check_scheduler_address(args.scheduler, "--scheduler")
+    if args.workers is not None and args.workers < 1:
+        raise HesspipeError(f"--workers: expected an integer >= 1, got {args.workers}")
+    if args.passes < 1:
+        raise HesspipeError(f"--passes: expected an integer >= 1, got {args.passes}")
+    if args.restarts < 1:
+        raise HesspipeError(f"--restarts: expected an integer >= 1, got {args.restarts}")
+    plants = read_plants(args.plants)
+    result = compare_pilots(args.dir, plants, workers=args.workers, scheduler=args.scheduler,
+                            seed=args.seed, optimizer=args.optimizer, passes=args.passes,
+                            start=args.start, restarts=args.restarts, benchmark=args.benchmark,
+                            criterion=args.criterion, **run_options(args))
+    print(result.table())
+    if args.json:
+        write_json(args.json, result.to_dict())
+    if args.figures:
+        from ..pilots.compare import _df_figure
+        from ..viz.compare import plot_pilot
+
+        with staged_output(args.figures, kind="figures") as stage:
+            for p in result.pilots:
+                plot_pilot(p, stage / f"{p.id}.png")
+                if p.frf is not None:
+                    _df_figure(p, stage / f"{p.id}_df.png")
+    for f in result.failures:
+        print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
+    if result.failures:
+        print(f"hesspipe: error: {len(result.failures)} of {len(result.failures) + len(result.pilots)} "
+              "run(s) failed; the others are in the table", file=sys.stderr)
+        return 1
+    return 0

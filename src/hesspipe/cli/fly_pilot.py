@@ -1,0 +1,103 @@
+"""``hesspipe fly-pilot``: the Hess pilot model flies the JSBSim aircraft in closed loop."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "fly-pilot", help="let the Hess pilot model fly a JSBSim aircraft in closed loop (SYNTHETIC run)",
+        description="Trim a bundled JSBSim transport on the approach and let the Hess structural pilot "
+                    "model (original or expanded, with effects) null the roll rate at 120 Hz through "
+                    "the paper's side wind plus the identification excitation. Writes DIR/ID.csv "
+                    "(measured-run format, marked synthetic), DIR/ID.truth.json and DIR/ID.png.")
+    from ..flight.aircraft import DEFAULT_AIRCRAFT
+
+    p.add_argument("--aircraft", default=DEFAULT_AIRCRAFT,
+                   help=f"aircraft file in aircraft/ to fly; may differ from the plants' aircraft "
+                        f"(default: {DEFAULT_AIRCRAFT})")
+    p.add_argument("--plants", required=True, metavar="PLANTS.json",
+                   help="plants JSON: sets the pilot's gain scale and optional motion_path")
+    p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder")
+    p.add_argument("--model", default="expanded", choices=("original", "expanded"),
+                   help="pilot model (default: %(default)s)")
+    p.add_argument("--effects", default="remnant", metavar="LIST",
+                   help="comma-separated pilot-side effects added to the model: extra_delay, remnant, "
+                        "otoliths, motion_feedback ('' for none; default: %(default)s)")
+    p.add_argument("--params", type=Path, metavar="FILE",
+                   help="JSON of parameter values (an object, or a truth file with 'parameters'); "
+                        "missing ones take Table 1 on the plants' gain scale")
+    p.add_argument("--remnant-share", type=float, metavar="X",
+                   help="remnant share of the control variance when Kn is not given (default 0.1)")
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="seed of the wind excitation and remnant (default: %(default)s)")
+    p.add_argument("--id", default="pilot", metavar="ID", help="run id / file stem (default: %(default)s)")
+    p.add_argument("--actuator-lag", type=float, default=0.0, metavar="S",
+                   help="hidden aileron actuator time constant, s (default: none)")
+    p.add_argument("--rate-limit", type=float, metavar="R",
+                   help="hidden aileron rate limit, normalised command per s (default: none)")
+    p.add_argument("--yaw-damper", choices=("on", "off"), default="on",
+                   help="'off' removes the aircraft's yaw damper (default: %(default)s)")
+    p.add_argument("--max-bank", type=float, default=15.0, metavar="DEG",
+                   help="bank limit of the record, deg (default: %(default)s)")
+    p.add_argument("--config", type=Path, metavar="FILE",
+                   help="TOML file whose [flight] table sets step, duration, limits and the wind")
+    p.set_defaults(func=_run)
+
+
+def _params(path: Path) -> dict:
+    import json
+    import math
+
+    from ..core.errors import HesspipeError
+
+    try:
+        obj = json.loads(path.read_text(encoding="utf-8-sig"))
+    except FileNotFoundError:
+        raise HesspipeError(f"{path}: file not found") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise HesspipeError(f"{path}: not a readable JSON file ({exc})") from None
+    if isinstance(obj, dict) and isinstance(obj.get("parameters"), dict):
+        obj = obj["parameters"]
+    if not isinstance(obj, dict):
+        raise HesspipeError(f"{path}: expected a JSON object of parameter values")
+    for name, value in obj.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise HesspipeError(f"{path}: field '{name}': expected a finite number, got {value!r}")
+    return {k: float(v) for k, v in obj.items()}
+
+
+def _run(args) -> int:
+    from ..core.config import load_toml
+    from ..core.errors import HesspipeError
+    from ..core.formats import read_plants
+    from ..flight.approach import FlightConfig
+    from ..flight.closed_loop import AircraftEffects, fly_pilot
+    from ..pilot.hess import model_from_name
+
+    for flag, value, ok, want in (
+            ("--actuator-lag", args.actuator_lag, lambda v: v >= 0, "a time constant >= 0 s"),
+            ("--rate-limit", args.rate_limit, lambda v: v > 0, "a rate > 0 (normalised command per s)"),
+            ("--max-bank", args.max_bank, lambda v: v > 0, "a bank limit > 0 deg"),
+            ("--remnant-share", args.remnant_share, lambda v: 0 < v < 1, "a share in (0, 1)")):
+        if value is not None and not (value == value and ok(value)):
+            raise HesspipeError(f"{flag}: expected {want}, got {value:g}")
+    plants = read_plants(args.plants)
+    config = (FlightConfig.from_table(load_toml(args.config).get("flight", {}), args.config)
+              if args.config is not None else FlightConfig())
+    effects = [e.strip() for e in args.effects.split(",") if e.strip()]
+    model = model_from_name("+".join([args.model] + [e for e in effects if not (
+        e == "motion_feedback" and args.model == "expanded")]))
+    act = AircraftEffects(actuator_lag_s=args.actuator_lag, rate_limit_per_s=args.rate_limit,
+                          yaw_damper=args.yaw_damper == "on")
+    params = _params(args.params) if args.params is not None else {}
+    flight = fly_pilot(args.aircraft, plants, args.out, model=model, params=params, seed=args.seed,
+                       config=config, aircraft_effects=act, remnant_share=args.remnant_share,
+                       max_bank_deg=args.max_bank, run_id=args.id)
+    env = flight.truth["envelope"]
+    print(f"SYNTHETIC DATA: {flight.truth['model']} pilot flew {flight.truth['aircraft']} for "
+          f"{flight.truth['duration_s']:g} s: airspeed {env['speed_kts'][0]:.1f}-{env['speed_kts'][1]:.1f} kt, "
+          f"min {env['min_agl_ft']:.0f} ft AGL, max |bank| {env['max_abs_bank_deg']:.1f} deg")
+    print(f"wrote {args.id}.csv, {args.id}.truth.json, {args.id}.png to {args.out}")
+    return 0

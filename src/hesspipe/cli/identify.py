@@ -1,0 +1,218 @@
+"""``hesspipe identify``: identify pilot-model parameters from one measured run."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..core.choices import CRITERIA, DEFAULT_CRITERION
+from ..core.errors import HesspipeError
+from ._options import add_run_options, add_seed, add_terms, run_options
+
+#: The library's names of identify's settings → this command's options.
+TERMS = {r"(^|: )free: ": r"\1--free: ", r"(^|: )fixed: ": r"\1--fix: ",
+         r"\bhold it in fixed\b": "hold it with --fix", r"(^|: )band: ": r"\1--band: "}
+
+
+def _fix(text: str) -> tuple[str, float]:
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got {text!r}")
+    name, value = (s.strip() for s in text.split("=", 1))
+    try:
+        number = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{name}: expected a number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise argparse.ArgumentTypeError(f"{name}: expected a finite number, got {value!r}")
+    return name, number
+
+
+def _band(text: str) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected LOW,HIGH in Hz, got {text!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
+        raise argparse.ArgumentTypeError(f"expected LOW,HIGH in Hz with 0 <= LOW < HIGH, got {text!r}")
+    return lo, hi
+
+
+def _bits(text: str):
+    # NAME=BITS[:SCALE[:OFFSET]]
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"expected NAME=BITS[:SCALE[:OFFSET]], got {text!r}")
+    name, spec = (s.strip() for s in text.split("=", 1))
+    parts = spec.split(":")
+    try:
+        bits = int(parts[0])
+        scale = float(parts[1]) if len(parts) > 1 else 100.0
+        offset = float(parts[2]) if len(parts) > 2 else 0.0
+    except (ValueError, IndexError):
+        raise argparse.ArgumentTypeError(f"expected NAME=BITS[:SCALE[:OFFSET]], got {text!r}") from None
+    return name, (bits, scale, offset)
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "identify", help="identify Hess pilot-model parameters from a measured run (APID)",
+        description="Fit the Hess structural model (original or expanded with motion feedback) to "
+                    "a measured run by matching control power spectra (paper Eqs. 5-10), with the "
+                    "bit-climbing GA (APID) or a scipy optimiser.")
+    p.add_argument("run", metavar="RUN.csv", help="measured run (time, disturbance, output, control)")
+    p.add_argument("--plants", required=True, metavar="PLANTS.json", help="fitted plants (Yc, Yd)")
+    p.add_argument("--model", default="original",
+                   help="original | expanded, optionally +EFFECT (e.g. expanded+remnant)")
+    p.add_argument("--fix", action="append", type=_fix, default=[], metavar="NAME=VALUE",
+                   help="hold a parameter at a value (repeatable)")
+    p.add_argument("--free", metavar="NAME,...", help="parameters to identify "
+                   "(default: Ke,K1,K2 and the effects' parameters, e.g. Km)")
+    add_seed(p, 0, "random seed")
+    add_run_options(p)
+    add_terms(p, TERMS)
+    p.add_argument("--passes", type=int, default=10, help="APID pass budget (default 10)")
+    p.add_argument("--restarts", type=int, default=4,
+                   help="APID climbs from random chromosomes, best kept (default 4; paper: 1)")
+    p.add_argument("--coding", choices=("gray", "binary"), default="gray",
+                   help="APID bit coding (default gray; paper: binary)")
+    p.add_argument("--bits", action="append", type=_bits, default=[], metavar="NAME=BITS[:SCALE[:OFFSET]]",
+                   help="APID bit field of a free parameter (value = offset + integer/scale)")
+    p.add_argument("--optimizer", choices=("apid", "scipy", "differential_evolution"), default="apid")
+    p.add_argument("--k", type=int, choices=(1, 2), default=None,
+                   help="Table 1 column: 1 for a rate-like plant (K/s), 2 for K/s^2 "
+                        "(default: Hess's rule on the plant's slope around 1-5 rad/s)")
+    p.add_argument("--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
+                   help=f"fit criterion (default {DEFAULT_CRITERION}): paper = Eq. 10 control PSD; "
+                        "df = describing-function error at the excited lines weighted by their "
+                        "uncertainty; output = control output error")
+    p.add_argument("--band", type=_band, default=(0.0, 5.0), metavar="LOW,HIGH",
+                   help="fitness band in Hz (default 0,5)")
+    p.add_argument("--psd", choices=("paper", "scipy"), default="paper", help="PSD estimate")
+    p.add_argument("--no-benchmark", action="store_true", help="skip the McRuer benchmark fit")
+    p.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
+    p.add_argument("--figure", metavar="OUT.png",
+                   help="write a figure: the model's describing function over the measured one "
+                        "(criteria df/output), a Fig. 8-style PSD figure (criterion paper)")
+    p.add_argument("--df-figure", metavar="OUT.png",
+                   help="write the describing-function figure whatever the criterion")
+    p.set_defaults(func=run)
+
+
+def format_table(result) -> str:
+    """Readable summary of an :class:`~hesspipe.identification.fit.Identification`."""
+    lines = []
+    tag = "  [SYNTHETIC DATA]" if result.synthetic else ""
+    lines.append(f"run {result.run_id}: model {result.model}, criterion {result.criterion}, "
+                 f"optimizer {result.optimizer}, seed {result.seed}{tag}")
+    if result.k_rule:
+        lines.append(result.k_rule)
+    lines.append(f"{'parameter':<10} {'value':>10}  status")
+    for name, value in result.parameters.items():
+        status = "identified" if name in result.free else (
+            "fixed" if name in result.fixed else "default")
+        lines.append(f"{name:<10} {value:>10.4g}  {status}")
+    what = ("RMS PSD difference" if result.stable else
+            "unstable closed loop: the worst score, graded by its growth rate")
+    if result.criterion == "paper":
+        lines.append(f"fitness            {result.fitness:.6g}   ({what}, "
+                     f"{result.band[0]:g}-{result.band[1]:g} Hz; lower is better)")
+    else:
+        what = result.fitness_units if result.stable else what
+        lines.append(f"fitness            {result.fitness:.6g}   (criterion {result.criterion}: "
+                     f"{what}; lower is better)")
+    bench = result.benchmark_fitness
+    lines.append(f"benchmark fitness  {bench:.6g}   (McRuer precision model, same criterion and units)"
+                 if math.isfinite(bench) else "benchmark fitness  not computed")
+    c = result.crossover
+    limits = (f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
+              f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
+    if math.isfinite(c.frequency_rad_s):
+        lines.append(f"crossover          {c.frequency_rad_s:.3f} rad/s, phase margin "
+                     f"{c.phase_margin_deg:.1f} deg, within limits: {'yes' if c.within_limits else 'no'} "
+                     + limits)
+    else:
+        lines.append("crossover          none found (the open loop's gain never crosses 1), within "
+                     "limits: no " + limits)
+    pc = result.primary_crossover
+    if pc is not None and math.isfinite(pc.frequency_rad_s) and pc.frequency_rad_s != c.frequency_rad_s:
+        lines.append(f"primary crossover  {pc.frequency_rad_s:.3f} rad/s, phase margin "
+                     f"{pc.phase_margin_deg:.1f} deg (|L| first falls through 1 here and rises "
+                     "above 1 again higher up)")
+    frf = result.frf
+    if isinstance(frf, str):
+        lines.append(f"nonparametric      {frf}")
+    elif frf is not None:
+        n = frf.crossover
+        where = f"({frf.method}; remnant {100 * frf.remnant_share:.0f} % of control power)"
+        if math.isfinite(n.frequency_rad_s):
+            lines.append(f"nonparametric      crossover {n.frequency_rad_s:.3f} +- {n.frequency_std:.3f} "
+                         f"rad/s, phase margin {n.phase_margin_deg:.1f} +- {n.phase_margin_std_deg:.1f} deg "
+                         + where + (f"; {n.note}" if n.note else ""))
+        else:
+            lines.append(f"nonparametric      crossover not found {where}: {n.note or 'no crossing'}")
+    lines.append(f"evaluations        {result.evaluations}")
+    ident = result.identifiability
+    lines.append(f"identifiability    {ident.get('summary', ident.get('method'))}")
+    for prod, val in ident.get("identified_products", {}).items():
+        lines.append(f"                   {prod} = {val:.4g} (only the product is determined)")
+    if not result.stable:
+        lines.append("warning: the best parameter set found gives an unstable closed loop")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    from ..core.formats import read_plants, read_run
+    from ..identification.fit import identify
+    from ..identification.spectra import PaperWelch
+    from ._outputs import check_file_outputs, write_result_json
+
+    check_file_outputs(json=args.json, figure=args.figure)  # before any work
+    plants = read_plants(args.plants)
+    rec = read_run(args.run, min_samples=PaperWelch().nperseg, **run_options(args))
+    free = None
+    if args.free is not None:
+        free = [n.strip() for n in args.free.split(",") if n.strip()]
+        if not free:
+            raise HesspipeError("--free: expected NAME,... with at least one parameter")
+    fixed = dict(args.fix)
+    if free is None:
+        from ..identification.problem import default_free
+        from ..pilot.hess import model_from_name
+
+        defaults = default_free(model_from_name(args.model))
+        if all(n in fixed for n in defaults):
+            raise HesspipeError(f"--fix: every parameter identified by default ({', '.join(defaults)}) "
+                                "is fixed: nothing to identify; name the parameters to identify with --free")
+    result = identify(rec, plants, args.model, free=free, fixed=fixed, seed=args.seed,
+                      passes=args.passes, optimizer=args.optimizer, band=args.band, k=args.k,
+                      fields=dict(args.bits) or None, psd_method=args.psd,
+                      with_benchmark=not args.no_benchmark, restarts=args.restarts, coding=args.coding,
+                      criterion=args.criterion)
+    print(format_table(result))
+    if args.json:
+        write_result_json(args.json, result, run=args.run, plants=args.plants)
+    if args.figure and result.criterion == "paper":
+        from ..viz.pilots import identification_figure
+
+        identification_figure(args.figure, [result])
+    for path in ([args.figure] if args.figure and result.criterion != "paper" else []) + (
+            [args.df_figure] if args.df_figure else []):
+        df_figure(path, result, rec.source)
+    return 0
+
+
+def df_figure(path, result, where: str = "") -> None:
+    """The model's (and the precision benchmark's) describing function over the measured one."""
+    from ..identification.criteria import model_df
+    from ..pilot.hess import model_from_name
+    from ..pilot.mcruer import precision_loop
+    from ..viz.frf import frf_figure
+
+    if result.frf is None or isinstance(result.frf, str):
+        raise HesspipeError(f"{where or result.run_id}: no describing-function figure: "
+                            f"{result.frf or 'no nonparametric estimate'}")
+    loop = model_from_name(result.model).loop(result.parameters)
+    models = {f"{result.model} model ({result.criterion})": lambda s: model_df(loop, s)}
+    if result.benchmark_parameters:
+        bench = precision_loop(result.benchmark_parameters)
+        models["McRuer precision benchmark"] = lambda s: model_df(bench, s)
+    frf_figure(path, result.frf, models)

@@ -1,0 +1,25 @@
+"""``hesspipe status``: each stage fresh or stale, and why."""
+
+from __future__ import annotations
+
+
+def register(sub) -> None:
+    p = sub.add_parser("status", help="show which pipeline stages are fresh or stale, and why")
+    p.add_argument("--config", metavar="FILE", help="TOML configuration merged over pipeline/default.toml")
+    p.add_argument("--out", metavar="DIR", default="hesspipe-out", help="output folder (default: %(default)s)")
+    p.add_argument("--aircraft", metavar="NAME", help="override flight.aircraft")
+    from ._options import add_seed
+
+    add_seed(p, None, "override the pipeline seed")
+    p.set_defaults(func=_status)
+
+
+def _status(args) -> int:
+    from ..pipeline.stages import build_pipeline
+
+    pipe = build_pipeline(args.config, args.out, aircraft=args.aircraft, seed=args.seed)
+    rows = pipe.status()
+    width = max(len(r.name) for r in rows)
+    for r in rows:
+        print(f"{r.name:<{width}}  {r.state:<5}  {r.reason}")
+    return 0

@@ -1,0 +1,12 @@
+"""Names of settings' choices that the command line needs at start-up.
+
+Kept apart from the numeric modules that act on them, so that building the CLI's
+parser (``hesspipe --help``) loads no numpy; :mod:`hesspipe.identification.criteria` re-exports them.
+"""
+
+CRITERIA = ("paper", "df", "output")
+"""Identification criteria: the paper's Eq. 10 PSD match, the describing function at the
+forcing lines, the control time signal (:mod:`hesspipe.identification.criteria`)."""
+
+DEFAULT_CRITERION = "df"
+"""Chosen by measurement on the independent generator (benchmarks/bench_frf_identify.py, README)."""

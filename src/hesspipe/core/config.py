@@ -1,0 +1,225 @@
+"""Reading TOML configuration with errors that name the file and the field.
+
+Configuration objects elsewhere are small frozen dataclasses; they are built
+from TOML tables with :class:`Fields`, which checks type and range of each
+value and raises :class:`~hesspipe.core.errors.HesspipeError` with a one-line
+message such as ``aircraft/737.toml: field 'approach.vc_kts': expected a
+number > 0, got 'fast'``.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from .errors import HesspipeError
+
+#: Root of the source tree (holds ``aircraft/`` and ``pipeline/``) when hesspipe runs
+#: from a checkout (an editable install); meaningless for an installed wheel.
+PROJECT_ROOT = Path(__file__).resolve().parents[3]
+
+#: Where a built package carries copies of ``aircraft/`` and ``pipeline/`` (setup.py).
+PACKAGED_DATA = Path(__file__).resolve().parents[1] / "_data"
+
+
+def data_dir(name: str) -> Path:
+    """Return the configuration folder `name` (``"aircraft"`` or ``"pipeline"``).
+
+    From a checkout, the checkout's own folder (the one users edit); from an
+    installed package, the copy the build placed in ``hesspipe/_data``.
+    """
+    checkout = PROJECT_ROOT / name
+    if (PROJECT_ROOT / "pyproject.toml").is_file() and checkout.is_dir():
+        return checkout
+    packaged = PACKAGED_DATA / name
+    if packaged.is_dir():
+        return packaged
+    raise HesspipeError(f"{packaged}: folder not found; expected hesspipe's '{name}' folder "
+                        "(reinstall hesspipe: the package is incomplete)")
+
+
+def aircraft_file(name_or_path: str | Path) -> Path:
+    """``aircraft/<name>.toml`` for a bare name, else the path itself."""
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.parent != Path("."):
+        return p
+    return data_dir("aircraft") / f"{name_or_path}.toml"
+
+
+def load_toml(path: str | Path) -> dict:
+    """Load a TOML file, turning I/O and syntax errors into one-line errors."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise HesspipeError(f"{path}: file not found") from None
+    except IsADirectoryError:
+        raise HesspipeError(f"{path}: is a folder, expected a TOML file") from None
+    except OSError as exc:
+        raise HesspipeError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    # Editors on Windows start UTF-8 files with a byte-order mark; TOML itself has none.
+    data = data.removeprefix(b"\xef\xbb\xbf")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise HesspipeError(f"{path}: not a TOML text file (not UTF-8 at byte {exc.start}); "
+                            "expected a TOML configuration") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise HesspipeError(f"{path}: not valid TOML ({exc})") from None
+
+
+def merge(base: Mapping, override: Mapping) -> dict:
+    """Deep-merge `override` into a copy of `base` (tables merge, values replace)."""
+    out = dict(base)
+    for key, value in override.items():
+        if isinstance(value, Mapping) and isinstance(out.get(key), Mapping):
+            out[key] = merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+_MISSING = object()
+
+
+class Fields:
+    """Typed access to one TOML table, for building config dataclasses.
+
+    Parameters
+    ----------
+    table : mapping
+        The parsed table.
+    source : str or Path
+        File the table came from (for messages).
+    prefix : str
+        Dotted path of the table inside the file (for messages), e.g. ``"flight"``.
+    """
+
+    def __init__(self, table: Mapping | None, source: str | Path, prefix: str = ""):
+        if table is not None and not isinstance(table, Mapping):
+            raise HesspipeError(f"{source}: field '{prefix}': expected a table, got {table!r}")
+        self.table = dict(table or {})
+        self.source = str(source)
+        self.prefix = prefix
+        self.used: set[str] = set()
+
+    def _name(self, key: str) -> str:
+        return f"{self.prefix}.{key}" if self.prefix else key
+
+    def error(self, key: str, expected: str, got: Any = _MISSING) -> HesspipeError:
+        """Return (not raise) the error for field `key`."""
+        tail = "missing" if got is _MISSING else f"got {got!r}"
+        return HesspipeError(f"{self.source}: field '{self._name(key)}': expected {expected}, {tail}")
+
+    def _get(self, key, default):
+        self.used.add(key)
+        if key in self.table:
+            return self.table[key]
+        if default is _MISSING:
+            return _MISSING
+        return default
+
+    def number(self, key: str, default: Any = _MISSING, *, min: float | None = None,
+               max: float | None = None, strict_min: bool = False) -> float | None:
+        """A finite real number, optionally bounded (``min <= x <= max``, or ``> min``).
+
+        With ``default=None`` the field is optional and None is returned when absent
+        (likewise for :meth:`integer` and :meth:`strings`).
+        """
+        what = "a number"
+        if min is not None:
+            what += f" {'>' if strict_min else '>='} {min:g}"
+        if max is not None:
+            what += f"{' and' if min is not None else ''} <= {max:g}"
+        value = self._get(key, default)
+        if value is _MISSING:
+            raise self.error(key, what)
+        if value is None and default is None:  # optional field left out (TOML has no null)
+            return None
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise self.error(key, what, value)
+        if min is not None and (value <= min if strict_min else value < min):
+            raise self.error(key, what, value)
+        if max is not None and value > max:
+            raise self.error(key, what, value)
+        return float(value)
+
+    def integer(self, key: str, default: Any = _MISSING, *, min: int | None = None,
+                max: int | None = None) -> int | None:
+        """An integer, optionally bounded."""
+        what = "an integer" + (f" >= {min}" if min is not None else "") + (
+            f" <= {max}" if max is not None else "")
+        value = self._get(key, default)
+        if value is _MISSING:
+            raise self.error(key, what)
+        if value is None and default is None:  # optional field left out
+            return None
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.error(key, what, value)
+        if (min is not None and value < min) or (max is not None and value > max):
+            raise self.error(key, what, value)
+        return int(value)
+
+    def string(self, key: str, default: Any = _MISSING, *, choices: Sequence[str] | None = None) -> str:
+        """A string, optionally one of `choices`."""
+        what = "one of " + ", ".join(repr(c) for c in choices) if choices else "a string"
+        value = self._get(key, default)
+        if value is _MISSING:
+            raise self.error(key, what)
+        if not isinstance(value, str) or (choices and value not in choices):
+            raise self.error(key, what, value)
+        return value
+
+    def boolean(self, key: str, default: Any = _MISSING) -> bool:
+        """true or false."""
+        value = self._get(key, default)
+        if value is _MISSING:
+            raise self.error(key, "true or false")
+        if not isinstance(value, bool):
+            raise self.error(key, "true or false", value)
+        return value
+
+    def numbers(self, key: str, default: Any = _MISSING, *, length: int | None = None) -> tuple[float, ...]:
+        """A list of finite numbers, optionally of a fixed length."""
+        what = f"a list of {length} numbers" if length else "a list of numbers"
+        value = self._get(key, default)
+        if value is _MISSING:
+            raise self.error(key, what)
+        if (not isinstance(value, (list, tuple)) or (length and len(value) != length)
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                           and math.isfinite(v) for v in value)):
+            raise self.error(key, what, value)
+        return tuple(float(v) for v in value)
+
+    def strings(self, key: str, default: Any = _MISSING, *,
+                choices: Sequence[str] | None = None) -> tuple[str, ...] | None:
+        """A list of non-empty strings (optionally each one of `choices`); None if
+        absent and `default` is None."""
+        what = "a list of " + ("names from " + ", ".join(repr(c) for c in choices) if choices
+                               else "non-empty strings")
+        value = self._get(key, default)
+        if value is _MISSING:
+            raise self.error(key, what)
+        if value is None and default is None:
+            return None
+        if (not isinstance(value, (list, tuple))
+                or not all(isinstance(v, str) and v for v in value)
+                or (choices and not set(value) <= set(choices))):
+            raise self.error(key, what, value)
+        return tuple(value)
+
+    def table_(self, key: str) -> "Fields":
+        """The sub-table `key` (empty if absent) as a new :class:`Fields`."""
+        self.used.add(key)
+        return Fields(self.table.get(key), self.source, self._name(key))
+
+    def reject_unknown(self) -> None:
+        """Raise if the table holds keys no getter asked for (catches typos)."""
+        unknown = sorted(set(self.table) - self.used)
+        if unknown:
+            raise HesspipeError(f"{self.source}: field '{self._name(unknown[0])}': unknown field "
+                                f"(known here: {', '.join(sorted(self.used)) or 'none'})")

@@ -1,0 +1,400 @@
+"""Aircraft-side findings of ``diagnose``: what the plant check's gap is, and what closes it.
+
+The plant check (:func:`hesspipe.diagnose.workflow.plant_check`) drives the plants with the
+measured control and disturbance and compares the result with the measured output. When
+it fails (fit below ``fit_ok`` even with the record's initial state and the disturbance
+path's gain refitted) this module asks two questions, each by refitting the output and
+comparing fits:
+
+* **Is the aircraft different from the plants?** Candidates a researcher would expect:
+  ``dutch_roll`` (a lightly damped lateral pair the rolling approximation omits, in both
+  paths), ``roll_mode`` (the roll pole and control power differ), ``actuator_lag`` (a
+  first-order actuator the plants omit) and ``rate_limit`` (a bounded surface rate).
+  Each is fitted by bounded least squares on the output error (a grid, then
+  Gauss-Newton); it *closes the gap* when it removes at least ``close_share`` of the
+  residual power of the nominal plants.
+* **Is the file wrong?** Evidence sought: the control or disturbance sign flipped, the
+  paths mis-scaled (both fitted by linear least squares on the two path responses:
+  a negative gain is a sign error, a gain outside [1/``scale_ratio``, ``scale_ratio``] a
+  units error) and swapped columns (every assignment of the three columns to the
+  control, disturbance and output roles). Only a sign, a units-size scale or a swap
+  that fits the output better than every aircraft candidate is a wrong-file verdict.
+
+Everything is a finding in the result, never an exception. The responses are computed
+once on an FFT grid (the convention of :func:`hesspipe.diagnose.workflow.forced_response`), so
+every candidate costs one multiplication and an inverse FFT.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.fft as sfft
+import scipy.optimize
+
+from ..plants.arx import fit_percent
+
+#: Plant-check fit (percent) below which the plants are taken to miss part of the aircraft.
+FIT_OK = 90.0
+#: Share of the nominal residual power a candidate must remove to close the gap.
+CLOSE_SHARE = 0.5
+#: Residual power a simpler aircraft candidate may leave, relative to the best one's, and
+#: still be preferred.
+PARSIMONY = 1.2
+_N_PARAMETERS = {"actuator_lag": 1, "rate_limit": 1, "roll_mode": 2, "dutch_roll": 6}
+#: A path gain beyond this factor (either way) is a units error, not an aircraft change.
+SCALE_RATIO = 3.0
+
+
+@dataclass(frozen=True)
+class Explanation:
+    """One refit of the plant check: ``kind`` "aircraft" or "file"; ``fit_percent`` of the
+    output; ``parameters`` fitted; ``how`` one line saying what was changed."""
+
+    id: str
+    kind: str
+    fit_percent: float
+    parameters: dict
+    how: str
+
+    def to_dict(self) -> dict:
+        return {"id": self.id, "kind": self.kind, "fit_percent": self.fit_percent,
+                "parameters": self.parameters, "how": self.how}
+
+
+@dataclass(frozen=True)
+class PlantFinding:
+    """Verdict on the plants: ``verdict`` is "match" (the check passes), "aircraft" (an
+    aircraft-side candidate closes the gap: ``named``), "wrong_file" (sign, scale or swapped
+    columns: ``named`` says which) or "unexplained"; ``message`` says it in words."""
+
+    verdict: str
+    fit_percent: float
+    named: str | None = None
+    parameters: dict = field(default_factory=dict)
+    explanations: tuple[Explanation, ...] = ()
+    message: str = ""
+
+    def to_dict(self) -> dict:
+        return {"verdict": self.verdict, "fit_percent": self.fit_percent, "named": self.named,
+                "parameters": self.parameters, "message": self.message,
+                "explanations": [e.to_dict() for e in self.explanations]}
+
+
+class _Paths:
+    """Column spectra and plant responses on one zero-padded FFT grid."""
+
+    def __init__(self, run, plants, edge_s: float = 1.0):
+        from ..pilot.blocks import from_tf
+
+        self.n = len(run)
+        self.dt = run.dt
+        self.nfft = sfft.next_fast_len(4 * self.n, real=True)
+        om = 2.0 * np.pi * np.fft.rfftfreq(self.nfft, run.dt)
+        om[0] = om[1] * 1e-6
+        self.s = 1j * om
+        self.yc = from_tf(plants.control_to_output).response(self.s)
+        self.yd = from_tf(plants.disturbance_to_output).response(self.s)
+        self.cols = {k: np.asarray(getattr(run, k), dtype=float) for k in ("control", "disturbance", "output")}
+        self.spec = {k: sfft.rfft(v, self.nfft) for k, v in self.cols.items()}
+        k = min(int(round(edge_s / run.dt)), self.n // 10)
+        self.sl = slice(k, self.n - k)
+
+    def basis(self, poles) -> np.ndarray:
+        """Free responses (columns over the fitted samples) of the slow `poles`: the record
+        starts mid-flight, not at rest, and a lightly damped mode's initial condition
+        lasts far past the left-out edge."""
+        t = self.dt * np.arange(self.n)[self.sl]
+        cols = []
+        for q in poles:
+            if q.real < -0.5 or q.real > 1e-6 or q.imag < -1e-9:
+                continue  # fast (gone within the edge), unstable, or the conjugate's twin
+            e = np.exp(q.real * t)
+            cols.append(e * np.cos(q.imag * t))
+            if abs(q.imag) > 1e-9:
+                cols.append(e * np.sin(q.imag * t))
+        return np.stack(cols, axis=1) if cols else np.zeros((t.size, 0))
+
+    def residual(self, a: np.ndarray, b: np.ndarray, poles) -> np.ndarray:
+        """Output error of ``a + g b`` plus free responses of `poles`, with the disturbance
+        path's gain ``g`` and the initial conditions fitted by linear least squares."""
+        y = self.cols["output"][self.sl] - a[self.sl]
+        b = b[:, None] if b.ndim == 1 else b
+        A = np.concatenate([b[self.sl], self.basis(poles)], axis=1)
+        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+        return y - A @ coef
+
+    def fit_of(self, r: np.ndarray) -> float:
+        y = self.cols["output"][self.sl]
+        return float(100.0 * (1.0 - np.linalg.norm(r) / max(np.linalg.norm(y - y.mean()), 1e-300)))
+
+    def time(self, spectrum: np.ndarray) -> np.ndarray:
+        return sfft.irfft(spectrum, self.nfft)[: self.n]
+
+    def fit(self, y: np.ndarray, y_sim: np.ndarray) -> float:
+        return fit_percent(y[self.sl], y_sim[self.sl])
+
+
+def _rate_limited(u: np.ndarray, rate: float, dt: float) -> np.ndarray:
+    """`u` through a surface that moves at most `rate` units per s (starting at u[0])."""
+    out = np.empty_like(u)
+    x, step = float(u[0]), rate * dt
+    for i, v in enumerate(u):
+        x += min(max(v - x, -step), step)
+        out[i] = x
+    return out
+
+
+def _slow_pole(plants) -> float | None:
+    """Magnitude (rad/s) of the slowest stable real pole of Yc (the roll mode), if any."""
+    poles = np.asarray(plants.control_to_output.poles() if hasattr(plants.control_to_output, "poles")
+                       else [], dtype=complex)
+    real = [-p.real for p in poles if abs(p.imag) < 1e-9 and p.real < -1e-6]
+    return min(real) if real else None
+
+
+def _lsq(residual, x0s, lo, hi, max_nfev: int = 60):
+    """Best bounded least-squares solution over starts `x0s`: (x, sum of squares)."""
+    best = (None, math.inf)
+    for x0 in x0s:
+        sol = scipy.optimize.least_squares(residual, x0, bounds=(lo, hi), max_nfev=max_nfev,
+                                           x_scale="jac", method="trf")
+        cost = 2.0 * float(sol.cost)
+        if cost < best[1]:
+            best = (sol.x, cost)
+    return best
+
+
+def _poles(*systems) -> list[complex]:
+    out: list[complex] = []
+    for sys in systems:
+        out += [complex(q) for q in np.atleast_1d(sys.poles())]
+    return out
+
+
+def _aircraft_candidates(p: _Paths, plants) -> list[Explanation]:
+    """Each candidate's output error with its factor in the path(s) it changes; the
+    disturbance path's gain and the slow modes' initial conditions are refitted linearly
+    (:meth:`_Paths.residual`) for every candidate alike."""
+    from ..pilot.effects import actuator_lag_factor, dutch_roll_factor, roll_mode_factor
+
+    U, W = p.spec["control"], p.spec["disturbance"]
+    yu, yw = p.yc * U, p.yd * W
+    nominal = _poles(plants.control_to_output, plants.disturbance_to_output)
+    out: list[Explanation] = []
+
+    def res(fc, fd=1.0, extra=(), u_spec=None):
+        a = p.time((yu if u_spec is None else p.yc * u_spec) * fc)
+        return p.residual(a, p.time(yw * fd), nominal + list(extra))
+
+    # Dutch roll: shared poles, own zeros in each path (the side wind excites the
+    # sideslip directly, so its path's gain is free too); log frequency and damping.
+    # The disturbance path's numerator (c2 s^2 + c1 s + c0) over the pair enters linearly.
+    def dr_parts(x):
+        w, z, rc = math.exp(x[0]), math.exp(x[1]), x[2]
+        pair = complex(-z * w, w * math.sqrt(max(1.0 - z * z, 0.0)))
+        den = p.s ** 2 + 2 * z * w * p.s + w * w
+        cols = np.stack([p.time(yw * p.s ** k / den) for k in range(3)], axis=1)
+        return p.time(yu * dutch_roll_factor(w, z, rc).response(p.s)), cols, nominal + [pair]
+
+    def dr(x):
+        return p.residual(*dr_parts(x))
+
+    lo = np.array([math.log(0.3), math.log(0.005), 0.3])
+    hi = np.array([math.log(6.0), math.log(0.7), 2.0])
+    grid = [(math.log(w), math.log(z), 0.9) for w in np.geomspace(0.4, 4.0, 8) for z in (0.03, 0.1, 0.3)]
+    ranked = sorted(grid, key=lambda x: float(np.sum(dr(x) ** 2)))[:3]
+    x, _ = _lsq(dr, ranked, lo, hi)
+    a, cols, poles = dr_parts(x)
+    yfit = p.cols["output"][p.sl] - a[p.sl]
+    A = np.concatenate([cols[p.sl], p.basis(poles)], axis=1)
+    c = np.linalg.lstsq(A, yfit, rcond=None)[0][:3]
+    out.append(Explanation("dutch_roll", "aircraft", p.fit_of(dr(x)),
+                           {"w_dr": math.exp(x[0]), "z_dr": math.exp(x[1]), "r_dr": float(x[2]),
+                            "disturbance_numerator": [float(c[2]), float(c[1]), float(c[0])]},
+                           "a lightly damped pole pair in both paths (zeros near it in the control "
+                           "path, the disturbance path's numerator refitted)"))
+
+    # Roll mode: the slowest real pole moved and the control power scaled.
+    p0 = _slow_pole(plants)
+    if p0 is not None:
+        def rm(x):
+            f = roll_mode_factor(math.exp(x[0]), math.exp(x[1]), p0).response(p.s)
+            return res(f, f, (complex(-math.exp(x[1]) * p0, 0.0),))
+
+        b = math.log(5.0)
+        x, _ = _lsq(rm, [(0.0, 0.0), (0.0, math.log(2)), (0.0, -math.log(2))],
+                    np.array([-b, -b]), np.array([b, b]))
+        out.append(Explanation("roll_mode", "aircraft", p.fit_of(rm(x)),
+                               {"K_rm": math.exp(x[0]), "a_rm": math.exp(x[1]), "p_rm": p0},
+                               f"the roll pole moved from {p0:.3g} rad/s and the control power scaled"))
+
+    def lag(x):
+        return res(actuator_lag_factor(float(x[0])).response(p.s))
+
+    x, _ = _lsq(lag, [(0.02,), (0.1,), (0.3,)], np.array([0.0]), np.array([0.5]))
+    out.append(Explanation("actuator_lag", "aircraft", p.fit_of(lag(x)), {"tau_a": float(x[0])},
+                           "a first-order actuator between the control and the aircraft"))
+
+    u = p.cols["control"]
+    top = float(np.max(np.abs(np.diff(u)))) / p.dt
+    best = (-math.inf, top)
+    if top > 0:
+        # One parameter: a bounded scalar search on the log of the limit is enough.
+        def rl_fit(lr):
+            uu = _rate_limited(u, math.exp(lr), p.dt)
+            return p.fit_of(res(1.0, u_spec=sfft.rfft(uu, p.nfft)))
+
+        sol = scipy.optimize.minimize_scalar(lambda lr: -rl_fit(lr), bounds=(math.log(top * 0.02), math.log(top)),
+                                             method="bounded", options={"maxiter": 25, "xatol": 0.02})
+        best = (rl_fit(sol.x), math.exp(sol.x))
+    out.append(Explanation("rate_limit", "aircraft", best[0], {"rate": best[1]},
+                           "the surface follows the control at a bounded rate (units/s)"))
+    out.append(Explanation("nominal", "reference", p.fit_of(res(1.0)), {},
+                           "the plants as given, disturbance gain and initial state refitted"))
+    return out
+
+
+def _file_candidates(p: _Paths, plants) -> list[Explanation]:
+    """Sign, scale and swapped-column explanations, each with the two path gains refitted."""
+    out: list[Explanation] = []
+    roles = ("control", "disturbance", "output")
+    import itertools
+
+    free = p.basis(_poles(plants.control_to_output, plants.disturbance_to_output))
+    for perm in itertools.permutations(roles):
+        u_k, w_k, y_k = perm
+        a_c = p.time(p.yc * p.spec[u_k])
+        a_d = p.time(p.yd * p.spec[w_k])
+        y = p.cols[y_k]
+        A = np.concatenate([np.stack([a_c[p.sl], a_d[p.sl]], axis=1), free], axis=1)
+        g, *_ = np.linalg.lstsq(A, y[p.sl], rcond=None)
+        r = y[p.sl] - A @ g
+        fit = float(100.0 * (1.0 - np.linalg.norm(r) / max(np.linalg.norm(y[p.sl] - y[p.sl].mean()), 1e-300)))
+        swapped = perm != roles
+        bad_sign = [r for r, v in zip(("control", "disturbance"), g) if v < 0]
+        bad_scale = [r for r, v in zip(("control", "disturbance"), g)
+                     if v != 0 and not 1 / SCALE_RATIO <= abs(v) <= SCALE_RATIO]
+        what = []
+        if swapped:
+            what.append("columns read as control='%s', disturbance='%s', output='%s'" % perm)
+        what += [f"the {r} path's sign flipped" for r in bad_sign]
+        what += [f"the {r} path's scale off by {abs(v):.3g}" for r, v in zip(("control", "disturbance"), g)
+                 if r in bad_scale]
+        out.append(Explanation("+".join(["swapped"] * swapped + ["sign"] * bool(bad_sign)
+                                        + ["scale"] * bool(bad_scale)) or "gains", "file", fit,
+                               {"columns": list(perm), "gain_control": float(g[0]),
+                                "gain_disturbance": float(g[1]), "swapped": swapped},
+                               "; ".join(what) or f"path gains refitted ({g[0]:.3g}, {g[1]:.3g})"))
+    return out
+
+
+def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: float = CLOSE_SHARE
+                  ) -> PlantFinding:
+    """Explain a failed plant check (see the module docstring); a passing one is "match".
+
+    Parameters
+    ----------
+    run, plants
+        As :func:`hesspipe.diagnose.workflow.diagnose`.
+    check : PlantCheck
+        Its plant check of `run` against `plants`.
+    fit_ok : float
+        Fit percent at or above which (with independent residuals) the plants match.
+    close_share : float
+        Share of the nominal residual power a candidate must remove to be named.
+    """
+    f0 = float(check.fit_percent)
+    if math.isfinite(f0) and f0 >= fit_ok and check.passes:
+        return PlantFinding("match", f0, message=f"plants reproduce the output (fit {f0:.1f} %)")
+    p = _Paths(run, plants)
+    # The plants as given, with the record's initial state (it starts mid-flight) and the
+    # disturbance path's gain refitted: a record whose slow modes start away from rest
+    # fails the zero-state check though its plants are right.
+    ref = Explanation("nominal", "reference",
+                      p.fit_of(p.residual(p.time(p.yc * p.spec["control"]), p.time(p.yd * p.spec["disturbance"]),
+                                          _poles(plants.control_to_output, plants.disturbance_to_output))),
+                      {}, "the plants as given, disturbance gain and initial state refitted")
+    if ref.fit_percent >= fit_ok:
+        return PlantFinding("match", f0, explanations=(ref,),
+                            message=f"plants reproduce the output: fit {ref.fit_percent:.1f} % with the "
+                                    f"initial state refitted ({f0:.1f} % from rest)")
+    tried = [e for e in _aircraft_candidates(p, plants) if e.id != "nominal"] + [ref]
+    air = [e for e in tried if e.kind == "aircraft"]
+    files = _file_candidates(p, plants)
+    expl = tuple(sorted(tried + files, key=lambda e: -e.fit_percent if math.isfinite(e.fit_percent) else math.inf))
+
+    def residual_share(e):  # residual power left, relative to the plants as given (same refits)
+        return ((100.0 - e.fit_percent) / max(100.0 - ref.fit_percent, 1e-9)) ** 2
+
+    def credible(e):
+        # A file error must make the plants reproduce the output, and a swap must do so
+        # with path gains of a sane size (any two closed-loop signals correlate).
+        q = e.parameters
+        sane = all(1 / SCALE_RATIO <= abs(q[k]) <= SCALE_RATIO for k in ("gain_control", "gain_disturbance"))
+        return e.id != "gains" and e.fit_percent >= fit_ok and (sane or not q["swapped"])
+
+    best_air = max(air, key=lambda e: e.fit_percent)
+    # Parsimony: a candidate with fewer parameters that leaves at most PARSIMONY times the
+    # best one's residual power is preferred (a heavily damped "pair" can mimic a lag).
+    for e in sorted(air, key=lambda e: _N_PARAMETERS[e.id]):
+        if _N_PARAMETERS[e.id] < _N_PARAMETERS[best_air.id] and \
+                (100.0 - e.fit_percent) ** 2 <= PARSIMONY * (100.0 - best_air.fit_percent) ** 2:
+            best_air = e
+            break
+    evidence = [e for e in files if credible(e)]
+    best_file = max(evidence, key=lambda e: e.fit_percent) if evidence else None
+    head = (f"plant check fails: fit {f0:.1f} % of the output from the measured control and disturbance "
+            f"({ref.fit_percent:.1f} % with the disturbance gain and initial state refitted)")
+    if best_file is not None and best_file.fit_percent > best_air.fit_percent + 5.0:
+        msg = (f"{head}; WRONG PLANTS FILE OR COLUMNS: {best_file.how} gives fit {best_file.fit_percent:.1f} % "
+               f"(decided by refitting the path gains for every assignment of the columns; best "
+               f"aircraft-side candidate {best_air.id}: {best_air.fit_percent:.1f} %)")
+        return PlantFinding("wrong_file", f0, best_file.id, dict(best_file.parameters), expl, msg)
+    if residual_share(best_air) <= 1.0 - close_share:
+        msg = (f"{head}; {best_air.id} closes the gap: fit {best_air.fit_percent:.1f} % "
+               f"({best_air.how}; " + ", ".join(f"{k}={v:.3g}" for k, v in best_air.parameters.items() if isinstance(v, float)) + ")")
+        return PlantFinding("aircraft", f0, best_air.id, dict(best_air.parameters), expl, msg)
+    msg = (f"{head}; no aircraft-side candidate or file error closes it (best {expl[0].id}: "
+           f"fit {expl[0].fit_percent:.1f} %)")
+    return PlantFinding("unexplained", f0, None, {}, expl, msg)
+
+
+def corrected(run, plants, finding: PlantFinding):
+    """(run, plants) with the finding applied, for the pilot's identification: the fitted
+    aircraft factor in both paths (``rate_limit`` has no linear form: plants unchanged),
+    or the columns and path gains of a wrong-file verdict."""
+    from dataclasses import replace
+
+    import control as ct
+
+    from ..pilot.blocks import tf
+    from ..pilot.effects import actuator_lag_factor, dutch_roll_factor, roll_mode_factor
+
+    def times(sys, block):
+        (t,) = block.terms  # each factor is one rational term without delay
+        return sys * ct.tf([t.gain * c for c in t.num], list(t.den))
+
+    q = finding.parameters
+    if finding.verdict == "aircraft":
+        if finding.named == "dutch_roll":
+            fc = dutch_roll_factor(q["w_dr"], q["z_dr"], q["r_dr"])
+            w, z = q["w_dr"], q["z_dr"]
+            fd = tf(list(q["disturbance_numerator"]), [1.0, 2 * z * w, w * w])
+        elif finding.named == "roll_mode":
+            fc = fd = roll_mode_factor(q["K_rm"], q["a_rm"], q["p_rm"])
+        elif finding.named == "actuator_lag":
+            fc, fd = actuator_lag_factor(q["tau_a"]), None
+        else:
+            return run, plants
+        yc = times(plants.control_to_output, fc)
+        yd = plants.disturbance_to_output if fd is None else times(plants.disturbance_to_output, fd)
+        return run, replace(plants, control_to_output=yc, disturbance_to_output=yd)
+    if finding.verdict == "wrong_file":
+        u_k, w_k, y_k = q["columns"]
+        run = replace(run, control=getattr(run, u_k), disturbance=getattr(run, w_k), output=getattr(run, y_k))
+        plants = replace(plants, control_to_output=q["gain_control"] * plants.control_to_output,
+                         disturbance_to_output=q["gain_disturbance"] * plants.disturbance_to_output)
+    return run, plants

@@ -1,0 +1,549 @@
+"""The pilot's nonparametric describing function, from a measured run.
+
+Multisine experiments (SPEC.md "Describing functions"): the disturbance d and
+the reference r each excite their own set of lines. At the lines of a set the
+pilot's describing function from displayed error e = r - y to control u is::
+
+    H(j w_k) = U(w_k) / E(w_k)
+
+with U, E the discrete Fourier coefficients over a window that holds an
+integer number of the forcing's periods. The disturbance lines give the
+feedback (error) response; reference lines give their own response (equal
+to it for a purely compensatory pilot). The remnant n is everything else in
+u: its share of the control power is the power at non-excited bins.
+
+Uncertainty per line: with ``U = H E + N`` near a line, ``U_j - H_k E_j`` at
+the non-excited neighbours j of line k samples the remnant, so
+``sigma_k^2 = mean_j |U_j - H_k E_j|^2 / |E_k|^2`` is the variance of the
+complex error of H_k (circular Gaussian to first order).
+
+Broadband inputs (the paper's side wind plus gusts) have no lines: then
+``H = S_du / S_de`` from Welch cross-spectra with the disturbance as
+instrument (unbiased by the remnant, which is uncorrelated with d), at the
+Welch bins where d explains e and u (coherence), with the coherence-based
+error ``sigma/|H| = sqrt((1 - g_du)/(2 n g_du) + (1 - g_de)/(2 n g_de))``.
+
+Crossover of ``L = H Yc``: bracketed by the highest pair of reliable lines where
+|L| falls through 1, then located by weighted straight-line fits of ln|L| in
+ln w and of the phase in w over the reliable lines near it (see :func:`_cross`);
+its uncertainty is the spread over seeded draws of H from its error model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import signal
+
+from ..core.errors import HesspipeError
+from ..core.seeds import derive_seed
+from ..pilot.blocks import from_tf
+
+LINE_RATIO = 100.0
+"""A bin is a line when its power exceeds LINE_RATIO times the median of its NEAR
+neighbours each side: a random broadband spectrum does so with probability ~e^-70."""
+NEAR = 6
+NEIGHBOURS = 10
+"""Non-excited bins each side of a line used for its remnant variance."""
+MIN_COHERENCE = 0.3
+"""Welch fallback: bins kept where d explains both e and u at least this much."""
+DRAWS = 400
+RELIABLE = 0.5
+"""Lines with a relative error sigma/|H| above this are left out of the crossover."""
+BAND = 1.8
+"""The crossover's local fit uses the reliable lines within this factor of it."""
+
+
+@dataclass(frozen=True)
+class Response:
+    """A describing function at a set of frequencies.
+
+    Attributes
+    ----------
+    freq_rad_s : ndarray
+    H : ndarray, complex
+        U/E (control units per unit of displayed error).
+    sigma : ndarray
+        Standard deviation of the complex error of H (same units; ``E|dH|^2``).
+    bins : ndarray
+        FFT bin of each line in the analysis window (Welch bins for "welch").
+    """
+
+    freq_rad_s: np.ndarray
+    H: np.ndarray
+    sigma: np.ndarray
+    bins: np.ndarray
+
+    def to_dict(self) -> dict:
+        mag = np.abs(self.H)
+        rel = np.where(mag > 0, self.sigma / np.maximum(mag, 1e-300), np.inf)
+        return {"frequency_rad_s": self.freq_rad_s.tolist(),
+                "magnitude": mag.tolist(), "magnitude_db": (20 * np.log10(mag)).tolist(),
+                "phase_deg": np.degrees(np.unwrap(np.angle(self.H))).tolist(),
+                "real": self.H.real.tolist(), "imag": self.H.imag.tolist(),
+                "sigma": self.sigma.tolist(),
+                "magnitude_db_std": (20 / np.log(10) * rel).tolist(),
+                "phase_deg_std": np.degrees(np.arcsin(np.clip(rel, 0, 1))).tolist()}
+
+
+@dataclass(frozen=True)
+class FrfCrossover:
+    """Nonparametric crossover of ``L = H Yc`` (NaN if |L| does not fall through 1 between lines)."""
+
+    frequency_rad_s: float
+    phase_margin_deg: float
+    frequency_std: float
+    phase_margin_std_deg: float
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
+                "frequency_std_rad_s": self.frequency_std,
+                "phase_margin_std_deg": self.phase_margin_std_deg, "note": self.note,
+                "method": "weighted local fits of ln|L| in ln w and of the phase in w over the reliable "
+                          "lines near the crossing; "
+                          f"std over {DRAWS} seeded draws of H from its error model"}
+
+
+@dataclass(frozen=True)
+class Frf:
+    """Result of :func:`estimate_frf`.
+
+    Attributes
+    ----------
+    method : {"multisine", "welch"}
+    feedback : Response
+        At the disturbance lines (or Welch bins): the pilot's error response.
+    reference : Response or None
+        At the reference lines, when the reference has its own lines.
+    remnant_share : float
+        Share of the control power (mean removed) at non-excited bins, 0..1;
+        for "welch", the share the disturbance does not explain,
+        ``sum((1 - coh_du) S_uu) / sum(S_uu)``.
+    crossover : FrfCrossover
+    window : (start, length)
+        Samples of the run analysed.
+    """
+
+    method: str
+    feedback: Response
+    reference: Response | None
+    remnant_share: float
+    crossover: FrfCrossover
+    window: tuple
+    dt: float
+    run_id: str = ""
+    synthetic: bool = False
+    notes: tuple = field(default=())
+
+    def to_dict(self) -> dict:
+        return {"run_id": self.run_id, "synthetic": self.synthetic, "method": self.method,
+                "definition": "H = U/E, E = reference - output; feedback response at the "
+                              "disturbance's lines",
+                "feedback": self.feedback.to_dict(),
+                "reference": None if self.reference is None else self.reference.to_dict(),
+                "remnant_share_of_control_power": self.remnant_share,
+                "crossover": self.crossover.to_dict(),
+                "window": {"start_sample": int(self.window[0]), "samples": int(self.window[1]),
+                           "duration_s": self.window[1] * self.dt},
+                "notes": list(self.notes)}
+
+
+def _check_run(run, where: str):
+    t = np.asarray(run.time, dtype=float)
+    for name in ("time", "disturbance", "output", "control", "reference"):
+        x = np.asarray(getattr(run, name), dtype=float)
+        if x.shape != t.shape:
+            raise HesspipeError(f"{where}: {name}: expected {t.size} samples like time, got {x.size}")
+        bad = ~np.isfinite(x)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise HesspipeError(f"{where}: {name}: a gap (non-finite value) at t = {t[i]:.6g} s; "
+                                "expected a continuous record")
+    if t.size < 8:
+        raise HesspipeError(f"{where}: {t.size} samples; expected a record of at least 8")
+    steps = np.diff(t)
+    dt = float(np.median(steps))
+    if not dt > 0:
+        raise HesspipeError(f"{where}: time: expected increasing sample times")
+    jump = np.abs(steps - dt) > 0.01 * dt + 1e-6
+    if jump.any():
+        i = int(np.argmax(jump))
+        raise HesspipeError(f"{where}: time: a gap of {steps[i]:.6g} s after t = {t[i]:.6g} s; "
+                            f"expected uniform samples every {dt:.6g} s")
+    return dt
+
+
+def _lines(power: np.ndarray) -> np.ndarray:
+    """Bins (>= 1) whose power stands LINE_RATIO above their nearest neighbours.
+
+    The reference is the median of the NEAR bins each side: the lines of a sparse
+    multisine in a whole-period window sit on an empty floor, while a random
+    spectrum (gusts) fluctuates bin to bin like chi-square(2) variates and a
+    smooth one (a slow drift) cannot fall by LINE_RATIO within a few bins. A
+    multisine exciting every bin of a band has no such contrast and is taken as
+    broadband (the Welch estimate serves it).
+    """
+    p = power.copy()
+    p[0] = 0.0
+    top = p.max()
+    if not top > 0:
+        return np.zeros(0, dtype=int)
+    n = p.size
+    idx = np.arange(n)
+    offsets = np.concatenate((np.arange(-NEAR, 0), np.arange(1, NEAR + 1)))
+    nb = idx[:, None] + offsets[None, :]
+    # Near the ends, take the missing neighbours from further along the other side.
+    nb = np.where(nb < 1, nb + 2 * NEAR + 1, nb)
+    nb = np.clip(np.where(nb > n - 1, nb - 2 * NEAR - 1, nb), 1, n - 1)
+    ref = np.median(p[nb], axis=1)
+    ref = np.maximum(ref, 1e-13 * top)  # exact multisines have an empty floor
+    ok = p > LINE_RATIO * ref
+    ok[0] = False
+    cand = np.nonzero(ok)[0]
+    if cand.size and cand.max() < 3:
+        # Only the record's first one or two bins: a slow drift (the paper's turning side
+        # wind), whose steep spectrum clears its neighbours there; a forcing has lines higher up.
+        return np.zeros(0, dtype=int)
+    if cand.size < 2:
+        return cand
+    # Leakage (a window that is not a whole number of periods) puts sidebands beside
+    # each line that decay like 1/distance^2: a candidate weaker than a neighbour's
+    # 1/(10 distance^2) is one of those, not a line of its own.
+    keep = np.ones(cand.size, dtype=bool)
+    pc = p[cand]
+    order = np.argsort(-pc)
+    for i in order:
+        if not keep[i]:
+            continue
+        dist = np.abs(cand - cand[i]).astype(float)
+        weak = (pc * 10 * np.maximum(dist, 1) ** 2 < pc[i]) & (dist > 0)
+        keep &= ~weak
+    return cand[keep]
+
+
+def _purity(x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    X = np.fft.rfft(x - x.mean())
+    p = np.abs(X) ** 2
+    lines = _lines(p)
+    total = p[1:].sum()
+    return (float(p[lines].sum() / total) if total > 0 else 0.0), lines, X
+
+
+def _period_by_lag(x: np.ndarray) -> int | None:
+    """Smallest lag L <= n/2 with x[t+L] ~ x[t] (a periodic forcing), or None."""
+    n = x.size
+    x = x - x.mean()
+    nf = 1 << int(np.ceil(np.log2(2 * n)))
+    F = np.fft.rfft(x, nf)
+    r = np.fft.irfft(np.abs(F) ** 2, nf)[: n // 2 + 1]
+    c = np.concatenate(([0.0], np.cumsum(x * x)))
+    lags = np.arange(n // 2 + 1)
+    # sum_t (x[t+L] - x[t])^2 over the overlap, relative to the overlap's power.
+    s_head = c[n - lags]            # sum x[0:n-L]^2
+    s_tail = c[n] - c[lags]         # sum x[L:n]^2
+    err = (s_head + s_tail - 2 * r) / np.maximum(s_head + s_tail, 1e-300)
+    cand = np.nonzero(err[1:] < 1e-3)[0] + 1
+    if cand.size == 0:
+        return None
+    L = int(cand[0])
+    # the first lag under the threshold: walk to its local minimum
+    while L + 1 < err.size and err[L + 1] < err[L]:
+        L += 1
+    return L if L >= 4 else None
+
+
+def _topk_purity(x: np.ndarray, k: int) -> float:
+    p = np.abs(np.fft.rfft(x - x.mean()))[1:] ** 2
+    total = p.sum()
+    if not total > 0:
+        return 0.0
+    k = min(k, p.size)
+    return float(np.partition(p, p.size - k)[p.size - k:].sum() / total)
+
+
+def _window(d: np.ndarray, r: np.ndarray | None):
+    """Analysis window (start, length) with the forcing's lines on exact bins.
+
+    The record as written (or less its last sample: loggers often write both
+    ends); else a whole number of periods found by lag (two or more periods);
+    else the length between half the record and all of it whose spectrum
+    concentrates most power in as many bins as there are lines (one period
+    of a forcing whose period is not the record's length). The window ends
+    at the record's end, so a start-up transient falls outside it.
+    """
+    n = d.size
+    x = d if r is None else d + r
+    best = None
+    lines = np.zeros(0, dtype=int)
+    for length in (n, n - 1):
+        pur, found, _ = _purity(x[n - length:])
+        if best is None or pur > best[0] + 1e-3:
+            best, lines = (pur, n - length, length), found
+    if best[0] >= 0.999 or lines.size == 0:
+        return best[1], best[2], best[0]
+    period = _period_by_lag(x)
+    if period is not None:
+        length = (n // period) * period
+        pur, _, _ = _purity(x[n - length:])
+        if pur > best[0]:
+            best = (pur, n - length, length)
+        if best[0] >= 0.999:
+            return best[1], best[2], best[0]
+    k = int(min(lines.size, 400))
+    coarse = np.arange(n, n // 2, -4)
+    scores = np.array([_topk_purity(x[n - m:], k) for m in coarse])
+    m0 = int(coarse[int(np.argmax(scores))])
+    fine = np.arange(min(n, m0 + 4), max(n // 2, m0 - 4) - 1, -1)
+    fs = np.array([_topk_purity(x[n - m:], k) for m in fine])
+    m = int(fine[int(np.argmax(fs))])
+    pur, _, _ = _purity(x[n - m:])
+    if pur > best[0]:
+        best = (pur, n - m, m)
+    return best[1], best[2], best[0]
+
+
+def _response(U, E, lines, all_lines, omega) -> Response:
+    H = U[lines] / E[lines]
+    excited = np.zeros(U.size, dtype=bool)
+    excited[all_lines] = True
+    excited[0] = True
+    sig = np.empty(lines.size)
+    for i, k in enumerate(lines):
+        nb = []
+        step = 1
+        while len(nb) < 2 * NEIGHBOURS and step < 4 * NEIGHBOURS + 20:
+            for j in (k - step, k + step):
+                if 0 < j < U.size and not excited[j]:
+                    nb.append(j)
+            step += 1
+        nb = np.array(nb[: 2 * NEIGHBOURS], dtype=int)
+        resid = U[nb] - H[i] * E[nb]
+        sig[i] = np.sqrt(np.mean(np.abs(resid) ** 2)) / max(abs(E[k]), 1e-300)
+    return Response(omega[lines], H, sig, np.asarray(lines))
+
+
+def _welch(d, e, u, dt, where) -> Response:
+    n = d.size
+    nper = int(min(n // 4, 2 ** int(np.floor(np.log2(max(n // 4, 16))))))
+    nper = max(nper, 64)
+    if n < 2 * nper:
+        raise HesspipeError(f"{where}: {n} samples is too short for the broadband (Welch) "
+                            "estimate; expected at least 4 segments of 64 samples")
+    kw = dict(fs=1.0 / dt, nperseg=nper, noverlap=nper // 2, window="hann", detrend="constant")
+    f, sdd = signal.welch(d, **kw)
+    _, see = signal.welch(e, **kw)
+    _, suu = signal.welch(u, **kw)
+    _, sdu = signal.csd(d, u, **kw)
+    _, sde = signal.csd(d, e, **kw)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g_du = np.abs(sdu) ** 2 / (sdd * suu)
+        g_de = np.abs(sde) ** 2 / (sdd * see)
+        H = sdu / sde
+    segments = 1 + (n - nper) // (nper // 2)
+    keep = (f > 0) & (g_du >= MIN_COHERENCE) & (g_de >= MIN_COHERENCE) & np.isfinite(H)
+    keep &= f <= 5.0  # the pilot-vehicle band (SPEC: 0-5 Hz)
+    if not keep.any():
+        raise HesspipeError(f"{where}: disturbance: no power at any detectable multisine line, and "
+                            f"its broadband coherence with the error and the control stays below "
+                            f"{MIN_COHERENCE}; expected a disturbance that drives the loop")
+    rel = np.sqrt((1 - g_du[keep]) / (2 * segments * g_du[keep])
+                  + (1 - g_de[keep]) / (2 * segments * g_de[keep]))
+    # Remnant: the part of the control power the disturbance does not explain.
+    g = np.nan_to_num(g_du[1:], nan=0.0)
+    share = float(np.sum((1 - g) * suu[1:]) / np.sum(suu[1:])) if np.sum(suu[1:]) > 0 else float("nan")
+    return Response(2 * np.pi * f[keep], H[keep], rel * np.abs(H[keep]), np.nonzero(keep)[0]), share
+
+
+def nonparametric_crossover(resp: Response, yc, *, seed: int = 0) -> FrfCrossover:
+    """Crossover of ``L = H Yc`` at the response's frequencies, with a draw-based std.
+
+    Parameters
+    ----------
+    resp : Response
+    yc : control.TransferFunction or Block
+        The control plant (input of Yc: the pilot's control).
+    seed : int
+        Seed of the draws (the estimate itself does not depend on it).
+    """
+    block = yc if hasattr(yc, "response") else from_tf(yc)
+    w = resp.freq_rad_s
+    nan = float("nan")
+    if w.size < 2:
+        return FrfCrossover(nan, nan, nan, nan, "fewer than two lines")
+    order = np.argsort(w)
+    w = w[order]
+    H0 = resp.H[order]
+    sig = resp.sigma[order]
+    rel = sig / np.maximum(np.abs(H0), 1e-300)
+    grid = np.logspace(np.log10(w[0] / BAND), np.log10(w[-1] * BAND), 1500)
+    plant = (grid, block.response(1j * grid), block.response(1j * w))
+    wc, pm = _cross(w, H0, rel, plant)
+    if not np.isfinite(wc):
+        mag = np.abs(H0 * plant[2])
+        note = ("|L| > 1 at every line: crossover above the highest line" if np.all(mag > 1) else
+                "|L| < 1 at every line: crossover below the lowest line" if np.all(mag < 1) else
+                "|L| does not fall through 1 between reliable lines")
+        return FrfCrossover(nan, nan, nan, nan, note)
+    rng = np.random.default_rng(derive_seed(seed, "frf-crossover"))
+    noise = (rng.standard_normal((DRAWS, w.size)) + 1j * rng.standard_normal((DRAWS, w.size))) / np.sqrt(2)
+    arr = np.array([_cross(w, H0 + sig * z, rel, plant) for z in noise])
+    ok = np.isfinite(arr[:, 0])
+    if ok.sum() < DRAWS // 2:
+        return FrfCrossover(wc, pm, float("inf"), float("inf"),
+                            "crossover not found in most draws: very uncertain")
+    dpm = (arr[ok, 1] - pm + 180.0) % 360.0 - 180.0
+    return FrfCrossover(wc, pm, float(np.std(arr[ok, 0])), float(np.std(dpm)))
+
+
+def _line(x, y, wt):
+    """Weighted least-squares line y = a + b x (weights: inverse variances)."""
+    sw = wt.sum()
+    mx, my = (wt * x).sum() / sw, (wt * y).sum() / sw
+    sxx = (wt * (x - mx) ** 2).sum()
+    b = (wt * (x - mx) * (y - my)).sum() / sxx if sxx > 0 else 0.0
+    return my - b * mx, b
+
+
+def _down(x, f):
+    """Highest x where f (sampled at x, ascending) falls through 0, linearly interpolated."""
+    down = np.nonzero((f[:-1] > 0) & (f[1:] <= 0))[0]
+    if down.size == 0:
+        return float("nan"), -1
+    i = down[-1]
+    t = f[i] / (f[i] - f[i + 1])
+    return float(x[i] + t * (x[i + 1] - x[i])), int(i)
+
+
+def _cross(w, H, rel, plant) -> tuple[float, float]:
+    """Crossover and phase margin of ``L = H Yc`` from measured points H(j w) (w ascending).
+
+    Lines whose relative error exceeds RELIABLE are left out (above the
+    forcing's corner the remnant swamps them). The crossing is bracketed
+    between the remaining lines (or extrapolated at most a factor BAND beyond
+    the highest when |L| is still above 1 there). Then the pilot's points
+    within a factor BAND of it are smoothed: ln|H| by a weighted straight
+    line in ln w, its unwrapped phase by one in w (weights: inverse relative
+    variances), and the crossing of that smooth H times the exact plant is
+    found. The plant's curvature (1/(s(s+1)) near 1 rad/s) is thus not
+    interpolated, and the remnant's scatter is averaged over neighbouring
+    lines instead of trusting two.
+    """
+    grid, yc_grid, yc_w = plant
+    keep = rel < RELIABLE
+    if keep.sum() < 2:
+        keep = np.isin(np.arange(w.size), np.argsort(rel)[:2])
+    w, H, rel, yc_w = w[keep], H[keep], rel[keep], yc_w[keep]
+    lw = np.log(w)
+    lm = np.log(np.abs(H * yc_w))
+    x0, i = _down(lw, lm)
+    wt = 1.0 / np.maximum(rel, 0.02) ** 2
+    if np.isfinite(x0):
+        wc0 = float(np.exp(x0))
+    else:
+        if not lm[-1] > 0:
+            return float("nan"), float("nan")
+        wc0 = float(w[-1])  # still above 1 at the last reliable line: look just beyond it
+    near = (w >= wc0 / BAND) & (w <= wc0 * BAND)
+    if near.sum() < 2:
+        if not np.isfinite(x0):
+            return float("nan"), float("nan")
+        near = np.isin(np.arange(w.size), (i, i + 1))
+    a, b = _line(lw[near], np.log(np.abs(H[near])), wt[near])
+    ph = np.unwrap(np.angle(H))
+    c, d = _line(w[near], ph[near], wt[near])
+    sel = (grid >= wc0 / BAND) & (grid <= wc0 * BAND)
+    g = grid[sel]
+    lmag = a + b * np.log(g) + np.log(np.abs(yc_grid[sel]))
+    xc, j = _down(np.log(g), lmag)
+    if not np.isfinite(xc):
+        return float("nan"), float("nan")
+    wc = float(np.exp(xc))
+    yc_phase = np.angle(yc_grid[sel][j])
+    phase = c + d * wc + yc_phase
+    pm = (np.degrees(phase) + 180.0 + 180.0) % 360.0 - 180.0
+    return wc, float(180.0 if pm == -180.0 else pm)
+
+
+def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
+    """The pilot's nonparametric describing function H = U/E from a run.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        Time (s, uniform), disturbance, output, control, reference.
+    plants : Plants or control.TransferFunction, optional
+        The control plant Yc, for the crossover of ``L = H Yc`` (NaN without).
+    seed : int
+        Seed of the crossover's uncertainty draws.
+
+    Returns
+    -------
+    Frf
+
+    Raises
+    ------
+    HesspipeError
+        Gaps or non-finite values; a disturbance with no detectable line and
+        no broadband coherence; a record holding fewer than two periods of
+        its lowest line.
+    """
+    where = getattr(run, "source", "") or getattr(run, "id", "run")
+    dt = _check_run(run, where)
+    d = np.asarray(run.disturbance, dtype=float)
+    r = np.asarray(run.reference, dtype=float)
+    y = np.asarray(run.output, dtype=float)
+    u = np.asarray(run.control, dtype=float)
+    if not np.ptp(d) > 0 and not np.ptp(r) > 0:
+        raise HesspipeError(f"{where}: disturbance: constant (no power at any frequency) and no "
+                            "reference; expected a forcing function that excites the loop")
+    has_r = np.ptp(r) > 0
+    start, length, _ = _window(d, r if has_r else None)
+    sl = slice(start, start + length)
+    D = np.fft.rfft(d[sl] - d[sl].mean())
+    R = np.fft.rfft(r[sl] - r[sl].mean()) if has_r else np.zeros_like(D)
+    pd_, pr_ = np.abs(D) ** 2, np.abs(R) ** 2
+    d_lines = _lines(pd_) if np.ptp(d) > 0 else np.zeros(0, int)
+    r_lines = _lines(pr_) if has_r else np.zeros(0, int)
+    # A bin belongs to the set that dominates it (interleaved sets share none).
+    d_lines = np.array([k for k in d_lines if pd_[k] >= pr_[k]], dtype=int)
+    r_lines = np.array([k for k in r_lines if pr_[k] > pd_[k]], dtype=int)
+    e = r - y
+    yc = None if plants is None else getattr(plants, "control_to_output", plants)
+    notes = []
+    if d_lines.size == 0 and r_lines.size == 0:
+        fb, share = _welch(d - d.mean(), e - e.mean(), u - u.mean(), dt, where)
+        notes.append("no multisine lines: Welch cross-spectra S_du/S_de (broadband disturbance)")
+        cross = (nonparametric_crossover(fb, yc, seed=seed) if yc is not None else
+                 FrfCrossover(*(float("nan"),) * 4, "no plants given"))
+        return Frf("welch", fb, None, share, cross, (0, d.size), dt,
+                   getattr(run, "id", ""), bool(getattr(run, "synthetic", False)), tuple(notes))
+    lowest = min(int(x.min()) for x in (d_lines, r_lines) if x.size)
+    if lowest < 2:
+        f0 = lowest / (length * dt)
+        raise HesspipeError(f"{where}: the record ({length * dt:.4g} s analysed) holds fewer than two "
+                            f"periods of its lowest excited line ({f0:.4g} Hz, period "
+                            f"{1 / f0:.4g} s); expected at least {2 / f0:.4g} s")
+    U = np.fft.rfft(u[sl] - u[sl].mean())
+    E = np.fft.rfft(e[sl] - e[sl].mean())
+    omega = 2 * np.pi * np.fft.rfftfreq(length, dt)
+    all_lines = np.union1d(d_lines, r_lines)
+    source = d_lines if d_lines.size else r_lines
+    if not d_lines.size:
+        notes.append("the disturbance has no lines: the feedback response is taken at the "
+                     "reference's lines")
+    fb = _response(U, E, source, all_lines, omega)
+    ref = _response(U, E, r_lines, all_lines, omega) if (d_lines.size and r_lines.size) else None
+    pu = np.abs(U) ** 2
+    quiet = np.ones(pu.size, dtype=bool)
+    quiet[0] = False
+    quiet[all_lines] = False
+    total = pu[1:].sum()
+    share = float(pu[quiet].sum() / total) if total > 0 else float("nan")
+    cross = (nonparametric_crossover(fb, yc, seed=seed) if yc is not None else
+             FrfCrossover(*(float("nan"),) * 4, "no plants given"))
+    if start:
+        notes.append(f"first {start} sample(s) left out so that the window holds whole periods")
+    return Frf("multisine", fb, ref, share, cross, (start, length), dt,
+               getattr(run, "id", ""), bool(getattr(run, "synthetic", False)), tuple(notes))

@@ -1,0 +1,150 @@
+"""Control-signal spectra and the fitness of the paper (Eqs. 5-10).
+
+The paper's estimate (:class:`PaperWelch`): the record is padded with its
+trim value to a whole number of segments (Eq. 9), cut into segments of 1024
+samples overlapping by 32, each weighted by a Hamming window; the segment
+periodograms ``|FFT|^2 / (N fs)`` (Eqs. 5-7: the correlation-sequence
+spectrum divided by the sample rate) are averaged and divided by the
+window's energy-loss factor U = 0.612 (Eq. 8). No mean is removed and the
+spectrum is not folded (values at f >= 0 of the two-sided density), as in
+the paper's equations. ``method="scipy"`` gives :func:`scipy.signal.welch`'s
+one-sided density with the same window and segmentation instead.
+
+Fitness (Eq. 10): the root mean square, over the bins of a band, of the
+difference between measured and simulated PSDs. Lower is better.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.fft
+import scipy.signal
+
+from ..core.errors import HesspipeError
+
+
+@functools.lru_cache(maxsize=8)
+def _hamming(n: int) -> np.ndarray:
+    w = scipy.signal.get_window("hamming", n)
+    w.flags.writeable = False
+    return w
+
+
+@functools.lru_cache(maxsize=8)
+def _rfftfreq(n: int, fs: float) -> np.ndarray:
+    return np.fft.rfftfreq(n, 1.0 / fs)
+
+
+@dataclass(frozen=True)
+class PaperWelch:
+    """Welch estimate of the paper.
+
+    Attributes
+    ----------
+    nperseg : int
+        Segment length, samples (1024).
+    noverlap : int
+        Overlap between segments, samples (32).
+    correction : float
+        Energy-loss factor U of Eq. 8 (0.612).
+    """
+
+    nperseg: int = 1024
+    noverlap: int = 32
+    correction: float = 0.612
+
+    def __post_init__(self):
+        if not (1 <= self.nperseg and 0 <= self.noverlap < self.nperseg):
+            raise HesspipeError(f"spectra: expected 0 <= noverlap < nperseg, got nperseg="
+                                f"{self.nperseg}, noverlap={self.noverlap}")
+
+    def segments(self, n: int) -> int:
+        """Number of segments covering `n` samples after padding (Eq. 9)."""
+        if n < self.nperseg:
+            raise HesspipeError(f"record of {n} samples is shorter than one spectral segment "
+                                f"({self.nperseg} samples); expected at least {self.nperseg}")
+        step = self.nperseg - self.noverlap
+        return 1 + -(-(n - self.nperseg) // step)
+
+    def frequencies(self, fs: float) -> np.ndarray:
+        return _rfftfreq(self.nperseg, float(fs)).copy()
+
+    @property
+    def window(self) -> np.ndarray:
+        return _hamming(self.nperseg)
+
+    def __call__(self, x, fs: float, trim: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(freq_hz, psd)`` of `x` sampled at `fs` Hz; `trim` pads (default: x[0])."""
+        x = np.asarray(x, dtype=float)
+        nseg = self.segments(x.size)
+        step = self.nperseg - self.noverlap
+        total = self.nperseg + (nseg - 1) * step
+        pad = x[0] if trim is None else float(trim)
+        if total > x.size:
+            x = np.concatenate([x, np.full(total - x.size, pad)])
+        frames = np.lib.stride_tricks.as_strided(x, (nseg, self.nperseg),
+                                                 (step * x.strides[0], x.strides[0]))
+        spec = scipy.fft.rfft(frames * self.window, axis=-1)
+        power = (spec.real ** 2 + spec.imag ** 2).mean(axis=0) / (self.nperseg * fs)
+        return self.frequencies(fs), power / self.correction
+
+
+def psd(x, fs: float, *, method: str = "paper", trim: float | None = None,
+        nperseg: int = 1024, noverlap: int = 32) -> tuple[np.ndarray, np.ndarray]:
+    """Power spectral density of a control signal.
+
+    Parameters
+    ----------
+    x : array
+        Signal.
+    fs : float
+        Sample rate, Hz.
+    method : {"paper", "scipy"}
+        The paper's estimate (:class:`PaperWelch`) or scipy's one-sided
+        Welch density (Hamming, same segments, no detrending).
+    trim : float, optional
+        Padding value of the paper's method (default: the first sample).
+
+    Returns
+    -------
+    freq_hz, psd : ndarray
+    """
+    if method == "paper":
+        return PaperWelch(nperseg, noverlap)(x, fs, trim)
+    if method == "scipy":
+        x = np.asarray(x, dtype=float)
+        if x.size < nperseg:
+            PaperWelch(nperseg, noverlap).segments(x.size)  # raises the same message
+        return scipy.signal.welch(x, fs, window="hamming", nperseg=nperseg, noverlap=noverlap,
+                                  detrend=False, scaling="density")
+    raise HesspipeError(f"spectra: unknown method {method!r}; expected 'paper' or 'scipy'")
+
+
+def band_mask(freq_hz, band=(0.0, 5.0)) -> np.ndarray:
+    """Boolean mask of the bins with ``band[0] <= f <= band[1]``."""
+    lo, hi = float(band[0]), float(band[1])
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
+        raise HesspipeError(f"band: expected 0 <= low < high in Hz, got {band!r}")
+    freq_hz = np.asarray(freq_hz)
+    nyquist = float(freq_hz[-1])
+    if hi > nyquist * (1 + 1e-9):
+        # Bins stop at the Nyquist frequency: a wider band would be clipped silently.
+        raise HesspipeError(f"band: high edge {hi:g} Hz is above the data's Nyquist frequency "
+                            f"{nyquist:g} Hz (sample interval {0.5 / nyquist:g} s); expected a band "
+                            f"within 0-{nyquist:g} Hz (an implausibly low Nyquist frequency means the "
+                            "time column is not in seconds)")
+    mask = (freq_hz >= lo) & (freq_hz <= hi + 1e-9)
+    if not mask.any():
+        raise HesspipeError(f"band: {lo:g}-{hi:g} Hz holds no frequency bin (bins every "
+                            f"{freq_hz[1] - freq_hz[0]:g} Hz up to {freq_hz[-1]:g} Hz)")
+    return mask
+
+
+def fitness(measured_psd, simulated_psd, freq_hz, band=(0.0, 5.0)) -> float:
+    """RMS difference of two PSDs over the bins of `band` (Hz) (paper Eq. 10); lower is better."""
+    mask = band_mask(freq_hz, band)
+    d = np.asarray(measured_psd)[mask] - np.asarray(simulated_psd)[mask]
+    return float(np.sqrt(np.mean(d * d)))

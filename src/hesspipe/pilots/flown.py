@@ -1,0 +1,89 @@
+"""The pilots stage's cohort flown in JSBSim (SYNTHETIC): each drawn pilot flies the aircraft.
+
+The draw is :func:`hesspipe.pilots.cohort.synth_pilot`'s; the flight is
+:func:`hesspipe.flight.closed_loop.fly_pilot_record`'s.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from dataclasses import replace
+from pathlib import Path
+from typing import Sequence
+
+from ..core.errors import HesspipeError
+from ..core.formats import Plants, tf_coefficients, write_run
+from ..core.io import staged_output, write_json
+from ..core.provenance import versions
+from ..core.seeds import derive_seed
+from ..flight.approach import FlightConfig
+from ..flight.closed_loop import fly_pilot_record
+from .cohort import CohortSpec, _check_effects, pilot_ids, synth_pilot
+
+
+def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_dir: str | os.PathLike, *,
+               aircraft: str = "737", config: FlightConfig = FlightConfig(), record_dt_s: float = 0.02,
+               spec=None) -> list[Path]:
+    """The pipeline's cohort, flown in JSBSim: ``<id>.csv``, ``<id>.truth.json``, ``cohort.json``.
+
+    Each pilot is drawn exactly as :func:`hesspipe.pilots.cohort.synth_pilot` draws it
+    (same seeds, parameters and remnant share; the frequency-domain run it also
+    makes is discarded), then flies `aircraft` at ``config.dt_s``; Kn is
+    re-derived for that step from the pilot's remnant share. Records keep every
+    ``ceil(record_dt_s / dt_s)``-th step (0.02 s at 1/120 s: every 3rd, 40 Hz, whose
+    times are exact in the CSV's decimal digits).
+    """
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise HesspipeError(f"n: expected an integer >= 1, got {n!r}")
+    effects = _check_effects(effects)
+    spec = spec or CohortSpec(duration_s=config.duration_s)
+    every = max(1, int(math.ceil(record_dt_s / config.dt_s - 1e-9)))
+    ids = pilot_ids(n)
+    out_dir = Path(out_dir)
+    summary = []
+    with staged_output(out_dir, kind="cohort") as stage:
+        with tempfile.TemporaryDirectory(prefix=".jsbsim-", dir=stage) as work:
+            for pid in ids:
+                pseed = derive_seed(seed, pid)
+                _, drawn = synth_pilot(plants, pid, pseed, effects, spec)
+                params = {k: v for k, v in drawn["parameters"].items() if k != "Kn"}
+                flight = fly_pilot_record(aircraft, plants, drawn["model"], params, seed=pseed,
+                                          workdir=Path(work), config=config, record_every=every,
+                                          remnant_share=drawn["remnant_share"], run_id=pid)
+                truth = dict(flight.truth, base_seed=seed, draws=drawn["draws"],
+                             distributions=drawn["distributions"])
+                write_run(stage / f"{pid}.csv", flight.run)
+                write_json(stage / f"{pid}.truth.json", truth)
+                summary.append({"id": pid, "seed": pseed, "parameters": truth["parameters"],
+                                "envelope": truth["envelope"]})
+        write_json(stage / "cohort.json", {
+            "synthetic": True,
+            "simulator": "jsbsim",
+            "note": "SYNTHETIC DATA: Hess pilot models flying the JSBSim aircraft in closed loop, "
+                    "not measured",
+            "aircraft": aircraft, "n": n, "seed": seed, "effects": list(summary and truth["effects"]),
+            "dt_s": config.dt_s * every, "simulation_dt_s": config.dt_s,
+            "plants": {"control_to_output": tf_coefficients(plants.control_to_output),
+                       "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)},
+            "pilots": summary, "versions": versions()})
+    return [out_dir / f"{pid}.csv" for pid in ids]
+
+
+def fly_pipeline_cohort(config, plants: Plants, ctx):
+    """The pilots stage's JSBSim cohort: fly it into ``ctx.out_dir/cohort``.
+
+    `config` is the stage's :class:`hesspipe.pilots.compare.PilotsConfig`; the aircraft and
+    the flight settings are the ``[flight]`` table's (the aircraft the plants were
+    fitted on, unless the user changes it). Returns `config` pointing at the cohort.
+    """
+    table = dict(ctx.config.get("flight", {}))
+    aircraft = table.pop("aircraft", "737")
+    flight_config = FlightConfig.from_table(table, ctx.source)
+    flight_config = replace(flight_config, duration_s=config.duration_s)
+    seed = config.seed if config.seed is not None else int(ctx.seed)
+    folder = Path(ctx.out_dir) / "cohort"
+    fly_cohort(plants, config.n, seed, config.effects, folder, aircraft=aircraft, config=flight_config,
+               record_dt_s=config.dt_s)
+    return replace(config, data=str(folder))

@@ -1,0 +1,245 @@
+"""The concrete pipeline stages: each wires one library call into the engine.
+
+The stages are declared in ``pipeline/stages.toml``; each ``run`` entry
+names one of the functions below, which receive a
+:class:`~hesspipe.pipeline.engine.StageContext`. Heavy imports stay inside the
+functions so that ``hesspipe status`` and an up-to-date ``hesspipe run``
+start quickly.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..core.config import Fields, aircraft_file, data_dir, load_toml, merge
+from ..core.errors import HesspipeError
+from .engine import Pipeline, load_stages
+
+SECTIONS = ("flight", "plants", "analytic", "pilots", "diagnose", "report")
+
+
+def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
+    """Load ``pipeline/default.toml`` merged with the user's file and overrides.
+
+    Returns the configuration and a name for it (for messages/manifests).
+    Relative paths in the user's file are resolved against its folder.
+    """
+    default_path = data_dir("pipeline") / "default.toml"
+    config = load_toml(default_path)
+    source = str(default_path)
+    if path:
+        user = load_toml(path)
+        source = str(path)
+        unknown = sorted(set(user) - set(SECTIONS) - {"seed"})
+        if unknown:
+            raise HesspipeError(f"{path}: field '{unknown[0]}': unknown section; expected seed or one of "
+                                f"{', '.join(SECTIONS)}")
+        for section, key in (("pilots", "data"), ("diagnose", "run")):
+            value = user.get(section, {}).get(key) if isinstance(user.get(section), dict) else None
+            if isinstance(value, str) and value and not Path(value).is_absolute():
+                user[section][key] = str((Path(path).parent / value).resolve())
+        config = merge(config, user)
+    if aircraft is not None:
+        config = merge(config, {"flight": {"aircraft": aircraft}})
+    if seed is not None:
+        config["seed"] = seed
+    from ..core.seeds import MAX_SEED
+
+    Fields(config, source).integer("seed", 0, min=0, max=MAX_SEED)
+    for name in SECTIONS:
+        if not isinstance(config.get(name, {}), dict):
+            raise HesspipeError(f"{source}: field '{name}': expected a table")
+    # The pipeline-level names and paths are read before any stage's own check (for the
+    # fingerprints, also by `status`), so their types are checked here.
+    for section, key in PATH_FIELDS:
+        value = config[section].get(key) if section in config else None
+        if value is not None and not isinstance(value, str):
+            raise Fields(config[section], source, section).error(key, "a string", value)
+    return config, source
+
+
+#: (table, field) of the names and paths the pipeline itself reads.
+PATH_FIELDS = (("flight", "aircraft"), ("analytic", "model"), ("pilots", "data"),
+               ("diagnose", "run"), ("diagnose", "model"))
+
+
+def _in_field(source: str, field: str, check, value) -> None:
+    """Run ``check(value)``; re-raise its error as one naming `source` and `field`."""
+    try:
+        check(value)
+    except HesspipeError as exc:
+        raise HesspipeError(f"{source}: field '{field}': {exc}") from None
+
+
+def validate(config: dict, source: str) -> None:
+    """Check every stage's table before anything runs, so a typo in the last stage's
+    table fails in a second, not after the first stages have run."""
+    from ..diagnose.workflow import DiagnoseConfig, _resolve_candidates
+    from ..flight.aircraft import load_aircraft
+    from ..flight.approach import FlightConfig
+    from ..pilot.hess import model_from_name
+    from ..pilots.batch import check_scheduler_address
+    from ..pilots.compare import PilotsConfig
+    from ..plants.analytic import load_analytic
+    from ..plants.fit import AnalyticConfig, PlantsConfig
+
+    flight, (aircraft,) = _split(config.get("flight", {}), "aircraft")
+    FlightConfig.from_table(flight, source)
+    _in_field(source, "flight.aircraft", load_aircraft, aircraft or "737")
+    PlantsConfig.from_table(config.get("plants", {}), source)
+    analytic = AnalyticConfig.from_table(config.get("analytic", {}), source)
+    _in_field(source, "analytic.model", load_analytic, analytic.model)
+    pilots = PilotsConfig.from_table(config.get("pilots", {}), source)
+    if pilots.scheduler:
+        check_scheduler_address(pilots.scheduler, f"{source}: field 'pilots.scheduler'")
+    table, (run, model) = _split(config.get("diagnose", {}), "run", "model")
+    diagnose = DiagnoseConfig.from_table(table, source)
+    _in_field(source, "diagnose.model", model_from_name, model or "original")
+    _in_field(source, "diagnose.candidates",
+              lambda c: _resolve_candidates(model_from_name(model or "original"), c, diagnose),
+              diagnose.candidates)
+    if run and not Path(run).is_file():
+        raise HesspipeError(f"{source}: field 'diagnose.run': expected a run CSV file, {run} not found")
+    Fields(config.get("report", {}), source, "report").reject_unknown()
+
+
+def build_pipeline(config_path=None, out="hesspipe-out", *, aircraft=None, seed=None) -> Pipeline:
+    """The pipeline of ``pipeline/stages.toml`` on the given configuration."""
+    config, source = load_config(config_path, aircraft=aircraft, seed=seed)
+    return Pipeline(load_stages(data_dir("pipeline") / "stages.toml"), config, out, source)
+
+
+def _split(section: dict, *keys: str) -> tuple[dict, list]:
+    """Remove the pipeline-level `keys` from a stage table before the stage's own parser sees it."""
+    rest = dict(section)
+    return rest, [rest.pop(k, None) for k in keys]
+
+
+# -- flight -------------------------------------------------------------------------------
+
+def flight_inputs(section: dict, config: dict) -> list:
+    path = aircraft_file(section.get("aircraft", "737"))
+    return [path] if path.exists() else []
+
+
+def flight(ctx) -> None:
+    from ..flight.approach import FlightConfig, fly
+
+    table, (aircraft,) = _split(ctx.section, "aircraft")
+    fly(aircraft or "737", FlightConfig.from_table(table, ctx.source), ctx.out_dir, ctx.seed)
+
+
+# -- plants -------------------------------------------------------------------------------
+
+def plants(ctx) -> None:
+    from ..plants.fit import PlantsConfig, fit_plants
+
+    fit_plants(ctx.upstream["flight"], ctx.out_dir, PlantsConfig.from_table(ctx.section, ctx.source))
+
+
+def analytic_inputs(section: dict, config: dict) -> list:
+    path = aircraft_file(section.get("model", "roskam"))
+    return [path] if path.exists() else []
+
+
+def analytic(ctx) -> None:
+    from ..plants.fit import AnalyticConfig, analytic_plants
+
+    config = AnalyticConfig.from_table(ctx.section, ctx.source)
+    analytic_plants(config.model, ctx.out_dir, config)
+
+
+# -- pilots -------------------------------------------------------------------------------
+
+def pilots_inputs(section: dict, config: dict) -> list:
+    data = section.get("data")
+    return [Path(data)] if isinstance(data, str) and data else []
+
+
+def pilots(ctx) -> None:
+    from ..core.formats import read_plants
+    from ..pilots.compare import PilotsConfig, run_study
+
+    config = PilotsConfig.from_table(ctx.section, ctx.source)
+    plants_ = read_plants(ctx.upstream["plants"] / "plants.json")
+    if not config.data and config.simulator == "jsbsim":
+        from ..pilots.flown import fly_pipeline_cohort
+
+        config = fly_pipeline_cohort(config, plants_, ctx)
+    result = run_study(config, plants_, ctx.out_dir, seed=ctx.seed, progress=False)
+    if not result.ok:
+        failed = ", ".join(f"{f.id} ({_config_terms(f.error)})" for f in result.failures)
+        raise HesspipeError(f"pilots: {len(result.failures)} run(s) failed: {failed}")
+
+
+def _config_terms(message: str) -> str:
+    """The library's setting names as the configuration spells them ([pilots] resample, columns)."""
+    import re
+
+    message = message.replace("set resample", "set [pilots] resample = true")
+    return re.sub(r"with columns (\S+)", r'with [pilots] columns = "\1"', message)
+
+
+# -- diagnose -----------------------------------------------------------------------------
+
+def _diagnose_run(ctx) -> Path:
+    """The run to diagnose: ``[diagnose] run``, or the first run the pilots stage compared.
+
+    The run is taken by id from the pilots stage's ``comparison.json`` (one of its
+    outputs, so in this stage's fingerprint), never by listing a folder: a file put
+    beside the cohort by hand is not a pilot of the study.
+    """
+    chosen = ctx.section.get("run", "")
+    if chosen:
+        return Path(chosen)
+    folder = ctx.upstream["pilots"]
+    try:
+        record = json.loads((folder / "comparison.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        record = None
+    pilots = record.get("pilots") if isinstance(record, dict) else None
+    if not pilots:
+        raise HesspipeError(f"{folder / 'comparison.json'}: the pilots stage compared no runs; "
+                            "set [diagnose] run = \"FILE\"")
+    source = Path(pilots[0]["source"])
+    return source if source.is_absolute() else folder / source
+
+
+def diagnose(ctx) -> None:
+    from ..core.formats import read_plants, read_run
+    from ..core.io import write_json, write_text
+    from ..diagnose.workflow import SEGMENT, DiagnoseConfig, format_report
+    from ..diagnose.workflow import diagnose as run_diagnose
+    from ..viz.diagnose import plot_diagnosis
+
+    table, (_, model) = _split(ctx.section, "run", "model")
+    config = DiagnoseConfig.from_table(table, ctx.source)
+    pilots_cfg = ctx.config.get("pilots", {})  # the runs' format settings ([pilots] columns, resample)
+    try:
+        run = read_run(_diagnose_run(ctx), min_samples=SEGMENT, columns=pilots_cfg.get("columns") or None,
+                       resample=bool(pilots_cfg.get("resample", False)))
+    except HesspipeError as exc:
+        raise HesspipeError(_config_terms(str(exc))) from None
+    result = run_diagnose(run, read_plants(ctx.upstream["plants"] / "plants.json"),
+                          model=model or "original", seed=ctx.seed, config=config)
+    write_json(ctx.out_dir / "diagnosis.json", result.to_dict())
+    write_text(ctx.out_dir / "diagnosis.md", format_report(result) + "\n")
+    plot_diagnosis(result, ctx.out_dir / "diagnosis.png")
+
+
+def diagnose_inputs(section: dict, config: dict) -> list:
+    run = section.get("run")
+    return [Path(run)] if isinstance(run, str) and run else []
+
+
+# -- report -------------------------------------------------------------------------------
+
+def report(ctx) -> None:
+    from ..core.io import write_text
+    from .report import build_report
+
+    Fields(ctx.section, ctx.source, "report").reject_unknown()  # nothing to configure yet
+    root = ctx.out_dir.parent
+    text = build_report(ctx.upstream, root, config_file=ctx.source, seed=ctx.seed)
+    write_text(ctx.out_dir / "report.md", text)

@@ -1,0 +1,789 @@
+"""Stage two: identify the plants from a flight folder, or build the analytic ones.
+
+:func:`fit_plants` reads the two stage-one records of a flight folder and
+identifies, for each channel, an ARX model, converts it to a continuous
+transfer function and validates both:
+
+=========================  ==============  ====================  ==================
+plant (plants.json key)    record          input                 output
+=========================  ==============  ====================  ==================
+``disturbance_to_output``  ``wind.csv``    ``wind_lateral_fps``  ``roll_rate_rps``
+``control_to_output``      ``aileron.csv`` ``aileron_cmd``       ``roll_rate_rps``
+=========================  ==============  ====================  ==================
+
+Units and signs: lateral wind in ft/s, positive when the air moves towards
+the right wing; aileron command normalised -1..1, positive gives positive
+roll rate; roll rate in rad/s, positive right wing down.
+
+Steps per channel (all configurable in ``[plants]``, see :class:`PlantsConfig`):
+
+1. Deviations from trim: the first sample (the trimmed state) is subtracted
+   from input and output, and simulations start from a zero state, so a
+   record must start in trim (stage one's excitations fade in over 1 s).
+2. Decimation by ``decimate`` (default 6: 120 Hz → 20 Hz, Nyquist 10 Hz, five
+   times the 2 Hz check band) with scipy's zero-phase order-8 Chebyshev
+   anti-alias filter, applied identically to input and output so their
+   relation is unchanged. At 120 Hz an ARX model spends its parameters on
+   the band above the excitation (stage one's multisines stop at 2 Hz) and
+   its regressors are nearly collinear; much coarser sampling warps the
+   Tustin conversion (see ``benchmarks/bench_plants.py`` for 4, 6 and 8).
+3. Split: the first ``1 - validation_fraction`` of the record is estimation
+   data, the tail (default the last 30 %, about 21 s of 70) is validation
+   data, never used for estimation or order selection.
+4. Persistent excitation check of the estimation input, then order and
+   delay selection over ``na <= na_max, nb <= nb_max, nk_min <= nk <= nk_max``
+   by ``criterion`` (AIC, BIC or FPE) on the estimation data, each candidate
+   fitted with ``focus`` (default ``"simulation"``: least squares on
+   1/A-prefiltered data, see :func:`hesspipe.plants.arx.arx_fit`; plain one-step
+   least squares underweights the slow Dutch-roll/spiral band and gave
+   validation fits of only 80-85 % on the 737 aileron record). Unstable
+   candidates cannot be chosen.
+5. Validation: simulated output (the model driven by the input alone from
+   the trim state through the whole record) scored by the fit percent on
+   the validation tail; residual whiteness and residual/input independence
+   on the validation tail.
+6. Tustin discrete → continuous conversion (:mod:`hesspipe.d2c`), checked
+   against the discrete frequency response on ``check_band_hz``; the
+   continuous model's own simulated validation fit is reported too.
+7. Roots below the record's resolution. A record of duration T cannot
+   place a root ``s = a`` with ``|a| < ln 2 / T`` (0.0099 1/s for 70 s;
+   :func:`hesspipe.pilot.simulation.growth_limit`): its time constant is longer than
+   the record, within which it is a factor two of a constant or an
+   integrator. Two consequences. Order selection (step 4) accepts
+   candidates whose poles grow slower than ``ln 2 / T`` ("stable on the
+   record", as the closed loop is judged in :mod:`hesspipe.pilot.hess`): refusing
+   them left the MD11's wind channel, whose Dutch roll is neutrally damped,
+   with a bad low-order fit (27.7 % validation) whose notch near 2 Hz then
+   failed the Tustin check by 2.55 dB / 23 deg. And every right-half-plane
+   pole or zero slower than ``ln 2 / T`` is listed in the report with the
+   continuous validation fit as fitted and with it reflected into the left
+   half plane (``s -> -conj(s)``: gain response unchanged, phase moved by
+   ``2 atan(a / w)``); ``slow_roots`` chooses which goes into plants.json.
+   The default ``"keep"`` is what the held-out data prefer: the 737
+   aileron channel's zero near +0.007 rad/s scores 99.4 % as fitted and
+   97.6 % reflected (seed 0), so the data do carry it, and the closed loops
+   it gives grow at 1e-3 1/s at most, which is stable on the record.
+   ``"reflect"`` makes the plants minimum phase and stable at that cost.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Mapping
+
+import control as ct
+import numpy as np
+from scipy import signal
+
+from ..core.config import Fields, aircraft_file
+from ..core.errors import HesspipeError
+from ..core.formats import Plants, read_csv_columns, sample_interval, tf_coefficients, write_plants
+from ..core.io import staged_output, write_json, write_text
+from ..core.provenance import file_hash, versions
+from ..pilot.motion import paper_motion_path
+from ..pilot.simulation import growth_limit
+from . import arx as _arx
+from .analytic import AnalyticPlants, analytic_transfer_functions, dimensional_derivatives, load_analytic, modes
+from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
+from .slow_roots import SlowRoots, phase_change, reflect_slow_roots
+
+#: The paper's Eq. 16: lateral wind → roll rate of its Boeing 757 (ARX, units as printed).
+PAPER_EQ16 = ((-0.2554, 14.4, -272.6, 25.72), (1.0, 84.37, 452.2, 1510.0, 628.8))
+
+UNITS = {"control_to_output": "aileron_cmd (normalised -1..1, positive -> positive roll rate) "
+                              "-> roll rate (rad/s)",
+         "disturbance_to_output": "lateral wind (ft/s, positive towards the right wing) "
+                                  "-> roll rate (rad/s)"}
+
+
+@dataclass(frozen=True)
+class Channel:
+    """Where one plant's data live in a flight folder."""
+
+    key: str
+    file: str
+    input: str
+    output: str
+    title: str
+
+
+CHANNELS = (
+    Channel("disturbance_to_output", "wind.csv", "wind_lateral_fps", "roll_rate_rps",
+            "lateral wind -> roll rate"),
+    Channel("control_to_output", "aileron.csv", "aileron_cmd", "roll_rate_rps",
+            "aileron -> roll rate"),
+)
+
+
+@dataclass(frozen=True)
+class PlantsConfig:
+    """Configuration of stage two (the ``[plants]`` table).
+
+    Attributes
+    ----------
+    decimate : int
+        Decimation factor before identification (1 = none).
+    criterion : {"aic", "bic", "fpe"}
+        Information criterion for order and delay selection.
+    focus : {"simulation", "prediction"}
+        Least-squares weighting (:func:`hesspipe.plants.arx.arx_fit`): ``"simulation"``
+        (default) prefilters by 1/A (Steiglitz–McBride) so the fit is not
+        biased away from low frequencies; the criterion then uses the
+        simulation-error variance.
+    iterations : int
+        Prefiltering iterations of the simulation focus.
+    na_max, nb_max : int
+        Largest orders of A(q) and B(q) in the grid.
+    nk_min, nk_max : int
+        Delay range of the grid, in (decimated) samples.
+    validation_fraction : float
+        Held-out tail of each record used only for validation.
+    min_excitation_order : int
+        Fewest independent input lags (persistent excitation order) accepted.
+    excitation_rcond : float
+        Relative singular-value threshold of the excitation test.
+    residual_max_lag : int
+        Largest lag of the residual tests (decimated samples).
+    residual_confidence : float
+        Confidence level of the residual bounds and tests.
+    check_band_hz : (float, float)
+        Band of the continuous-vs-discrete frequency check.
+    check_gain_db, check_phase_deg : float
+        Largest accepted gain and phase difference in that band.
+    on_check_failure : {"error", "warn"}
+        A failed frequency check raises (default) or is only reported.
+    slow_roots : {"keep", "reflect"}
+        Right-half-plane poles and zeros slower than the record resolves
+        (step 7 of the module docstring): kept as fitted (default) or
+        reflected into the left half plane. Both fits are reported.
+    """
+
+    decimate: int = 6
+    criterion: str = "bic"
+    focus: str = "simulation"
+    iterations: int = 10
+    na_max: int = 6
+    nb_max: int = 6
+    nk_min: int = 1
+    nk_max: int = 3
+    validation_fraction: float = 0.3
+    min_excitation_order: int = 4
+    excitation_rcond: float = 1e-4
+    residual_max_lag: int = 25
+    residual_confidence: float = 0.99
+    check_band_hz: tuple[float, float] = (0.01, 2.0)
+    check_gain_db: float = 1.0
+    check_phase_deg: float = 5.0
+    on_check_failure: str = "error"
+    slow_roots: str = "keep"
+
+    @classmethod
+    def from_table(cls, table: Mapping | None, source: str | Path = "<plants defaults>",
+                   prefix: str = "plants") -> "PlantsConfig":
+        """Build from the ``[plants]`` TOML table; unknown keys are rejected."""
+        f = Fields(table, source, prefix)
+        d = cls()
+        cfg = cls(
+            decimate=f.integer("decimate", d.decimate, min=1, max=50),
+            criterion=f.string("criterion", d.criterion, choices=_arx.CRITERIA),
+            focus=f.string("focus", d.focus, choices=_arx.FOCUS),
+            iterations=f.integer("iterations", d.iterations, min=1, max=200),
+            na_max=f.integer("na_max", d.na_max, min=1, max=30),
+            nb_max=f.integer("nb_max", d.nb_max, min=1, max=30),
+            nk_min=f.integer("nk_min", d.nk_min, min=0, max=50),
+            nk_max=f.integer("nk_max", d.nk_max, min=0, max=50),
+            validation_fraction=f.number("validation_fraction", d.validation_fraction, min=0.05, max=0.8),
+            min_excitation_order=f.integer("min_excitation_order", d.min_excitation_order, min=1, max=30),
+            excitation_rcond=f.number("excitation_rcond", d.excitation_rcond, min=0, max=0.5, strict_min=True),
+            residual_max_lag=f.integer("residual_max_lag", d.residual_max_lag, min=1, max=1000),
+            residual_confidence=f.number("residual_confidence", d.residual_confidence, min=0.5, max=0.9999),
+            check_band_hz=f.numbers("check_band_hz", d.check_band_hz, length=2),
+            check_gain_db=f.number("check_gain_db", d.check_gain_db, min=0, strict_min=True),
+            check_phase_deg=f.number("check_phase_deg", d.check_phase_deg, min=0, strict_min=True),
+            on_check_failure=f.string("on_check_failure", d.on_check_failure, choices=("error", "warn")),
+            slow_roots=f.string("slow_roots", d.slow_roots, choices=("keep", "reflect")),
+        )
+        if cfg.nk_max < cfg.nk_min:
+            raise f.error("nk_max", f"an integer >= nk_min = {cfg.nk_min}", cfg.nk_max)
+        lo, hi = cfg.check_band_hz
+        if not 0 < lo < hi:
+            raise f.error("check_band_hz", "[low, high] with 0 < low < high (Hz)", list(cfg.check_band_hz))
+        f.reject_unknown()
+        return cfg
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        out["check_band_hz"] = list(self.check_band_hz)
+        return out
+
+
+@dataclass(frozen=True)
+class Record:
+    """One channel's data as read from a flight file (full rate, raw values)."""
+
+    time: np.ndarray
+    input: np.ndarray
+    output: np.ndarray
+    path: str
+    comments: tuple[str, ...]
+
+    @property
+    def synthetic(self) -> bool:
+        return any("synthetic" in c.lower() for c in self.comments)
+
+
+def read_record(path: str | Path, input_column: str, output_column: str, *,
+                rtol: float = 1e-4) -> Record:
+    """Read `time`, `input_column` and `output_column` from a flight-record CSV.
+
+    Raises
+    ------
+    HesspipeError
+        File missing, a column missing, non-finite values, or time not
+        strictly increasing and uniform (within `rtol` of the median step).
+    """
+    path = Path(path)
+    names = {"time": "time", input_column: input_column, output_column: output_column}
+    data, comments = read_csv_columns(path, names, what="a stage-one flight record CSV")
+    t = data["time"]
+    if len(t) < 2:
+        raise HesspipeError(f"{path}: {len(t)} samples; expected a record")
+    dt, uniform = sample_interval(path, t, rtol=rtol)
+    if not uniform:
+        steps = np.diff(t)
+        raise HesspipeError(f"{path}: column 'time': expected uniform sampling (interval {dt:g} s), "
+                            f"found intervals from {steps.min():g} to {steps.max():g} s")
+    return Record(time=t, input=data[input_column], output=data[output_column], path=str(path),
+                  comments=comments)
+
+
+@dataclass(frozen=True)
+class ChannelFit:
+    """Everything identified and checked for one plant.
+
+    The arrays are on the decimated grid, as deviations from trim.
+    """
+
+    channel: Channel
+    source: str
+    raw_dt: float
+    time: np.ndarray
+    input: np.ndarray
+    output: np.ndarray
+    n_estimation: int
+    selection: _arx.OrderSelection
+    continuous: ct.TransferFunction
+    conversion_notes: tuple[str, ...]
+    check: FrequencyCheck
+    simulated: np.ndarray
+    simulated_continuous: np.ndarray
+    fit_estimation: float
+    fit_validation: float
+    fit_validation_continuous: float
+    residuals: _arx.ResidualTests
+    trim_input: float
+    trim_output: float
+    synthetic: bool = False
+    slow_roots: SlowRoots | None = None
+
+    @property
+    def model(self) -> _arx.ArxModel:
+        return self.selection.model
+
+    @property
+    def discrete(self) -> ct.TransferFunction:
+        return self.model.tf()
+
+    @property
+    def validation_start_s(self) -> float:
+        return float(self.time[self.n_estimation])
+
+
+def _decimate(x: np.ndarray, q: int) -> np.ndarray:
+    if q == 1:
+        return x.copy()
+    return signal.decimate(x, q, ftype="iir", zero_phase=True)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A record after steps 1–3: trim removed, decimated, split (checked, not yet fitted)."""
+
+    time: np.ndarray
+    input: np.ndarray
+    output: np.ndarray
+    raw_dt: float
+    dt: float
+    n_estimation: int
+    trim_input: float
+    trim_output: float
+    label: str
+
+
+def prepare(record: Record, channel: Channel, config: PlantsConfig) -> Prepared:
+    """Steps 1–3 and the data checks, so a bad record fails before any fitting."""
+    label = f"{record.path}: column '{channel.input}'"
+    # The span over the count is exact to the CSV's precision; a single step is not.
+    raw_dt = float(record.time[-1] - record.time[0]) / (len(record.time) - 1)
+    q = config.decimate
+    if len(record.time) < 30 * q:
+        raise HesspipeError(f"{record.path}: record too short: {len(record.time)} samples, expected "
+                            f"many more than 30 x decimate = {30 * q}")
+    u0, y0 = float(record.input[0]), float(record.output[0])
+    u = _decimate(record.input - u0, q)
+    y = _decimate(record.output - y0, q)
+    dt = raw_dt * q
+    n_est = int(round(len(u) * (1 - config.validation_fraction)))
+    if len(u) - n_est < 2 * config.residual_max_lag:
+        raise HesspipeError(f"{record.path}: record too short: {len(record.time)} samples leave "
+                            f"{len(u) - n_est} decimated validation samples, expected at least "
+                            f"{2 * config.residual_max_lag}")
+    nyq = 0.5 / dt
+    if config.check_band_hz[1] >= nyq:
+        raise HesspipeError(f"plants: field 'check_band_hz': upper limit {config.check_band_hz[1]:g} Hz "
+                            f"is not below the Nyquist frequency {nyq:g} Hz after decimation by {q}")
+    _arx.check_data(u[:n_est], y[:n_est], na_max=config.na_max, nb_max=config.nb_max,
+                    nk_max=config.nk_max, min_excitation=config.min_excitation_order,
+                    rcond=config.excitation_rcond, label=label)
+    return Prepared(time=record.time[0] + dt * np.arange(len(u)), input=u, output=y, raw_dt=raw_dt,
+                    dt=dt, n_estimation=n_est, trim_input=u0, trim_output=y0, label=label)
+
+
+def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
+                     prepared: Prepared | None = None) -> ChannelFit:
+    """Identify, convert and validate one plant from one record (steps 1–6 of the module doc)."""
+    p = prepared or prepare(record, channel, config)
+    u, y, t, dt, n_est, label = p.input, p.output, p.time, p.dt, p.n_estimation, p.label
+    limit = growth_limit(dt * len(u))
+    selection = _arx.select_order(u[:n_est], y[:n_est], na_max=config.na_max, nb_max=config.nb_max,
+                                  nk_min=config.nk_min, nk_max=config.nk_max,
+                                  criterion=config.criterion, dt=dt,
+                                  min_excitation=config.min_excitation_order,
+                                  rcond=config.excitation_rcond, focus=config.focus,
+                                  iterations=config.iterations, max_growth=limit, label=label)
+    model = selection.model
+    y_sim = model.simulate(u)
+    val = slice(n_est, None)
+    residuals = (y - model.predict(u, y))[val]
+    tests = _arx.residual_tests(residuals, u[val], max_lag=config.residual_max_lag,
+                                confidence=config.residual_confidence)
+    sysd = model.tf()
+    sysc, notes = tustin_d2c(sysd, label=f"{record.path}: {channel.title} ARX{model.orders}")
+    check = compare_frequency_response(sysd, sysc, band_hz=tuple(config.check_band_hz),
+                                       gain_limit_db=config.check_gain_db,
+                                       phase_limit_deg=config.check_phase_deg)
+    if not check.passed and config.on_check_failure == "error":
+        raise HesspipeError(
+            f"{record.path}: continuous {channel.title} model differs from the discrete ARX{model.orders} "
+            f"by {check.max_gain_error_db:.2f} dB / {check.max_phase_error_deg:.1f} deg within "
+            f"{check.band_hz[0]:g}-{check.band_hz[1]:g} Hz (limits {config.check_gain_db:g} dB / "
+            f"{config.check_phase_deg:g} deg); lower 'decimate' or set on_check_failure = 'warn'")
+    y_sim_c = np.asarray(ct.forced_response(sysc, T=t - t[0], U=u).outputs).reshape(-1)
+    resolved, reflected = reflect_slow_roots(sysc, limit)
+    y_res = y_sim_c
+    if reflected:
+        y_res = np.asarray(ct.forced_response(resolved, T=t - t[0], U=u).outputs).reshape(-1)
+    slow = SlowRoots(limit=limit, roots=tuple(reflected), applied=config.slow_roots,
+                     fit_validation_before=_arx.fit_percent(y[val], y_sim_c[val]),
+                     fit_validation_after=_arx.fit_percent(y[val], y_res[val]),
+                     max_phase_change_deg=phase_change(sysc, resolved, config.check_band_hz))
+    if config.slow_roots == "reflect":
+        sysc, y_sim_c = resolved, y_res
+    return ChannelFit(
+        channel=channel, source=record.path, raw_dt=p.raw_dt, time=t, input=u, output=y,
+        n_estimation=n_est, selection=selection, continuous=sysc, conversion_notes=tuple(notes),
+        check=check, simulated=y_sim, simulated_continuous=y_sim_c,
+        fit_estimation=_arx.fit_percent(y[:n_est], y_sim[:n_est]),
+        fit_validation=_arx.fit_percent(y[val], y_sim[val]),
+        fit_validation_continuous=_arx.fit_percent(y[val], y_sim_c[val]),
+        residuals=tests, trim_input=p.trim_input, trim_output=p.trim_output,
+        synthetic=record.synthetic, slow_roots=slow)
+
+
+# -- descriptions of transfer functions ---------------------------------------------------
+
+def roots_table(roots) -> list[dict]:
+    """Continuous roots with natural frequency (rad/s) and damping ratio."""
+    out = []
+    for r in sorted(np.atleast_1d(roots), key=lambda z: (abs(z), z.imag)):
+        if r.imag < -1e-12:
+            continue  # conjugate listed once
+        wn = abs(r)
+        out.append({"re": float(r.real), "im": float(r.imag), "wn_rad_s": float(wn),
+                    "zeta": float(-r.real / wn) if wn > 0 else None})
+    return out
+
+
+def describe_tf(sys: ct.TransferFunction) -> dict:
+    """Coefficients, poles, zeros (with wn, zeta) and DC gain of a continuous SISO tf."""
+    co = tf_coefficients(sys)
+    num, den = np.array(co["num"]), np.array(co["den"])
+    zeros = np.roots(np.trim_zeros(num, "f")) if np.any(num) else np.array([])
+    dc = ct.dcgain(sys)
+    return {**co, "poles": roots_table(np.roots(den)), "zeros": roots_table(zeros),
+            "dc_gain": float(np.real(dc)) if np.isfinite(dc) else None}
+
+
+def format_tf(sys_or_coeffs) -> str:
+    """``(num) / (den)`` in descending powers of s, of a tf or a ``{"num", "den"}`` mapping."""
+    co = sys_or_coeffs if isinstance(sys_or_coeffs, dict) else tf_coefficients(sys_or_coeffs)
+
+    def poly(c):
+        c = list(c)
+        n = len(c) - 1
+        terms = []
+        for i, v in enumerate(c):
+            if v == 0:
+                continue
+            p = n - i
+            s = "" if p == 0 else ("s" if p == 1 else f"s^{p}")
+            coef = "" if (v == 1 and s) else ("-" if (v == -1 and s) else f"{v:.4g} ")
+            terms.append((coef + s).strip())
+        return " + ".join(terms).replace("+ -", "- ") or "0"
+
+    return f"({poly(co['num'])}) / ({poly(co['den'])})"
+
+
+def _roots_md(rows: list[dict]) -> str:
+    if not rows:
+        return "none"
+    parts = []
+    for r in rows:
+        z = f"{r['re']:.4g}" + (f" ± {abs(r['im']):.4g}j" if abs(r["im"]) > 1e-12 else "")
+        zeta = "" if r["zeta"] is None else f", ζ {r['zeta']:.3f}"
+        parts.append(f"{z} (ωn {r['wn_rad_s']:.4g} rad/s{zeta})")
+    return "; ".join(parts)
+
+
+# -- the stage -----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class PlantsResult:
+    """What :func:`fit_plants` produced."""
+
+    plants: Plants
+    fits: dict
+    report: dict
+    files: dict = field(default_factory=dict)
+
+
+def _channel_report(fit: ChannelFit, config: PlantsConfig) -> dict:
+    m = fit.model
+    sel = fit.selection
+    poles_d = np.roots(m.polynomials()[1])
+    return {
+        "file": fit.source, "input": fit.channel.input, "output": fit.channel.output,
+        "units": UNITS[fit.channel.key],
+        "trim": {"input": fit.trim_input, "output": fit.trim_output},
+        "raw_dt_s": fit.raw_dt, "decimate": config.decimate, "model_dt_s": m.dt,
+        "samples": {"estimation": fit.n_estimation, "validation": len(fit.time) - fit.n_estimation,
+                    "validation_start_s": fit.validation_start_s},
+        "orders": {"na": m.na, "nb": m.nb, "nk": m.nk},
+        "criterion": {"name": sel.criterion, "value": sel.best.criterion, "focus": config.focus,
+                      "variance": ("simulation error" if config.focus == "simulation"
+                                   else "one-step prediction error") + " on the estimation data",
+                      "n_samples": sel.n_samples, "grid_size": len(sel.candidates),
+                      "max_growth_1_per_s": fit.slow_roots.limit, "growth_rate_1_per_s": m.growth_rate(),
+                      "ranked": [c.to_dict() for c in sel.ranked(10)]},
+        "excitation_order": sel.excitation_order,
+        "fit_percent": {"estimation": fit.fit_estimation, "validation": fit.fit_validation,
+                        "validation_continuous": fit.fit_validation_continuous,
+                        "definition": "100 (1 - ||y - y_sim|| / ||y - mean(y)||), simulated output"},
+        "residual_tests": fit.residuals.to_dict(),
+        "discrete": {**m.to_dict(), "poles_z": [{"re": float(p.real), "im": float(p.imag)}
+                                               for p in poles_d]},
+        "continuous": describe_tf(fit.continuous),
+        "conversion": {"method": "tustin (inverse bilinear)", "notes": list(fit.conversion_notes),
+                       "check": fit.check.to_dict()},
+        "slow_roots": fit.slow_roots.to_dict(),
+    }
+
+
+def _eq16_report() -> dict:
+    sys = ct.tf(*PAPER_EQ16)
+    return {**describe_tf(sys), "what": "paper Eq. 16: lateral wind -> roll rate, Boeing 757 "
+            "(NASA Langley model), ARX fit, units as printed (not stated)"}
+
+
+def _markdown(report: dict, synthetic: bool) -> str:
+    lines = ["# Stage two: plants identified from the flight records", ""]
+    if synthetic:
+        lines += ["**SYNTHETIC DATA**: the flight records were generated by a model, not measured.", ""]
+    lines += [f"Flight folder: `{report['source']['flight_dir']}`.", "",
+              f"Validation data: {report['validation_data']}.", "",
+              "Residual tests use the one-step residuals on the validation tail. On noise-free "
+              "simulated records the residuals are model error, not noise, so they are rarely white: "
+              "a failed test there says the model is not exact, the fit percent says how close it is.", ""]
+    for key, ch in report["channels"].items():
+        o, fp, rt = ch["orders"], ch["fit_percent"], ch["residual_tests"]
+        chk = ch["conversion"]["check"]
+        lines += [f"## {key}: {ch['units']}", "",
+                  f"Record `{ch['file']}`, input `{ch['input']}`, output `{ch['output']}`; sample "
+                  f"interval {ch['raw_dt_s']:.6g} s decimated by {ch['decimate']} to {ch['model_dt_s']:.6g} s; "
+                  f"{ch['samples']['estimation']} estimation and {ch['samples']['validation']} validation "
+                  f"samples (validation from t = {ch['samples']['validation_start_s']:.2f} s).", "",
+                  f"- ARX orders: na = {o['na']}, nb = {o['nb']}, nk = {o['nk']} "
+                  f"(chosen by {ch['criterion']['name'].upper()} = {ch['criterion']['value']:.6g} of the "
+                  f"{ch['criterion']['variance']}, over {ch['criterion']['grid_size']} candidates, "
+                  f"eligible if their poles grow slower than ln 2 / duration = "
+                  f"{ch['criterion']['max_growth_1_per_s']:.3g} 1/s (stable on the record), "
+                  f"{ch['criterion']['focus']} focus; input excitation order "
+                  f"{ch['excitation_order']}; the chosen model's fastest pole: "
+                  f"{ch['criterion']['growth_rate_1_per_s']:.3g} 1/s)",
+                  f"- Fit (simulated output): estimation {fp['estimation']:.2f} %, **validation "
+                  f"{fp['validation']:.2f} %**, continuous model on validation "
+                  f"{fp['validation_continuous']:.2f} %",
+                  f"- Residual whiteness ({rt['whiteness']['test']}, {100 * rt['confidence']:g} %): "
+                  f"{'pass' if rt['whiteness']['pass'] else 'FAIL'} (p = {rt['whiteness']['p_value']:.3g}; "
+                  f"max |r| {rt['whiteness']['max_abs']:.3g}, bound ±{rt['whiteness']['bound']:.3g}, "
+                  f"{rt['whiteness']['lags_outside_bound']} of {rt['max_lag']} lags outside)",
+                  f"- Residual/input independence: {'pass' if rt['independence']['pass'] else 'FAIL'} "
+                  f"(p = {rt['independence']['p_value']:.3g}; max |r| {rt['independence']['max_abs']:.3g}, "
+                  f"bound ±{rt['independence']['bound']:.3g}, {rt['independence']['lags_outside_bound']} "
+                  f"of {2 * rt['max_lag'] + 1} lags outside)",
+                  f"- Continuous vs discrete ({chk['band_hz'][0]:g}-{chk['band_hz'][1]:g} Hz): "
+                  f"max {chk['max_gain_error_db']:.3f} dB, {chk['max_phase_error_deg']:.2f} deg "
+                  f"(limits {chk['gain_limit_db']:g} dB, {chk['phase_limit_deg']:g} deg): "
+                  f"{'pass' if chk['pass'] else 'FAIL'}",
+                  "", f"Continuous: `{format_tf(ch['continuous'])}`", "",
+                  f"- poles: {_roots_md(ch['continuous']['poles'])}",
+                  f"- zeros: {_roots_md(ch['continuous']['zeros'])}",
+                  f"- DC gain: {ch['continuous']['dc_gain']}", ""]
+        sr = ch["slow_roots"]
+        if sr["roots"]:
+            moved = "; ".join(f"{r['kind']} {r['before']['re']:.4g}"
+                              + (f" ± {abs(r['before']['im']):.4g}j" if r["before"]["im"] else "")
+                              for r in sr["roots"])
+            lines += [f"Right-half-plane roots slower than the record resolves (|s| < ln 2 / duration "
+                      f"= {sr['limit_1_per_s']:.3g} 1/s): {moved}. Continuous validation fit as fitted "
+                      f"{sr['fit_validation_continuous_as_fitted']:.2f} %, reflected into the left half "
+                      f"plane {sr['fit_validation_continuous_reflected']:.2f} % (phase change up to "
+                      f"{sr['max_phase_change_deg']:.2f} deg on the check band, gain unchanged); "
+                      f"plants.json holds them **{'as fitted' if sr['applied'] == 'keep' else 'reflected'}** "
+                      "(`slow_roots`).", ""]
+        if ch["conversion"]["notes"]:
+            lines += ["Conversion notes:", ""] + [f"- {n}" for n in ch["conversion"]["notes"]] + [""]
+        ranked = ch["criterion"]["ranked"]
+        lines += ["Best candidates:", "", "| na | nb | nk | criterion | residual variance |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {c['na']} | {c['nb']} | {c['nk']} | {c['criterion']:.6g} | {c['noise_variance']:.4g} |"
+                  for c in ranked[:5]] + [""]
+        if key == "disturbance_to_output":
+            e = report["paper_eq16"]
+            lines += ["For comparison, the paper's Eq. 16 (Boeing 757, NASA Langley model; its units "
+                      "are not stated):", "", f"`{format_tf(e)}`", "",
+                      f"- poles: {_roots_md(e['poles'])}", f"- zeros: {_roots_md(e['zeros'])}",
+                      f"- DC gain: {e['dc_gain']:.4g}", ""]
+    return "\n".join(lines) + "\n"
+
+
+def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig | None = None, *,
+               figures: bool = True) -> PlantsResult:
+    """Stage two: identify both plants from a flight folder and write the outputs.
+
+    Writes ``plants.json`` (SPEC.md format, plus ``units``, ``orders``, ``fit``,
+    ``source``), ``plants_report.md``, ``plants_report.json``, figures
+    ``plants_validation.png``, ``plants_bode.png``, ``plants_residuals.png`` and
+    ``manifest.json`` into `out_dir`, all or none.
+
+    Parameters
+    ----------
+    flight_dir : path
+        A stage-one folder holding ``wind.csv`` and ``aileron.csv``
+        (lateral wind ft/s, aileron command normalised, roll rate rad/s).
+    out_dir : path
+        Output folder (new, empty, or a plants folder hesspipe wrote).
+    config : PlantsConfig, optional
+        Decimation, hold-out share, order ranges, slow-root handling
+        (default: ``PlantsConfig()``).
+    figures : bool
+        Also draw the validation, Bode and residual figures.
+
+    Returns
+    -------
+    PlantsResult
+        The fitted plants (continuous transfer functions, rad/s per input
+        unit) with their validation.
+
+    Raises
+    ------
+    HesspipeError
+        A missing file or column, bad time or values, a record too short for
+        the orders, an input not persistently exciting, or a failed
+        continuous conversion check (unless ``on_check_failure = "warn"``).
+    """
+    config = config or PlantsConfig()
+    flight_dir = Path(flight_dir)
+    if not flight_dir.is_dir():
+        raise HesspipeError(f"{flight_dir}: flight folder not found; expected the output of "
+                            "'hesspipe flight' (wind.csv, aileron.csv)")
+    records = {ch.key: read_record(flight_dir / ch.file, ch.input, ch.output) for ch in CHANNELS}
+    prepared = {ch.key: prepare(records[ch.key], ch, config) for ch in CHANNELS}
+    fits = {ch.key: identify_channel(records[ch.key], ch, config, prepared[ch.key]) for ch in CHANNELS}
+    synthetic = any(f.synthetic for f in fits.values())
+    inputs = {ch.file: file_hash(flight_dir / ch.file) for ch in CHANNELS}
+    # Data files only: a manifest holds wall times, and hashing it would make these
+    # outputs differ between two runs on the same records.
+    if (flight_dir / "trim.json").is_file():
+        inputs["trim.json"] = file_hash(flight_dir / "trim.json")
+    frac = config.validation_fraction
+    report = {
+        "stage": "plants", "synthetic": synthetic,
+        "source": {"flight_dir": str(flight_dir), "inputs": inputs},
+        "validation_data": (f"held-out tail of each record: the last {100 * frac:g} % (never used for "
+                            "estimation or order selection); the model is simulated from the trim "
+                            "state through the whole record and scored on the tail"),
+        "config": config.to_dict(),
+        "channels": {k: _channel_report(f, config) for k, f in fits.items()},
+        "paper_eq16": _eq16_report(),
+    }
+    # The output is roll rate on the paper's simulator: its platform x washout is the motion
+    # path, written explicitly so the file says what the cab did (SPEC "Data formats").
+    plants = Plants(fits["control_to_output"].continuous, fits["disturbance_to_output"].continuous,
+                    motion_path=paper_motion_path())
+    out_dir = Path(out_dir)
+    names = ["plants.json", "plants_report.md", "plants_report.json", "manifest.json"]
+    with staged_output(out_dir, kind="plants") as stage:
+        write_plants(stage / "plants.json", plants, units=UNITS,
+                     orders={k: report["channels"][k]["orders"] | {"dt_s": f.model.dt}
+                             for k, f in fits.items()},
+                     fit={k: report["channels"][k]["fit_percent"] for k in fits},
+                     source={"kind": "arx", "flight_dir": str(flight_dir), "inputs": inputs,
+                             "conversion": "tustin"},
+                     synthetic=synthetic)
+        write_json(stage / "plants_report.json", report)
+        write_text(stage / "plants_report.md", _markdown(report, synthetic))
+        if figures:
+            from ..viz.plants import plot_bode, plot_residuals, plot_validation
+
+            plot_validation(fits, stage / "plants_validation.png", synthetic=synthetic)
+            plot_bode(fits, stage / "plants_bode.png", synthetic=synthetic, reference=ct.tf(*PAPER_EQ16))
+            plot_residuals(fits, stage / "plants_residuals.png", synthetic=synthetic)
+            names[3:3] = ["plants_validation.png", "plants_bode.png", "plants_residuals.png"]
+        write_json(stage / "manifest.json", {
+            "stage": "plants", "inputs": inputs, "flight_dir": str(flight_dir),
+            "config": config.to_dict(), "synthetic": synthetic, "files": names, "versions": versions()})
+    return PlantsResult(plants=plants, fits=fits, report=report,
+                        files={n: out_dir / n for n in names})
+
+
+# -- the analytic aircraft ------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class AnalyticConfig:
+    """The ``[analytic]`` table.
+
+    Attributes
+    ----------
+    model : str
+        Analytic aircraft file name in ``aircraft/`` (or a path).
+    control : {"rolling", "full"}
+        Which aileron → roll-rate plant goes into ``control_to_output``:
+        the paper's rolling approximation (Eq. 14, default) or the full model.
+    disturbance : {"full", "rolling"}
+        Which wind → roll-rate plant goes into ``disturbance_to_output``: the
+        full model (default; the wind acts through sideslip, which the
+        rolling approximation does not have) or ``-(Lb/U) / (s - Lp)``.
+    """
+
+    model: str = "roskam"
+    control: str = "rolling"
+    disturbance: str = "full"
+
+    @classmethod
+    def from_table(cls, table: Mapping | None, source: str | Path = "<analytic defaults>",
+                   prefix: str = "analytic") -> "AnalyticConfig":
+        f = Fields(table, source, prefix)
+        d = cls()
+        cfg = cls(model=f.string("model", d.model),
+                  control=f.string("control", d.control, choices=("rolling", "full")),
+                  disturbance=f.string("disturbance", d.disturbance, choices=("full", "rolling")))
+        f.reject_unknown()
+        return cfg
+
+
+def _analytic_report(ap: AnalyticPlants, config: AnalyticConfig) -> dict:
+    ac = ap.aircraft
+    d = dimensional_derivatives(ac)
+    m = modes(ac)
+    eq15 = None
+    if ac.paper_eq15:
+        eq15 = {**describe_tf(ct.tf(*ac.paper_eq15)),
+                "what": "paper Eq. 15 as printed; it does not follow from Table 4 (Eq. 14 with "
+                        "Table 3 gives the rolling approximation reported here)"}
+    return {
+        "stage": "analytic", "synthetic": False, "aircraft": ac.name, "file": ac.path,
+        "units": {"control_to_output": "aileron (rad, positive -> positive roll rate) -> roll rate (rad/s)",
+                  "disturbance_to_output": UNITS["disturbance_to_output"]},
+        "choice": {"control_to_output": config.control, "disturbance_to_output": config.disturbance},
+        "mass_slug": ac.mass_slug,
+        "dimensional_derivatives": d,
+        "modes": {k: {"re": v.real, "im": v.imag} for k, v in m.items()},
+        "models": {"full_control": describe_tf(ap.full_control),
+                   "full_disturbance": describe_tf(ap.full_disturbance),
+                   "rolling_control": describe_tf(ap.rolling_control),
+                   "rolling_disturbance": describe_tf(ap.rolling_disturbance)},
+        "paper_eq15": eq15,
+    }
+
+
+def _analytic_markdown(r: dict) -> str:
+    d = r["dimensional_derivatives"]
+    mo = r["modes"]
+    lines = [f"# Analytic aircraft `{r['aircraft']}` (paper Tables 3-4, Eqs. 11-14)", "",
+             f"From `{r['file']}`. Mass {r['mass_slug']:.1f} slug (Table 4's \"564000 slug\" is the "
+             "weight in lb).", "",
+             f"- q = {d['q']:.4g} lb/ft², Lδa = {d['Lda']:.4g} 1/s², Lp = {d['Lp']:.5g} 1/s, "
+             f"Lβ = {d['Lb']:.4g} 1/s², Nβ = {d['Nb']:.4g} 1/s², Nr = {d['Nr']:.4g} 1/s, "
+             f"Yβ = {d['Yb']:.4g} ft/s²",
+             f"- Roll mode {mo['roll']['re']:.4g} 1/s; Dutch roll {mo['dutch_roll']['re']:.4g} ± "
+             f"{abs(mo['dutch_roll']['im']):.4g}j 1/s; spiral {mo['spiral']['re']:.4g} 1/s", "",
+             "| plant | transfer function | in plants.json |", "|---|---|---|"]
+    chosen = {f"{r['choice']['control_to_output']}_control": "control_to_output",
+              f"{r['choice']['disturbance_to_output']}_disturbance": "disturbance_to_output"}
+    for k, v in r["models"].items():
+        lines.append(f"| {k} | `{format_tf(v)}` | {chosen.get(k, '')} |")
+    lines += ["", f"Units: {r['units']['control_to_output']}; {r['units']['disturbance_to_output']}.", ""]
+    if r["paper_eq15"]:
+        e = r["paper_eq15"]
+        lines += [f"The paper's Eq. 15 prints p/δa = `{format_tf(e)}`; computed from Table 4 with Eq. 14 "
+                  f"it is `{format_tf(r['models']['rolling_control'])}`. **The paper's Eq. 15 does not "
+                  "follow from its Table 4**; it is shown here only for comparison and not used.", ""]
+    return "\n".join(lines) + "\n"
+
+
+def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
+                    config: AnalyticConfig | None = None, *, figures: bool = True) -> Plants:
+    """Write the analytic aircraft's plants: ``plants.json``, ``plants_report.md``,
+    ``plants_report.json``, ``analytic_bode.png`` and ``manifest.json`` (all or none)."""
+    config = config or AnalyticConfig()
+    ac = load_analytic(name_or_path)
+    ap = analytic_transfer_functions(ac)
+    report = _analytic_report(ap, config)
+    yc = ap.rolling_control if config.control == "rolling" else ap.full_control
+    yd = ap.full_disturbance if config.disturbance == "full" else ap.rolling_disturbance
+    plants = Plants(yc, yd, motion_path=paper_motion_path())   # roll rate, the paper's cab
+    path = aircraft_file(name_or_path)
+    names = ["plants.json", "plants_report.md", "plants_report.json", "manifest.json"]
+    with staged_output(out_dir, kind="analytic") as stage:
+        write_plants(stage / "plants.json", plants, units=report["units"],
+                     orders={key: {"model": choice, "n_poles": len(describe_tf(tf)["den"]) - 1,
+                                   "n_zeros": len(np.trim_zeros(describe_tf(tf)["num"], "f")) - 1}
+                             for key, choice, tf in (("control_to_output", config.control, yc),
+                                                     ("disturbance_to_output", config.disturbance, yd))},
+                     fit=None, source={"kind": "analytic", "aircraft": ac.name, "file": ac.path,
+                                       "equations": "paper Tables 3-4, Eqs. 11-14"},
+                     models={k: {"num": v["num"], "den": v["den"]} for k, v in report["models"].items()},
+                     synthetic=False)
+        write_json(stage / "plants_report.json", report)
+        write_text(stage / "plants_report.md", _analytic_markdown(report))
+        if figures:
+            from ..viz.plants import plot_analytic
+
+            plot_analytic(ap, stage / "analytic_bode.png")
+            names.insert(3, "analytic_bode.png")
+        write_json(stage / "manifest.json", {
+            "stage": "analytic", "inputs": {str(path): file_hash(path)}, "config": asdict(config),
+            "files": names, "versions": versions()})
+    return plants
