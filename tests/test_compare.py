@@ -312,7 +312,9 @@ def test_run_study_writes_the_pilots_stage_outputs(tmp_path):
 
     config = PilotsConfig.from_table({"n": 2, "duration_s": 21.0, "passes": 2, "restarts": 1, "workers": 1,
                                       "effects": ["motion_feedback"]}, "test.toml")
-    result = run_study(config, paper_plants(), tmp_path, seed=4, progress=False)
+    from hesspipe.viz.compare import draw_comparison
+
+    result = run_study(config, paper_plants(), tmp_path, seed=4, progress=False, draw=draw_comparison)
     assert result.ok and result.synthetic and [p.id for p in result.pilots] == ["pilot01", "pilot02"]
     names = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
     assert names == ["cohort/.hesspipe-output", "cohort/cohort.json", "cohort/pilot01.csv", "cohort/pilot01.truth.json",

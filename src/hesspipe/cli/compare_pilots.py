@@ -73,14 +73,10 @@ def _run(args) -> int:
     if args.json:
         write_json(args.json, result.to_dict())
     if args.figures:
-        from ..pilots.compare import _df_figure
-        from ..viz.compare import plot_pilot
+        from ..viz.compare import draw_pilots
 
         with staged_output(args.figures, kind="figures") as stage:
-            for p in result.pilots:
-                plot_pilot(p, stage / f"{p.id}.png")
-                if p.frf is not None:
-                    _df_figure(p, stage / f"{p.id}_df.png")
+            draw_pilots(stage, result.pilots)
     for f in result.failures:
         print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
     if result.failures:

@@ -56,7 +56,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 import numpy as np
 import pandas as pd
@@ -458,11 +458,12 @@ def _csv_text(df: pd.DataFrame, comments: list[str]) -> str:
 
 
 def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: int = 0, *,
-        figures: bool = True) -> FlightResult:
+        draw: Callable | None = None) -> FlightResult:
     """Stage one: trim `aircraft`, fly the wind and aileron records, write them to `out_dir`.
 
-    Writes ``trim.json``, ``wind.csv``, ``aileron.csv``, ``flight_wind.png``,
-    ``flight_aileron.png`` and ``manifest.json`` (all or none).
+    Writes ``trim.json``, ``wind.csv``, ``aileron.csv``, the figures `draw`
+    makes (``flight_wind.png``, ``flight_aileron.png`` with
+    :func:`hesspipe.viz.flight.draw_flight`) and ``manifest.json`` (all or none).
 
     Parameters
     ----------
@@ -473,8 +474,10 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
         Output folder (created if needed).
     seed : int
         Seed of the excitation signals; the same seed gives identical files.
-    figures : bool
-        Also draw ``flight_wind.png`` and ``flight_aileron.png`` (matplotlib).
+    draw : callable, optional
+        ``draw(folder, wind, aileron, aircraft=name, seed=seed, config=config)``
+        writes figures into the staging folder `folder` and returns their file
+        names (None: no figures; the library itself never imports matplotlib).
 
     Raises
     ------
@@ -512,13 +515,9 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
         write_json(stage / "trim.json", trim)
         write_text(stage / "wind.csv", _csv_text(wind, wind_comments))
         write_text(stage / "aileron.csv", _csv_text(aileron, ail_comments))
-        if figures:
-            from ..viz.flight import plot_record  # matplotlib only when figures are asked for
-
-            plot_record(wind, stage / "flight_wind.png", kind="wind", title=f"{ac.name}: side-wind "
-                        f"record ({config.wind_excitation.kind} excitation, seed {seed})")
-            plot_record(aileron, stage / "flight_aileron.png", kind="aileron", title=f"{ac.name}: "
-                        f"aileron record ({config.aileron_excitation.kind} excitation, seed {seed})")
+        figures = []
+        if draw is not None:
+            figures = list(draw(stage, wind, aileron, aircraft=ac.name, seed=seed, config=config))
         write_json(stage / "manifest.json", {
             "stage": "flight",
             "aircraft": ac.name,
@@ -530,11 +529,10 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
             "excitation": {"wind": config.wind_excitation.describe("ft/s"),
                            "aileron": config.aileron_excitation.describe("(normalised command)")},
             "columns": list(COLUMNS),
-            "files": ["trim.json", "wind.csv", "aileron.csv", "flight_wind.png", "flight_aileron.png"],
+            "files": ["trim.json", "wind.csv", "aileron.csv", *figures],
             "source": f"JSBSim {versions().get('jsbsim')} simulation of the bundled {ac.model} model",
             "versions": versions(),
         })
-    files = {name: out_dir / name for name in ("trim.json", "wind.csv", "aileron.csv",
-                                                "flight_wind.png", "flight_aileron.png",
+    files = {name: out_dir / name for name in ("trim.json", "wind.csv", "aileron.csv", *figures,
                                                 "manifest.json")}
     return FlightResult(aircraft=ac.name, seed=seed, trim=trim, wind=wind, aileron=aileron, files=files)

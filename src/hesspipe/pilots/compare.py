@@ -28,7 +28,7 @@ import functools
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Iterable, Mapping, Sequence
+from typing import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -662,10 +662,13 @@ def format_table(comparison: Comparison) -> str:
     return "\n".join(out)
 
 
-def write_comparison(comparison: Comparison, out_dir: str | Path, *, figures: bool = True,
+def write_comparison(comparison: Comparison, out_dir: str | Path, *, draw: Callable | None = None,
                      json_name: str = "comparison.json", table_name: str = "comparison.md") -> list[Path]:
-    """Write ``comparison.json``, ``comparison.md`` and ``figures/<pilot>.png`` into `out_dir`.
+    """Write ``comparison.json``, ``comparison.md`` and the figures of `draw` into `out_dir`.
 
+    ``draw(folder, comparison)`` writes figures into `folder` and returns their
+    names relative to it (:func:`hesspipe.viz.compare.draw_comparison`:
+    ``figures/<pilot>.png`` and ``figures/<pilot>_df.png``); None: no figures.
     Each file is written atomically; callers that need all-or-nothing wrap
     this in :func:`hesspipe.core.io.staged_output`.
     """
@@ -679,28 +682,9 @@ def write_comparison(comparison: Comparison, out_dir: str | Path, *, figures: bo
             entry["source"] = str(src.relative_to(out_dir.resolve()))
     written = [write_json(out_dir / json_name, record),
                write_text(out_dir / table_name, "```\n" + comparison.table() + "\n```\n")]
-    if figures:
-        from ..viz.compare import plot_pilot
-
-        for p in comparison.pilots:
-            written.append(plot_pilot(p, out_dir / "figures" / f"{p.id}.png"))
-            if p.frf is not None:
-                written.append(_df_figure(p, out_dir / "figures" / f"{p.id}_df.png"))
+    if draw is not None:
+        written += [out_dir / name for name in draw(out_dir, comparison)]
     return written
-
-
-def _df_figure(p: PilotComparison, path: Path) -> Path:
-    """The identified models' describing functions over the pilot's measured one."""
-    from ..identification.criteria import model_df
-    from ..pilot.hess import model_from_name
-    from ..viz.frf import frf_figure
-
-    models = {}
-    for name in ("original", "expanded"):
-        d = getattr(p, name)
-        loop = model_from_name(d["model"]).loop(d["parameters"])
-        models[name] = (lambda lp: (lambda s: model_df(lp, s)))(loop)
-    return frf_figure(path, p.frf, models)
 
 
 # -- pipeline configuration --------------------------------------------------------------------
@@ -816,7 +800,7 @@ class PilotsConfig:
 
 
 def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed: int = 0,
-              progress: bool | None = None) -> Comparison:
+              progress: bool | None = None, draw: Callable | None = None) -> Comparison:
     """The pipeline's pilots stage: cohort (or data folder) → comparison files in `out_dir`.
 
     Without ``config.data`` a synthetic frequency-domain cohort of ``config.n`` pilots
@@ -825,7 +809,7 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
     ``data``: :func:`hesspipe.pilots.flown.fly_pipeline_cohort`); then every run is compared and ``comparison.json``,
     ``comparison.md`` and ``figures/<pilot>.png`` are written. Failed pilots
     are listed in the outputs; the caller decides whether ``not result.ok``
-    fails the stage.
+    fails the stage. `draw` is :func:`write_comparison`'s, used when ``config.figures``.
     """
     from .cohort import CohortSpec, synth_cohort
 
@@ -843,7 +827,7 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
                             start=config.start, restarts=config.restarts, benchmark=config.benchmark,
                             columns=config.columns or None, resample=config.resample, progress=progress,
                             criterion=config.criterion)
-    write_comparison(result, out_dir, figures=config.figures)
+    write_comparison(result, out_dir, draw=draw if config.figures else None)
     return result
 
 

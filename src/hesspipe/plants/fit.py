@@ -70,7 +70,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 import control as ct
 import numpy as np
@@ -579,13 +579,14 @@ def _markdown(report: dict, synthetic: bool) -> str:
 
 
 def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig | None = None, *,
-               figures: bool = True) -> PlantsResult:
+               draw: Callable | None = None) -> PlantsResult:
     """Stage two: identify both plants from a flight folder and write the outputs.
 
     Writes ``plants.json`` (SPEC.md format, plus ``units``, ``orders``, ``fit``,
-    ``source``), ``plants_report.md``, ``plants_report.json``, figures
-    ``plants_validation.png``, ``plants_bode.png``, ``plants_residuals.png`` and
-    ``manifest.json`` into `out_dir`, all or none.
+    ``source``), ``plants_report.md``, ``plants_report.json``, the figures
+    `draw` makes (:func:`hesspipe.viz.plants.draw_plants`: ``plants_validation.png``,
+    ``plants_bode.png``, ``plants_residuals.png``) and ``manifest.json`` into
+    `out_dir`, all or none.
 
     Parameters
     ----------
@@ -597,8 +598,9 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
     config : PlantsConfig, optional
         Decimation, hold-out share, order ranges, slow-root handling
         (default: ``PlantsConfig()``).
-    figures : bool
-        Also draw the validation, Bode and residual figures.
+    draw : callable, optional
+        ``draw(folder, fits, synthetic=bool)`` writes figures into the staging
+        folder `folder` and returns their file names (None: no figures).
 
     Returns
     -------
@@ -654,13 +656,8 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
                      synthetic=synthetic)
         write_json(stage / "plants_report.json", report)
         write_text(stage / "plants_report.md", _markdown(report, synthetic))
-        if figures:
-            from ..viz.plants import plot_bode, plot_residuals, plot_validation
-
-            plot_validation(fits, stage / "plants_validation.png", synthetic=synthetic)
-            plot_bode(fits, stage / "plants_bode.png", synthetic=synthetic, reference=ct.tf(*PAPER_EQ16))
-            plot_residuals(fits, stage / "plants_residuals.png", synthetic=synthetic)
-            names[3:3] = ["plants_validation.png", "plants_bode.png", "plants_residuals.png"]
+        if draw is not None:
+            names[3:3] = list(draw(stage, fits, synthetic=synthetic))
         write_json(stage / "manifest.json", {
             "stage": "plants", "inputs": inputs, "flight_dir": str(flight_dir),
             "config": config.to_dict(), "synthetic": synthetic, "files": names, "versions": versions()})
@@ -754,9 +751,11 @@ def _analytic_markdown(r: dict) -> str:
 
 
 def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
-                    config: AnalyticConfig | None = None, *, figures: bool = True) -> Plants:
+                    config: AnalyticConfig | None = None, *, draw: Callable | None = None) -> Plants:
     """Write the analytic aircraft's plants: ``plants.json``, ``plants_report.md``,
-    ``plants_report.json``, ``analytic_bode.png`` and ``manifest.json`` (all or none)."""
+    ``plants_report.json``, the figures of ``draw(folder, analytic_plants) -> names``
+    (:func:`hesspipe.viz.plants.draw_analytic`: ``analytic_bode.png``) and
+    ``manifest.json`` (all or none)."""
     config = config or AnalyticConfig()
     ac = load_analytic(name_or_path)
     ap = analytic_transfer_functions(ac)
@@ -778,11 +777,8 @@ def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
                      synthetic=False)
         write_json(stage / "plants_report.json", report)
         write_text(stage / "plants_report.md", _analytic_markdown(report))
-        if figures:
-            from ..viz.plants import plot_analytic
-
-            plot_analytic(ap, stage / "analytic_bode.png")
-            names.insert(3, "analytic_bode.png")
+        if draw is not None:
+            names[3:3] = list(draw(stage, ap))
         write_json(stage / "manifest.json", {
             "stage": "analytic", "inputs": {str(path): file_hash(path)}, "config": asdict(config),
             "files": names, "versions": versions()})
