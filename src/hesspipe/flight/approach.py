@@ -61,7 +61,7 @@ from typing import Callable, Mapping
 import numpy as np
 import pandas as pd
 
-from ..core.config import Fields
+from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
 from ..core.io import staged_output, write_json, write_text
 from ..core.provenance import file_hash, versions
@@ -93,7 +93,7 @@ _DEFAULT_AILERON_EXCITATION = Excitation(kind="multisine", rms=0.05, f_min_hz=0.
 
 
 @dataclass(frozen=True)
-class FlightConfig:
+class FlightConfig(Settings):
     """Settings of stage one (the ``[flight]`` table).
 
     Attributes
@@ -131,32 +131,33 @@ class FlightConfig:
     wind_excitation: Excitation = _DEFAULT_WIND_EXCITATION
     aileron_excitation: Excitation = _DEFAULT_AILERON_EXCITATION
 
+    def _checked(self, f: Fields) -> dict:
+        out = dict(
+            duration_s=f.number("duration_s", min=0, strict_min=True, max=3600),
+            dt_s=f.number("dt_s", min=0, strict_min=True, max=0.05),
+            record_every=f.integer("record_every", min=1),
+            max_speed_dev_kts=f.number("max_speed_dev_kts", min=0, strict_min=True),
+            min_agl_ft=f.number("min_agl_ft", min=0),
+            record_terrain_ft=f.number("record_terrain_ft", None, max=30000))
+        for key, kind in (("side_wind", SideWind), ("wind_excitation", Excitation),
+                          ("aileron_excitation", Excitation)):
+            if not isinstance(f.table[key], kind):
+                raise f.error(key, f"a {kind.__name__}", f.table[key])
+        if out["duration_s"] < 2 * out["dt_s"] * out["record_every"]:
+            raise f.error("duration_s", f"a number >= {2 * out['dt_s'] * out['record_every']:g} "
+                          "(at least two recorded samples)", out["duration_s"])
+        return out
+
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<flight defaults>",
                    prefix: str = "flight") -> "FlightConfig":
         """Build from the ``[flight]`` table of a TOML file; unknown keys are errors."""
         f = Fields(table, source, prefix)
         d = cls()
-        terrain = None
-        if "record_terrain_ft" in f.table:
-            terrain = f.number("record_terrain_ft", max=30000)
-        out = cls(
-            duration_s=f.number("duration_s", d.duration_s, min=0, strict_min=True, max=3600),
-            dt_s=f.number("dt_s", d.dt_s, min=0, strict_min=True, max=0.05),
-            record_every=f.integer("record_every", d.record_every, min=1),
-            max_speed_dev_kts=f.number("max_speed_dev_kts", d.max_speed_dev_kts, min=0, strict_min=True),
-            min_agl_ft=f.number("min_agl_ft", d.min_agl_ft, min=0),
-            record_terrain_ft=terrain,
-            side_wind=SideWind.from_fields(f.table_("side_wind")),
+        return cls._from_fields(
+            f, side_wind=SideWind.from_fields(f.table_("side_wind")),
             wind_excitation=Excitation.from_fields(f.table_("wind_excitation"), d.wind_excitation),
-            aileron_excitation=Excitation.from_fields(f.table_("aileron_excitation"),
-                                                      d.aileron_excitation),
-        )
-        if out.duration_s < 2 * out.dt_s * out.record_every:
-            raise f.error("duration_s", f"a number >= {2 * out.dt_s * out.record_every:g} "
-                          "(at least two recorded samples)", out.duration_s)
-        f.reject_unknown()
-        return out
+            aileron_excitation=Excitation.from_fields(f.table_("aileron_excitation"), d.aileron_excitation))
 
     def to_dict(self) -> dict:
         """Plain dict (for manifests); None values are left out."""

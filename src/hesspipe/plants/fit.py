@@ -76,7 +76,7 @@ import control as ct
 import numpy as np
 from scipy import signal
 
-from ..core.config import Fields, aircraft_file
+from ..core.config import Fields, Settings, aircraft_file
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, read_csv_columns, sample_interval, tf_coefficients, write_plants
 from ..core.io import staged_output, write_json, write_text
@@ -117,7 +117,7 @@ CHANNELS = (
 
 
 @dataclass(frozen=True)
-class PlantsConfig:
+class PlantsConfig(Settings):
     """Configuration of stage two (the ``[plants]`` table).
 
     Attributes
@@ -178,39 +178,39 @@ class PlantsConfig:
     on_check_failure: str = "error"
     slow_roots: str = "keep"
 
+    def _checked(self, f: Fields) -> dict:
+        cfg = dict(
+            decimate=f.integer("decimate", min=1, max=50),
+            criterion=f.string("criterion", choices=_arx.CRITERIA),
+            focus=f.string("focus", choices=_arx.FOCUS),
+            iterations=f.integer("iterations", min=1, max=200),
+            na_max=f.integer("na_max", min=1, max=30),
+            nb_max=f.integer("nb_max", min=1, max=30),
+            nk_min=f.integer("nk_min", min=0, max=50),
+            nk_max=f.integer("nk_max", min=0, max=50),
+            validation_fraction=f.number("validation_fraction", min=0.05, max=0.8),
+            min_excitation_order=f.integer("min_excitation_order", min=1, max=30),
+            excitation_rcond=f.number("excitation_rcond", min=0, max=0.5, strict_min=True),
+            residual_max_lag=f.integer("residual_max_lag", min=1, max=1000),
+            residual_confidence=f.number("residual_confidence", min=0.5, max=0.9999),
+            check_band_hz=f.numbers("check_band_hz", length=2),
+            check_gain_db=f.number("check_gain_db", min=0, strict_min=True),
+            check_phase_deg=f.number("check_phase_deg", min=0, strict_min=True),
+            on_check_failure=f.string("on_check_failure", choices=("error", "warn")),
+            slow_roots=f.string("slow_roots", choices=("keep", "reflect")),
+        )
+        if cfg["nk_max"] < cfg["nk_min"]:
+            raise f.error("nk_max", f"an integer >= nk_min = {cfg['nk_min']}", cfg["nk_max"])
+        lo, hi = cfg["check_band_hz"]
+        if not 0 < lo < hi:
+            raise f.error("check_band_hz", "[low, high] with 0 < low < high (Hz)", list(cfg["check_band_hz"]))
+        return cfg
+
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<plants defaults>",
                    prefix: str = "plants") -> "PlantsConfig":
         """Build from the ``[plants]`` TOML table; unknown keys are rejected."""
-        f = Fields(table, source, prefix)
-        d = cls()
-        cfg = cls(
-            decimate=f.integer("decimate", d.decimate, min=1, max=50),
-            criterion=f.string("criterion", d.criterion, choices=_arx.CRITERIA),
-            focus=f.string("focus", d.focus, choices=_arx.FOCUS),
-            iterations=f.integer("iterations", d.iterations, min=1, max=200),
-            na_max=f.integer("na_max", d.na_max, min=1, max=30),
-            nb_max=f.integer("nb_max", d.nb_max, min=1, max=30),
-            nk_min=f.integer("nk_min", d.nk_min, min=0, max=50),
-            nk_max=f.integer("nk_max", d.nk_max, min=0, max=50),
-            validation_fraction=f.number("validation_fraction", d.validation_fraction, min=0.05, max=0.8),
-            min_excitation_order=f.integer("min_excitation_order", d.min_excitation_order, min=1, max=30),
-            excitation_rcond=f.number("excitation_rcond", d.excitation_rcond, min=0, max=0.5, strict_min=True),
-            residual_max_lag=f.integer("residual_max_lag", d.residual_max_lag, min=1, max=1000),
-            residual_confidence=f.number("residual_confidence", d.residual_confidence, min=0.5, max=0.9999),
-            check_band_hz=f.numbers("check_band_hz", d.check_band_hz, length=2),
-            check_gain_db=f.number("check_gain_db", d.check_gain_db, min=0, strict_min=True),
-            check_phase_deg=f.number("check_phase_deg", d.check_phase_deg, min=0, strict_min=True),
-            on_check_failure=f.string("on_check_failure", d.on_check_failure, choices=("error", "warn")),
-            slow_roots=f.string("slow_roots", d.slow_roots, choices=("keep", "reflect")),
-        )
-        if cfg.nk_max < cfg.nk_min:
-            raise f.error("nk_max", f"an integer >= nk_min = {cfg.nk_min}", cfg.nk_max)
-        lo, hi = cfg.check_band_hz
-        if not 0 < lo < hi:
-            raise f.error("check_band_hz", "[low, high] with 0 < low < high (Hz)", list(cfg.check_band_hz))
-        f.reject_unknown()
-        return cfg
+        return cls._from_fields(Fields(table, source, prefix))
 
     def to_dict(self) -> dict:
         out = asdict(self)
@@ -668,7 +668,7 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
 # -- the analytic aircraft ------------------------------------------------------------------
 
 @dataclass(frozen=True)
-class AnalyticConfig:
+class AnalyticConfig(Settings):
     """The ``[analytic]`` table.
 
     Attributes
@@ -688,16 +688,15 @@ class AnalyticConfig:
     control: str = "rolling"
     disturbance: str = "full"
 
+    def _checked(self, f: Fields) -> dict:
+        return dict(model=f.string("model"), control=f.string("control", choices=("rolling", "full")),
+                    disturbance=f.string("disturbance", choices=("full", "rolling")))
+
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<analytic defaults>",
                    prefix: str = "analytic") -> "AnalyticConfig":
-        f = Fields(table, source, prefix)
-        d = cls()
-        cfg = cls(model=f.string("model", d.model),
-                  control=f.string("control", d.control, choices=("rolling", "full")),
-                  disturbance=f.string("disturbance", d.disturbance, choices=("full", "rolling")))
-        f.reject_unknown()
-        return cfg
+        """Build from the ``[analytic]`` TOML table; unknown keys are rejected."""
+        return cls._from_fields(Fields(table, source, prefix))
 
 
 def _analytic_report(ap: AnalyticPlants, config: AnalyticConfig) -> dict:
