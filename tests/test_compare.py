@@ -159,11 +159,11 @@ def test_cli_bad_file_exit_status_and_message(tmp_path, capsys, monkeypatch):
 
 
 @pytest.mark.parametrize("argv, code, words", [
-    (["compare-pilots", "{runs}", "--plants", "{plants}", "--workers", "0"], 1, "--workers: expected"),
-    (["compare-pilots", "{tmp}/none", "--plants", "{plants}"], 1, "not found"),
-    (["compare-pilots", "{runs}", "--plants", "{tmp}/missing.json"], 1, "missing.json: file not found"),
-    (["compare-pilots", "{runs}"], 2, "--plants"),
-    (["compare-pilots", "{runs}", "--plants", "{plants}", "--columns", "stick=control"], 1,
+    (["pilots", "{runs}", "--plants", "{plants}", "--workers", "0"], 1, "--workers: expected"),
+    (["pilots", "{tmp}/none", "--plants", "{plants}"], 1, "not found"),
+    (["pilots", "{runs}", "--plants", "{tmp}/missing.json"], 1, "missing.json: file not found"),
+    (["pilots", "{runs}"], 2, "--plants"),
+    (["pilots", "{runs}", "--plants", "{plants}", "--columns", "stick=control"], 1,
      "--columns: unknown role 'stick'"),
 ])
 def test_cli_argument_errors(tmp_path, capsys, argv, code, words):
@@ -264,7 +264,7 @@ def test_cli_end_to_end_with_figures(cohorts, tmp_path, capsys):
     folder.mkdir()
     for name in ("pilot01.csv", "pilot01.truth.json"):
         shutil.copy(cohorts / "none" / name, folder / name)
-    code = main(["compare-pilots", str(folder), "--plants", str(plants), "--workers", "1", "--passes", "2",
+    code = main(["pilots", str(folder), "--plants", str(plants), "--workers", "1", "--passes", "2",
                  "--restarts", "1", "--criterion", "paper",
                  "--json", str(tmp_path / "c.json"), "--figures", str(tmp_path / "fig")])
     out = capsys.readouterr().out
@@ -373,3 +373,19 @@ def test_compare_pilots_command_spells_the_librarys_settings_as_its_flags():
     assert cli_message("scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (x)", args) == \
         "--scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (x)"
     assert cli_message("runs/p1.csv: column 'control' missing", args) == "runs/p1.csv: column 'control' missing"
+
+
+def test_pilots_command_keeps_compare_pilots_as_an_alias(tmp_path, capsys):
+    """The stage's command is `pilots`; old scripts calling `compare-pilots` get the same command."""
+    from hesspipe.cli import build_parser
+    from hesspipe.cli._options import cli_message
+
+    new = build_parser().parse_args(["pilots", "runs", "--plants", "p.json", "--passes", "3"])
+    old = build_parser().parse_args(["compare-pilots", "runs", "--plants", "p.json", "--passes", "3"])
+    assert new.func is old.func and new.passes == old.passes == 3
+    # The settings are checked by the library (CompareSettings) and named as flags here.
+    assert cli_message("CompareSettings: field 'passes': expected an integer >= 1, got 0", new) == \
+        "--passes: expected an integer >= 1, got 0"
+    for cmd in ("pilots", "compare-pilots"):
+        assert main([cmd, str(tmp_path), "--plants", str(tmp_path / "p.json"), "--restarts", "0"]) == 1
+        assert capsys.readouterr().err.strip() == "hesspipe: error: --restarts: expected an integer >= 1, got 0"

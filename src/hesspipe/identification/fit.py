@@ -41,7 +41,7 @@ from .problem import (
 )
 from .spectra import PaperWelch
 
-OPTIMIZERS = ("apid", "scipy", "differential_evolution")
+from ..core.choices import OPTIMIZERS  # noqa: F401 - one list (the command line reads it too)
 
 # Relative singular values below NULL_TOL: not identifiable (a structural
 # null direction, e.g. K1*K2, sits at 1e-10 or below); below WEAK_TOL: only
