@@ -25,7 +25,7 @@ BAD = [
     (PilotsConfig, "pilots", "effects", ("warp",), "unknown effect 'warp'"),
     (PilotsConfig, "pilots", "n", 0, "an integer >= 1"),
     (CompareSettings, None, "restarts", 0, "an integer >= 1"),
-    (CompareSettings, None, "seed", -1, "an integer 0 <= seed < 2**63"),
+    (CompareSettings, None, "seed", -1, "an integer >= 0"),
     (DiagnoseConfig, "diagnose", "alpha", 5, "a number > 0 and <= 0.5"),
     (DiagnoseConfig, "diagnose", "weighting", "bogus", "one of 'random-share', 'uniform'"),
 ]

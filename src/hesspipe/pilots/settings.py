@@ -15,7 +15,7 @@ from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
 from ..core.formats import _parse_columns, record_samples
-from ..core.seeds import check_seed
+from ..core.seeds import MAX_SEED
 from ..pilot.effects import EFFECTS
 
 #: The model configurations every pilot is identified with (Table 5's rows).
@@ -31,10 +31,7 @@ _SHARED = ("optimizer", "passes", "km_fixed", "start", "restarts", "benchmark", 
 
 
 def _seed(f: Fields, key: str) -> int:
-    try:
-        return check_seed(f.table[key])
-    except HesspipeError:
-        raise f.error(key, "an integer 0 <= seed < 2**63", f.table[key]) from None
+    return f.integer(key, min=0, max=MAX_SEED)  # the pipeline's own seed rule and message
 
 
 def _identification(f: Fields, band: str) -> dict:

@@ -111,7 +111,7 @@ def draw_plants(folder: str | Path, fits: dict, *, synthetic: bool = False) -> l
     validation, Bode (with the paper's Eq. 16) and residuals; returns their names."""
     import control as ct
 
-    from ..plants.fit import PAPER_EQ16
+    from ..plants.report import PAPER_EQ16
 
     folder = Path(folder)
     plot_validation(fits, folder / "plants_validation.png", synthetic=synthetic)
