@@ -455,7 +455,7 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
         return [path]
     files = [Path(p) for p in paths_or_dir]
     if not files:
-        raise HesspipeError("compare-pilots: no run files given")
+        raise HesspipeError("paths_or_dir: no run files given; expected a folder or a list of run CSV files")
     return files
 
 
