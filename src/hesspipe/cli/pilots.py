@@ -9,7 +9,8 @@ from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 
 def register(sub) -> None:
     # The stage, its package and its command share one name; compare-pilots is kept for old scripts.
-    p = sub.add_parser("pilots", aliases=["compare-pilots"], help="identify original / expanded-fixed-Km / expanded models per pilot",
+    p = sub.add_parser("pilots", aliases=["compare-pilots"],
+                       help="identify original / expanded-fixed-Km / expanded models per pilot",
                        description="For each run CSV in DIR (the file stem is the pilot id) identify the "
                                    "original Hess model, the expanded model with Km fixed, and the expanded "
                                    "model with Km identified; print a table and the mean improvement "

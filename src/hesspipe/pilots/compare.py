@@ -36,12 +36,20 @@ from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run, _parse_columns, read_run
 from ..core.seeds import derive_seed
 from .batch import run_batch
-# The stage's settings live in .settings; imported here too, where users and older code look.
-from .report import TABLE_PARAMETERS, _fmt, format_table, write_comparison  # noqa: F401
-from .settings import (CONFIGURATIONS, MIN_SAMPLES, OPTIMIZERS, SIMULATORS, STARTS,  # noqa: F401
-                       CompareSettings, PilotsConfig)
-from .verdict import safe_motion_test
 
+# The stage's settings live in .settings and its text in .report; their names are imported
+# here too, where users and older code look for them.
+from .report import TABLE_PARAMETERS, _fmt, format_table, write_comparison  # noqa: F401
+from .settings import (  # noqa: F401
+    CONFIGURATIONS,
+    MIN_SAMPLES,
+    OPTIMIZERS,
+    SIMULATORS,
+    STARTS,
+    CompareSettings,
+    PilotsConfig,
+)
+from .verdict import safe_motion_test
 
 
 @dataclass(frozen=True)

@@ -86,10 +86,21 @@ from ..pilot.simulation import growth_limit
 from . import arx as _arx
 from .analytic import analytic_transfer_functions, load_analytic
 from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
+
 # The report's text lives in .report; PAPER_EQ16, describe_tf, format_tf, roots_table are
 # imported here too, where users and older code look for them.
-from .report import (PAPER_EQ16, UNITS, _analytic_markdown, _analytic_report, _channel_report,  # noqa: F401
-                     _eq16_report, _markdown, describe_tf, format_tf, roots_table)
+from .report import (  # noqa: F401
+    PAPER_EQ16,
+    UNITS,
+    _analytic_markdown,
+    _analytic_report,
+    _channel_report,
+    _eq16_report,
+    _markdown,
+    describe_tf,
+    format_tf,
+    roots_table,
+)
 from .slow_roots import SlowRoots, phase_change, reflect_slow_roots
 
 
