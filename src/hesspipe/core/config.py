@@ -285,5 +285,5 @@ class Settings:
         return out
 
     def to_dict(self) -> dict:
-        """Plain dict (tuples as lists are JSON's business; manifests, reports)."""
+        """Plain dict (``dataclasses.asdict``), for manifests and reports."""
         return dataclasses.asdict(self)
