@@ -57,7 +57,7 @@ RESTARTS, PASSES = 2, 10  # the pipeline's APID budget (--restarts/--passes chan
 
 def fitted_plants(root: Path):
     fly("737", FlightConfig(), root / "flight", seed=1)
-    fit_plants(root / "flight", root / "plants", PlantsConfig(), figures=False)
+    fit_plants(root / "flight", root / "plants", PlantsConfig())
     return read_plants(root / "plants" / "plants.json")
 
 

@@ -50,8 +50,7 @@ def main(argv=None) -> int:
                     break
                 for q in args.decimate:
                     t0 = time.perf_counter()
-                    res = fit_plants(flight, tmp / f"p-{ac}-{seed}-{q}", replace(base, decimate=q),
-                                     figures=False)
+                    res = fit_plants(flight, tmp / f"p-{ac}-{seed}-{q}", replace(base, decimate=q))
                     wall = time.perf_counter() - t0
                     for key, f in res.fits.items():
                         c = f.check
@@ -74,7 +73,7 @@ def main(argv=None) -> int:
         print("\nsynthetic roskam (SYNTHETIC DATA): identified continuous plant vs the true one, 0.02-2 Hz")
         for seed in args.seeds:
             folder = _write_synthetic_flight(tmp / f"syn-{seed}", seed=seed)
-            res = fit_plants(folder, tmp / f"syn-out-{seed}", base, figures=False)
+            res = fit_plants(folder, tmp / f"syn-out-{seed}", base)
             for key, true in (("control_to_output", truth.full_control),
                               ("disturbance_to_output", truth.full_disturbance)):
                 r = frequency_response(res.fits[key].continuous, f) / frequency_response(true, f)

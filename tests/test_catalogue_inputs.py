@@ -145,7 +145,7 @@ CASES = [
      r"gap\.csv: column 'time': expected uniform.*pass --resample", None),
     ("diagnose: other names", ["diagnose", "{d}/renamed.csv", "--plants", "{d}/plants.json"], REFUSED,
      r"renamed\.csv: column 'time' missing.*map other names with --columns time=NAME", None),
-    ("compare-pilots: bad role", ["compare-pilots", "{d}/cohort", "--plants", "{d}/plants.json",
+    ("pilots: bad role", ["pilots", "{d}/cohort", "--plants", "{d}/plants.json",
                                   "--columns", "stick=control"], REFUSED, r"--columns: unknown role 'stick'", None),
     # -- item 3: silent wrong results are refused ---------------------------------------------
     ("time in ms", ID + ["{d}/ms_col.csv", "--plants", "{d}/plants.json"], REFUSED,

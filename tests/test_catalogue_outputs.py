@@ -85,7 +85,7 @@ BUILDERS: dict[str, Callable[[Path, Path], list[str]]] = {
                                 "--json", str(out / "r.json")],
     "synth-pilots": lambda i, out: ["synth-pilots", "--plants", str(i / "plants.json"), "--n", "1",
                                     "--duration", "25", "--out", str(out)],
-    "compare-pilots": lambda i, out: ["compare-pilots", str(i / "runs"), "--plants", str(i / "plants.json"),
+    "pilots": lambda i, out: ["pilots", str(i / "runs"), "--plants", str(i / "plants.json"),
                                       "--workers", "1", "--json", str(out / "c.json")],
     "diagnose": lambda i, out: ["diagnose", str(i / "runs" / "p0.csv"), "--plants", str(i / "plants.json"),
                                 "--json", str(out / "d.json")],
@@ -101,7 +101,8 @@ READ_ONLY_COMMANDS = {"status"}
 def command_names() -> list[str]:
     parser = build_parser()
     sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
-    names = list(sub.choices)
+    # One name per command: an alias (compare-pilots for pilots) maps to the same parser.
+    names = list({id(p): name for name, p in reversed(sub.choices.items())}.values())[::-1]
     assert len(names) == len(COMMANDS)
     return names
 
@@ -221,7 +222,7 @@ def test_every_command_refuses_a_file_as_output_folder(name, inputs, tmp_path):
 OTHER_OUTPUTS = {
     "identify --figure": lambda i, ro: BUILDERS["identify"](i, ro)[:-2] + ["--figure", str(ro / "x.png")],
     "diagnose --figure": lambda i, ro: BUILDERS["diagnose"](i, ro)[:-2] + ["--figure", str(ro / "x.png")],
-    "compare-pilots --figures": lambda i, ro: BUILDERS["compare-pilots"](i, ro)[:-2] + ["--figures", str(ro)],
+    "pilots --figures": lambda i, ro: BUILDERS["pilots"](i, ro)[:-2] + ["--figures", str(ro)],
     "plants --analytic": lambda i, ro: ["plants", "--analytic", "roskam", "--out", str(ro / "a")],
 }
 
@@ -300,8 +301,8 @@ CASES = [
     # item 6: tracebacks before
     Case("identify --json <folder>",
          lambda t, i: BUILDERS["identify"](i, t)[:-2] + ["--json", str(t)], 1, r": is a folder; expected a file name"),
-    Case("compare-pilots --json <folder>",
-         lambda t, i: BUILDERS["compare-pilots"](i, t)[:-2] + ["--json", str(t)], 1, r": is a folder; expected a file name"),
+    Case("pilots --json <folder>",
+         lambda t, i: BUILDERS["pilots"](i, t)[:-2] + ["--json", str(t)], 1, r": is a folder; expected a file name"),
     Case("diagnose --figure x.xyz",
          lambda t, i: BUILDERS["diagnose"](i, t)[:-2] + ["--figure", str(t / "x.xyz")], 1,
          r"x.xyz: unknown image format '.xyz'; expected one of .*\.png"),
@@ -326,7 +327,7 @@ CASES = [
     Case("manifest.json holding 5",
          lambda t, i: ["status", "--out", str(_run_root(t, manifest=b"5"))], 0, ""),
     Case("malformed --scheduler address",
-         lambda t, i: BUILDERS["compare-pilots"](i, t) + ["--scheduler", "tcp://127.0.0.1:abc"], 1,
+         lambda t, i: BUILDERS["pilots"](i, t) + ["--scheduler", "tcp://127.0.0.1:abc"], 1,
          r"--scheduler: expected a Dask scheduler address like tcp://HOST:PORT .*got 'tcp://127.0.0.1:abc'"),
     Case("[pilots] scheduler malformed",
          lambda t, i: ["run", "--config", str(_config(t, '[pilots]\nscheduler = "nonsense"\n')), "--out",
@@ -562,7 +563,7 @@ def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
         shutil.copy(inputs / "runs" / "p0.csv", runs / f"p{i}.csv")
     err_file = tmp_path / "stderr.txt"
     code, orphans = sigterm_when_ready(
-        [sys.executable, "-m", "hesspipe.cli", "compare-pilots", str(runs), "--plants",
+        [sys.executable, "-m", "hesspipe.cli", "pilots", str(runs), "--plants",
          str(inputs / "plants.json"), "--workers", "2", "--json", str(tmp_path / "c.json")],
         err_file, lambda workers, err: len(workers) >= 2, settle_s=0.3)
     err = err_file.read_text()

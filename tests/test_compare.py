@@ -159,11 +159,11 @@ def test_cli_bad_file_exit_status_and_message(tmp_path, capsys, monkeypatch):
 
 
 @pytest.mark.parametrize("argv, code, words", [
-    (["compare-pilots", "{runs}", "--plants", "{plants}", "--workers", "0"], 1, "--workers: expected"),
-    (["compare-pilots", "{tmp}/none", "--plants", "{plants}"], 1, "not found"),
-    (["compare-pilots", "{runs}", "--plants", "{tmp}/missing.json"], 1, "missing.json: file not found"),
-    (["compare-pilots", "{runs}"], 2, "--plants"),
-    (["compare-pilots", "{runs}", "--plants", "{plants}", "--columns", "stick=control"], 1,
+    (["pilots", "{runs}", "--plants", "{plants}", "--workers", "0"], 1, "--workers: expected"),
+    (["pilots", "{tmp}/none", "--plants", "{plants}"], 1, "not found"),
+    (["pilots", "{runs}", "--plants", "{tmp}/missing.json"], 1, "missing.json: file not found"),
+    (["pilots", "{runs}"], 2, "--plants"),
+    (["pilots", "{runs}", "--plants", "{plants}", "--columns", "stick=control"], 1,
      "--columns: unknown role 'stick'"),
 ])
 def test_cli_argument_errors(tmp_path, capsys, argv, code, words):
@@ -264,7 +264,7 @@ def test_cli_end_to_end_with_figures(cohorts, tmp_path, capsys):
     folder.mkdir()
     for name in ("pilot01.csv", "pilot01.truth.json"):
         shutil.copy(cohorts / "none" / name, folder / name)
-    code = main(["compare-pilots", str(folder), "--plants", str(plants), "--workers", "1", "--passes", "2",
+    code = main(["pilots", str(folder), "--plants", str(plants), "--workers", "1", "--passes", "2",
                  "--restarts", "1", "--criterion", "paper",
                  "--json", str(tmp_path / "c.json"), "--figures", str(tmp_path / "fig")])
     out = capsys.readouterr().out
@@ -312,7 +312,9 @@ def test_run_study_writes_the_pilots_stage_outputs(tmp_path):
 
     config = PilotsConfig.from_table({"n": 2, "duration_s": 21.0, "passes": 2, "restarts": 1, "workers": 1,
                                       "effects": ["motion_feedback"]}, "test.toml")
-    result = run_study(config, paper_plants(), tmp_path, seed=4, progress=False)
+    from hesspipe.viz.compare import draw_comparison
+
+    result = run_study(config, paper_plants(), tmp_path, seed=4, progress=False, draw=draw_comparison)
     assert result.ok and result.synthetic and [p.id for p in result.pilots] == ["pilot01", "pilot02"]
     names = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*") if p.is_file())
     assert names == ["cohort/.hesspipe-output", "cohort/cohort.json", "cohort/pilot01.csv", "cohort/pilot01.truth.json",
@@ -371,3 +373,19 @@ def test_compare_pilots_command_spells_the_librarys_settings_as_its_flags():
     assert cli_message("scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (x)", args) == \
         "--scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (x)"
     assert cli_message("runs/p1.csv: column 'control' missing", args) == "runs/p1.csv: column 'control' missing"
+
+
+def test_pilots_command_keeps_compare_pilots_as_an_alias(tmp_path, capsys):
+    """The stage's command is `pilots`; old scripts calling `compare-pilots` get the same command."""
+    from hesspipe.cli import build_parser
+    from hesspipe.cli._options import cli_message
+
+    new = build_parser().parse_args(["pilots", "runs", "--plants", "p.json", "--passes", "3"])
+    old = build_parser().parse_args(["compare-pilots", "runs", "--plants", "p.json", "--passes", "3"])
+    assert new.func is old.func and new.passes == old.passes == 3
+    # The settings are checked by the library (CompareSettings) and named as flags here.
+    assert cli_message("CompareSettings: field 'passes': expected an integer >= 1, got 0", new) == \
+        "--passes: expected an integer >= 1, got 0"
+    for cmd in ("pilots", "compare-pilots"):
+        assert main([cmd, str(tmp_path), "--plants", str(tmp_path / "p.json"), "--restarts", "0"]) == 1
+        assert capsys.readouterr().err.strip() == "hesspipe: error: --restarts: expected an integer >= 1, got 0"

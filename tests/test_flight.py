@@ -15,6 +15,7 @@ from hesspipe.flight import approach as flight
 from hesspipe.flight.aircraft import AircraftConfig, Approach, known_aircraft, load_aircraft
 from hesspipe.flight.approach import COLUMNS, FlightConfig, fly, fly_records
 from hesspipe.flight.wind import heading_to_ned
+from hesspipe.viz.flight import draw_flight
 
 OUTPUTS = {"trim.json", "wind.csv", "aileron.csv", "manifest.json", "flight_wind.png",
            "flight_aileron.png"}
@@ -28,7 +29,7 @@ def _read(path):
 @pytest.fixture(scope="module", params=["737", "B747"])
 def flown(request, tmp_path_factory):
     out = tmp_path_factory.mktemp(f"flight_{request.param}")
-    return fly(request.param, FlightConfig(), out, seed=0), out
+    return fly(request.param, FlightConfig(), out, seed=0, draw=draw_flight), out
 
 
 def _calm(aircraft, workdir):
@@ -309,8 +310,8 @@ def test_known_aircraft_and_loading():
 
 
 def test_figures_are_optional(tmp_path):
-    fly("737", SHORT, tmp_path / "with", seed=0)
-    fly("737", SHORT, tmp_path / "without", seed=0, figures=False)
+    fly("737", SHORT, tmp_path / "with", seed=0, draw=draw_flight)
+    fly("737", SHORT, tmp_path / "without", seed=0)
     assert (tmp_path / "with" / "flight_wind.png").is_file()
     assert not list((tmp_path / "without").glob("*.png"))
     for name in ("wind.csv", "aileron.csv", "trim.json"):

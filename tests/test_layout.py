@@ -97,7 +97,6 @@ def _against(graph) -> list[str]:
     return sorted(against)
 
 
-@pytest.mark.xfail(strict=True, reason="layout work in progress (issue 11): remove once it passes")
 def test_imports_flow_one_way():
     against = _against(_graph())
     assert not against, "imports against the layers:\n" + "\n".join(against)

@@ -14,6 +14,7 @@ from hesspipe.core.formats import read_plants
 from hesspipe.plants import analytic
 from hesspipe.plants.d2c import frequency_response
 from hesspipe.plants.fit import PlantsConfig, fit_plants
+from hesspipe.viz.plants import draw_plants
 
 DT = 1 / 120
 
@@ -52,7 +53,7 @@ def synthetic_flight(tmp_path_factory):
 @pytest.fixture(scope="module")
 def synthetic_result(synthetic_flight, tmp_path_factory):
     out = tmp_path_factory.mktemp("plants")
-    return fit_plants(synthetic_flight, out, PlantsConfig()), out
+    return fit_plants(synthetic_flight, out, PlantsConfig(), draw=draw_plants), out
 
 
 # -- configuration ----------------------------------------------------------------------
@@ -117,8 +118,8 @@ SMALL = PlantsConfig(na_max=4, nb_max=4, nk_max=1)
 
 
 def test_same_input_same_output(synthetic_flight, tmp_path):
-    a = fit_plants(synthetic_flight, tmp_path / "a", SMALL, figures=False)
-    b = fit_plants(synthetic_flight, tmp_path / "b", SMALL, figures=False)
+    a = fit_plants(synthetic_flight, tmp_path / "a", SMALL)
+    b = fit_plants(synthetic_flight, tmp_path / "b", SMALL)
     assert (tmp_path / "a" / "plants.json").read_text() == (tmp_path / "b" / "plants.json").read_text()
     assert (tmp_path / "a" / "plants_report.json").read_text() == (tmp_path / "b" / "plants_report.json").read_text()
     assert a.fits["control_to_output"].model.orders == b.fits["control_to_output"].model.orders
@@ -210,7 +211,7 @@ def test_jsbsim_plants_meet_the_bar(aircraft, tmp_path):
     from hesspipe.flight.approach import FlightConfig, fly
 
     fly(aircraft, FlightConfig(), tmp_path / "flight", seed=1)
-    result = fit_plants(tmp_path / "flight", tmp_path / "plants", figures=False)
+    result = fit_plants(tmp_path / "flight", tmp_path / "plants")
     for key, fit in result.fits.items():
         assert fit.fit_validation >= 90.0, (aircraft, key, fit.fit_validation)
         assert fit.check.band_hz == (0.01, 2.0)
@@ -223,9 +224,9 @@ def test_failed_frequency_check_is_an_error_unless_warned(synthetic_flight, tmp_
 
     strict = replace(SMALL, check_gain_db=1e-4, check_phase_deg=1e-4)
     with pytest.raises(HesspipeError, match="continuous lateral wind -> roll rate model differs"):
-        fit_plants(synthetic_flight, tmp_path / "a", strict, figures=False)
+        fit_plants(synthetic_flight, tmp_path / "a", strict)
     assert not (tmp_path / "a").exists()
-    res = fit_plants(synthetic_flight, tmp_path / "b", replace(strict, on_check_failure="warn"), figures=False)
+    res = fit_plants(synthetic_flight, tmp_path / "b", replace(strict, on_check_failure="warn"))
     assert not res.report["channels"]["control_to_output"]["conversion"]["check"]["pass"]
     assert "FAIL" in (tmp_path / "b" / "plants_report.md").read_text()
 

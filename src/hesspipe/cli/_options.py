@@ -28,6 +28,12 @@ def add_terms(parser: argparse.ArgumentParser, terms: dict[str, str]) -> None:
     parser.set_defaults(_terms={**(parser.get_default("_terms") or {}), **terms})
 
 
+def field_terms(settings: str, flags: dict[str, str]) -> dict[str, str]:
+    """Terms for a settings class's own errors (``DiagnoseConfig: field 'alpha': ...``,
+    :class:`hesspipe.core.config.Settings`), each field spelled as its flag (``--alpha: ...``)."""
+    return {rf"(^|: ){settings}: field '{field}': ": rf"\1{flag}: " for field, flag in flags.items()}
+
+
 def cli_message(message: str, args: argparse.Namespace | None) -> str:
     """`message` with the library's setting names replaced by the command's options."""
     for pattern, text in (getattr(args, "_terms", None) or {}).items():

@@ -13,7 +13,7 @@ _NAMES = [
     "plants",
     "identify",
     "frf",
-    "synth_pilots", "compare_pilots",
+    "synth_pilots", "pilots",
     "fly_pilot",
     "diagnose",
 ]

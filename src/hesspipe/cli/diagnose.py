@@ -23,9 +23,10 @@ def register(sub) -> None:
     p.add_argument("--max-effects", type=int, help="most effects to name (default 3)")
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
-    from ._options import add_run_options, add_seed
+    from ._options import add_run_options, add_seed, add_terms, field_terms
 
     add_run_options(p)
+    add_terms(p, field_terms("DiagnoseConfig", {"alpha": "--alpha", "max_effects": "--max-effects"}))
     add_seed(p, 0, "seed of the remnant draws")
     p.set_defaults(func=_diagnose)
 
@@ -38,15 +39,9 @@ def _diagnose(args) -> int:
     from ._outputs import check_file_outputs
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
-    cfg = DiagnoseConfig()
-    if args.alpha is not None:
-        if not 0 < args.alpha <= 0.5:
-            raise HesspipeError(f"--alpha: expected a number in (0, 0.5], got {args.alpha:g}")
-        cfg = replace(cfg, alpha=args.alpha)
-    if args.max_effects is not None:
-        if args.max_effects < 0:
-            raise HesspipeError(f"--max-effects: expected an integer >= 0, got {args.max_effects}")
-        cfg = replace(cfg, max_effects=args.max_effects)
+    # The library checks its settings (DiagnoseConfig); cli_message names the flags.
+    cfg = replace(DiagnoseConfig(), **{k: v for k, v in (("alpha", args.alpha),
+                                                         ("max_effects", args.max_effects)) if v is not None})
     candidates = None
     if args.candidates is not None:
         candidates = [c.strip() for c in args.candidates.split(",") if c.strip()]

@@ -27,13 +27,14 @@ def _run(args) -> int:
     from ..core.config import load_toml
     from ..core.io import check_output_dir
     from ..flight.approach import FlightConfig, fly
+    from ..viz.flight import draw_flight
 
     check_output_dir(args.out, "flight")  # before any work: a bad folder loses nothing
     if args.config is not None:
         config = FlightConfig.from_table(load_toml(args.config).get("flight", {}), args.config)
     else:
         config = FlightConfig()
-    result = fly(args.aircraft, config, args.out, seed=args.seed)
+    result = fly(args.aircraft, config, args.out, seed=args.seed, draw=draw_flight)
     tr = result.trim
     print(f"{result.aircraft}: trimmed at {tr['vc_kts']:.2f} KCAS, gamma {tr['gamma_deg']:.2f} deg, "
           f"heading {tr['psi_deg']:.1f} deg, alpha {tr['alpha_deg']:.2f} deg, throttle {tr['throttle']:.3f}")

@@ -75,6 +75,7 @@ def _run(args) -> int:
     from ..flight.approach import FlightConfig
     from ..flight.closed_loop import AircraftEffects, fly_pilot
     from ..pilot.hess import model_from_name
+    from ..viz.pilotflight import draw_pilot_flight
 
     for flag, value, ok, want in (
             ("--actuator-lag", args.actuator_lag, lambda v: v >= 0, "a time constant >= 0 s"),
@@ -94,7 +95,7 @@ def _run(args) -> int:
     params = _params(args.params) if args.params is not None else {}
     flight = fly_pilot(args.aircraft, plants, args.out, model=model, params=params, seed=args.seed,
                        config=config, aircraft_effects=act, remnant_share=args.remnant_share,
-                       max_bank_deg=args.max_bank, run_id=args.id)
+                       max_bank_deg=args.max_bank, run_id=args.id, draw=draw_pilot_flight)
     env = flight.truth["envelope"]
     print(f"SYNTHETIC DATA: {flight.truth['model']} pilot flew {flight.truth['aircraft']} for "
           f"{flight.truth['duration_s']:g} s: airspeed {env['speed_kts'][0]:.1f}-{env['speed_kts'][1]:.1f} kt, "

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..core.choices import CRITERIA, DEFAULT_CRITERION
+from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.errors import HesspipeError
 from ._options import add_run_options, add_seed, add_terms, run_options
 
@@ -76,7 +76,7 @@ def register(subparsers) -> None:
                    help="APID bit coding (default gray; paper: binary)")
     p.add_argument("--bits", action="append", type=_bits, default=[], metavar="NAME=BITS[:SCALE[:OFFSET]]",
                    help="APID bit field of a free parameter (value = offset + integer/scale)")
-    p.add_argument("--optimizer", choices=("apid", "scipy", "differential_evolution"), default="apid")
+    p.add_argument("--optimizer", choices=OPTIMIZERS, default="apid")
     p.add_argument("--k", type=int, choices=(1, 2), default=None,
                    help="Table 1 column: 1 for a rate-like plant (K/s), 2 for K/s^2 "
                         "(default: Hess's rule on the plant's slope around 1-5 rad/s)")

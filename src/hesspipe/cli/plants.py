@@ -30,14 +30,18 @@ def _run(args) -> int:
     table = load_toml(args.config) if args.config is not None else {}
     if args.analytic:
         cfg = AnalyticConfig.from_table(table.get("analytic", {}), args.config or "<defaults>")
-        plants = analytic_plants(args.analytic, args.out, cfg, figures=not args.no_figures)
+        from ..viz.plants import draw_analytic
+
+        plants = analytic_plants(args.analytic, args.out, cfg, draw=None if args.no_figures else draw_analytic)
         for key, sys in (("control_to_output", plants.Yc), ("disturbance_to_output", plants.Yd)):
             d = describe_tf(sys)
             print(f"{key}: num {[round(v, 6) for v in d['num']]} den {[round(v, 6) for v in d['den']]}")
         print(f"wrote plants.json, plants_report.md, plants_report.json to {args.out}")
         return 0
     cfg = PlantsConfig.from_table(table.get("plants", {}), args.config or "<defaults>")
-    result = fit_plants(args.flight, args.out, cfg, figures=not args.no_figures)
+    from ..viz.plants import draw_plants
+
+    result = fit_plants(args.flight, args.out, cfg, draw=None if args.no_figures else draw_plants)
     for key, ch in result.report["channels"].items():
         o, chk = ch["orders"], ch["conversion"]["check"]
         print(f"{key}: ARX({o['na']},{o['nb']},{o['nk']}) at {ch['model_dt_s']:.4g} s, validation fit "

@@ -10,3 +10,6 @@ forcing lines, the control time signal (:mod:`hesspipe.identification.criteria`)
 
 DEFAULT_CRITERION = "df"
 """Chosen by measurement on the independent generator (benchmarks/bench_frf_identify.py, README)."""
+
+OPTIMIZERS = ("apid", "scipy", "differential_evolution")
+"""Optimizers of :func:`hesspipe.identification.fit.identify` (the paper's APID first)."""

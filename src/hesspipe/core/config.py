@@ -1,15 +1,22 @@
 """Reading TOML configuration with errors that name the file and the field.
 
-Configuration objects elsewhere are small frozen dataclasses; they are built
-from TOML tables with :class:`Fields`, which checks type and range of each
-value and raises :class:`~hesspipe.core.errors.HesspipeError` with a one-line
-message such as ``aircraft/737.toml: field 'approach.vc_kts': expected a
-number > 0, got 'fast'``.
+Configuration objects elsewhere are small frozen dataclasses; :class:`Fields`
+checks type and range of each value and raises
+:class:`~hesspipe.core.errors.HesspipeError` with a one-line message such as
+``aircraft/737.toml: field 'approach.vc_kts': expected a number > 0, got 'fast'``.
+
+A stage's settings class derives from :class:`Settings`: it is validated on
+construction (Python, the command line and TOML all build it the same way, and
+all get the same checks: ``FlightConfig: field 'duration_s': expected ...``),
+and its ``from_table`` only maps a TOML table onto the constructor, refusing
+unknown keys and naming the file and table in the message.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import numbers
 import tomllib
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -86,6 +93,20 @@ def merge(base: Mapping, override: Mapping) -> dict:
 _MISSING = object()
 
 
+class FieldError(HesspipeError):
+    """A bad value of one configuration field.
+
+    ``field`` is the field's name in its table (or settings class) and
+    ``detail`` the rest of the message (``"expected ..., got ..."``), so a
+    caller can name the field where it came from (a file's table, a flag).
+    """
+
+    def __init__(self, message: str, field: str, detail: str):
+        super().__init__(message)
+        self.field = field
+        self.detail = detail
+
+
 class Fields:
     """Typed access to one TOML table, for building config dataclasses.
 
@@ -110,10 +131,14 @@ class Fields:
     def _name(self, key: str) -> str:
         return f"{self.prefix}.{key}" if self.prefix else key
 
-    def error(self, key: str, expected: str, got: Any = _MISSING) -> HesspipeError:
+    def error(self, key: str, expected: str, got: Any = _MISSING) -> FieldError:
         """Return (not raise) the error for field `key`."""
         tail = "missing" if got is _MISSING else f"got {got!r}"
-        return HesspipeError(f"{self.source}: field '{self._name(key)}': expected {expected}, {tail}")
+        return self.fail(key, f"expected {expected}, {tail}")
+
+    def fail(self, key: str, detail: str) -> FieldError:
+        """Return (not raise) an error for field `key` with a free-form `detail`."""
+        return FieldError(f"{self.source}: field '{self._name(key)}': {detail}", key, detail)
 
     def _get(self, key, default):
         self.used.add(key)
@@ -140,7 +165,7 @@ class Fields:
             raise self.error(key, what)
         if value is None and default is None:  # optional field left out (TOML has no null)
             return None
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
             raise self.error(key, what, value)
         if min is not None and (value <= min if strict_min else value < min):
             raise self.error(key, what, value)
@@ -158,7 +183,7 @@ class Fields:
             raise self.error(key, what)
         if value is None and default is None:  # optional field left out
             return None
-        if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise self.error(key, what, value)
         if (min is not None and value < min) or (max is not None and value > max):
             raise self.error(key, what, value)
@@ -190,7 +215,7 @@ class Fields:
         if value is _MISSING:
             raise self.error(key, what)
         if (not isinstance(value, (list, tuple)) or (length and len(value) != length)
-                or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                or not all(isinstance(v, numbers.Real) and not isinstance(v, bool)
                            and math.isfinite(v) for v in value)):
             raise self.error(key, what, value)
         return tuple(float(v) for v in value)
@@ -223,3 +248,42 @@ class Fields:
         if unknown:
             raise HesspipeError(f"{self.source}: field '{self._name(unknown[0])}': unknown field "
                                 f"(known here: {', '.join(sorted(self.used)) or 'none'})")
+
+
+class Settings:
+    """Base of a stage's frozen settings dataclass: validated on construction.
+
+    A subclass defines ``_checked(self, f: Fields) -> dict``: it reads each field
+    with `f` (which holds the instance's own values, so the one set of checks
+    serves Python, the command line and TOML) and returns the normalised values
+    (floats for numbers, tuples for lists), which are stored. Errors are
+    :class:`FieldError` naming the field, e.g. ``DiagnoseConfig: field 'alpha':
+    expected a number > 0 and <= 0.5, got 5``.
+    """
+
+    def __post_init__(self):
+        f = Fields({k.name: getattr(self, k.name) for k in dataclasses.fields(self)}, type(self).__name__)
+        for name, value in self._checked(f).items():
+            object.__setattr__(self, name, value)  # frozen: normalised once, here
+
+    def _checked(self, f: Fields) -> dict:  # pragma: no cover - every subclass defines it
+        raise NotImplementedError
+
+    @classmethod
+    def _from_fields(cls, f: Fields, **values):
+        """``cls(**table keys, **values)``: the table's keys that name fields, `values`
+        (already built sub-objects) over them; unknown keys refused; an error names
+        the file and the table's field."""
+        names = {k.name for k in dataclasses.fields(cls)}
+        given = {k: v for k, v in f.table.items() if k in names and k not in values}
+        f.used.update(names)  # every field is a key of the table (for the unknown-key message)
+        try:
+            out = cls(**given, **values)
+        except FieldError as exc:
+            raise f.fail(exc.field, exc.detail) from None
+        f.reject_unknown()
+        return out
+
+    def to_dict(self) -> dict:
+        """Plain dict (``dataclasses.asdict``), for manifests and reports."""
+        return dataclasses.asdict(self)

@@ -118,7 +118,7 @@ import scipy.signal
 import scipy.special
 import scipy.stats
 
-from ..core.config import Fields
+from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run
 from ..core.seeds import derive_seed
@@ -151,7 +151,7 @@ _FINE_HZ = 1.0
 # -- configuration --------------------------------------------------------------------------
 
 @dataclass(frozen=True)
-class DiagnoseConfig:
+class DiagnoseConfig(Settings):
     """Settings of :func:`diagnose` (the ``[diagnose]`` table of a pipeline file).
 
     Attributes
@@ -225,43 +225,40 @@ class DiagnoseConfig:
     #: so no Bonferroni share; issue 13 allows <= 10 % of no-motion runs named).
     motion_alpha: float = 0.05
 
+    def _checked(self, f: Fields) -> dict:
+        # Validated on construction (Python, the command line and TOML alike); from_table maps.
+        cands = f.table["candidates"]
+        if cands is not None:
+            if (not isinstance(cands, (list, tuple)) or not all(isinstance(c, str) and c for c in cands)):
+                raise f.error("candidates", "a list of effect ids", cands)
+            cands = tuple(cands)
+        band = f.numbers("band_hz", length=2)
+        if not 0.0 <= band[0] < band[1]:
+            raise f.error("band_hz", "[lo, hi] with 0 <= lo < hi", list(band))
+        edges = f.numbers("band_edges_hz")
+        if len(edges) < 2 or any(b <= a for a, b in zip(edges, edges[1:])) or edges[0] < 0:
+            raise f.error("band_edges_hz", "at least two increasing frequencies >= 0", list(edges))
+        return dict(candidates=cands, band_hz=band, band_edges_hz=edges,
+                    alpha=f.number("alpha", min=0.0, max=0.5, strict_min=True),
+                    max_effects=f.integer("max_effects", min=0),
+                    free=tuple(_strings(f, "free", ())),
+                    grid=f.integer("grid", min=1, max=20),
+                    gain_levels=_fractions(f, "gain_levels", ()),
+                    starts=f.integer("starts", min=0, max=50),
+                    max_evaluations=f.integer("max_evaluations", min=5),
+                    max_lag=f.integer("max_lag", min=1),
+                    plant_fit_ok=f.number("plant_fit_ok", min=0.0, max=100.0),
+                    resolution_db=f.number("resolution_db", min=0.0, strict_min=True),
+                    dynamic_range_db=f.number("dynamic_range_db", min=10.0, max=200.0),
+                    weighting=f.string("weighting", choices=("random-share", "uniform")),
+                    k=f.integer("k", min=1, max=2),
+                    motion_alpha=f.number("motion_alpha", min=0.0, max=0.5, strict_min=True))
+
     @classmethod
     def from_table(cls, table: Mapping | None, source: str = "<config>",
                    prefix: str = "diagnose") -> "DiagnoseConfig":
         """Build from a ``[diagnose]`` TOML table; unknown keys and bad values raise."""
-        f = Fields(table, source, prefix)
-        d = cls()
-        cands = f._get("candidates", None)
-        if cands is not None:
-            if (not isinstance(cands, list) or not all(isinstance(c, str) and c for c in cands)):
-                raise f.error("candidates", "a list of effect ids", cands)
-            cands = tuple(cands)
-        band = f.numbers("band_hz", list(d.band_hz), length=2)
-        if not 0.0 <= band[0] < band[1]:
-            raise f.error("band_hz", "[lo, hi] with 0 <= lo < hi", list(band))
-        edges = f.numbers("band_edges_hz", list(d.band_edges_hz))
-        if len(edges) < 2 or any(b <= a for a, b in zip(edges, edges[1:])) or edges[0] < 0:
-            raise f.error("band_edges_hz", "at least two increasing frequencies >= 0", list(edges))
-        cfg = cls(candidates=cands, band_hz=band, band_edges_hz=edges,
-                  alpha=f.number("alpha", d.alpha, min=0.0, max=0.5, strict_min=True),
-                  max_effects=f.integer("max_effects", d.max_effects, min=0),
-                  free=tuple(_strings(f, "free", d.free)),
-                  grid=f.integer("grid", d.grid, min=1, max=20),
-                  gain_levels=_fractions(f, "gain_levels", d.gain_levels),
-                  starts=f.integer("starts", d.starts, min=0, max=50),
-                  max_evaluations=f.integer("max_evaluations", d.max_evaluations, min=5),
-                  max_lag=f.integer("max_lag", d.max_lag, min=1),
-                  plant_fit_ok=f.number("plant_fit_ok", d.plant_fit_ok, min=0.0, max=100.0),
-                  resolution_db=f.number("resolution_db", d.resolution_db, min=0.0, strict_min=True),
-                  dynamic_range_db=f.number("dynamic_range_db", d.dynamic_range_db, min=10.0, max=200.0),
-                  weighting=f.string("weighting", d.weighting, choices=("random-share", "uniform")),
-                  k=f.integer("k", d.k, min=1, max=2),
-                  motion_alpha=f.number("motion_alpha", d.motion_alpha, min=0.0, max=0.5, strict_min=True))
-        f.reject_unknown()
-        return cfg
-
-    def to_dict(self) -> dict:
-        return asdict(self)
+        return cls._from_fields(Fields(table, source, prefix))
 
 
 def _fractions(f: Fields, key: str, default) -> tuple[float, ...]:

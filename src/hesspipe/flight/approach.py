@@ -56,12 +56,12 @@ import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 import numpy as np
 import pandas as pd
 
-from ..core.config import Fields
+from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
 from ..core.io import staged_output, write_json, write_text
 from ..core.provenance import file_hash, versions
@@ -93,7 +93,7 @@ _DEFAULT_AILERON_EXCITATION = Excitation(kind="multisine", rms=0.05, f_min_hz=0.
 
 
 @dataclass(frozen=True)
-class FlightConfig:
+class FlightConfig(Settings):
     """Settings of stage one (the ``[flight]`` table).
 
     Attributes
@@ -131,32 +131,33 @@ class FlightConfig:
     wind_excitation: Excitation = _DEFAULT_WIND_EXCITATION
     aileron_excitation: Excitation = _DEFAULT_AILERON_EXCITATION
 
+    def _checked(self, f: Fields) -> dict:
+        out = dict(
+            duration_s=f.number("duration_s", min=0, strict_min=True, max=3600),
+            dt_s=f.number("dt_s", min=0, strict_min=True, max=0.05),
+            record_every=f.integer("record_every", min=1),
+            max_speed_dev_kts=f.number("max_speed_dev_kts", min=0, strict_min=True),
+            min_agl_ft=f.number("min_agl_ft", min=0),
+            record_terrain_ft=f.number("record_terrain_ft", None, max=30000))
+        for key, kind in (("side_wind", SideWind), ("wind_excitation", Excitation),
+                          ("aileron_excitation", Excitation)):
+            if not isinstance(f.table[key], kind):
+                raise f.error(key, f"a {kind.__name__}", f.table[key])
+        if out["duration_s"] < 2 * out["dt_s"] * out["record_every"]:
+            raise f.error("duration_s", f"a number >= {2 * out['dt_s'] * out['record_every']:g} "
+                          "(at least two recorded samples)", out["duration_s"])
+        return out
+
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<flight defaults>",
                    prefix: str = "flight") -> "FlightConfig":
         """Build from the ``[flight]`` table of a TOML file; unknown keys are errors."""
         f = Fields(table, source, prefix)
         d = cls()
-        terrain = None
-        if "record_terrain_ft" in f.table:
-            terrain = f.number("record_terrain_ft", max=30000)
-        out = cls(
-            duration_s=f.number("duration_s", d.duration_s, min=0, strict_min=True, max=3600),
-            dt_s=f.number("dt_s", d.dt_s, min=0, strict_min=True, max=0.05),
-            record_every=f.integer("record_every", d.record_every, min=1),
-            max_speed_dev_kts=f.number("max_speed_dev_kts", d.max_speed_dev_kts, min=0, strict_min=True),
-            min_agl_ft=f.number("min_agl_ft", d.min_agl_ft, min=0),
-            record_terrain_ft=terrain,
-            side_wind=SideWind.from_fields(f.table_("side_wind")),
+        return cls._from_fields(
+            f, side_wind=SideWind.from_fields(f.table_("side_wind")),
             wind_excitation=Excitation.from_fields(f.table_("wind_excitation"), d.wind_excitation),
-            aileron_excitation=Excitation.from_fields(f.table_("aileron_excitation"),
-                                                      d.aileron_excitation),
-        )
-        if out.duration_s < 2 * out.dt_s * out.record_every:
-            raise f.error("duration_s", f"a number >= {2 * out.dt_s * out.record_every:g} "
-                          "(at least two recorded samples)", out.duration_s)
-        f.reject_unknown()
-        return out
+            aileron_excitation=Excitation.from_fields(f.table_("aileron_excitation"), d.aileron_excitation))
 
     def to_dict(self) -> dict:
         """Plain dict (for manifests); None values are left out."""
@@ -458,11 +459,12 @@ def _csv_text(df: pd.DataFrame, comments: list[str]) -> str:
 
 
 def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: int = 0, *,
-        figures: bool = True) -> FlightResult:
+        draw: Callable | None = None) -> FlightResult:
     """Stage one: trim `aircraft`, fly the wind and aileron records, write them to `out_dir`.
 
-    Writes ``trim.json``, ``wind.csv``, ``aileron.csv``, ``flight_wind.png``,
-    ``flight_aileron.png`` and ``manifest.json`` (all or none).
+    Writes ``trim.json``, ``wind.csv``, ``aileron.csv``, the figures `draw`
+    makes (``flight_wind.png``, ``flight_aileron.png`` with
+    :func:`hesspipe.viz.flight.draw_flight`) and ``manifest.json`` (all or none).
 
     Parameters
     ----------
@@ -473,8 +475,10 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
         Output folder (created if needed).
     seed : int
         Seed of the excitation signals; the same seed gives identical files.
-    figures : bool
-        Also draw ``flight_wind.png`` and ``flight_aileron.png`` (matplotlib).
+    draw : callable, optional
+        ``draw(folder, wind, aileron, aircraft=name, seed=seed, config=config)``
+        writes figures into the staging folder `folder` and returns their file
+        names (None: no figures; the library itself never imports matplotlib).
 
     Raises
     ------
@@ -512,13 +516,9 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
         write_json(stage / "trim.json", trim)
         write_text(stage / "wind.csv", _csv_text(wind, wind_comments))
         write_text(stage / "aileron.csv", _csv_text(aileron, ail_comments))
-        if figures:
-            from ..viz.flight import plot_record  # matplotlib only when figures are asked for
-
-            plot_record(wind, stage / "flight_wind.png", kind="wind", title=f"{ac.name}: side-wind "
-                        f"record ({config.wind_excitation.kind} excitation, seed {seed})")
-            plot_record(aileron, stage / "flight_aileron.png", kind="aileron", title=f"{ac.name}: "
-                        f"aileron record ({config.aileron_excitation.kind} excitation, seed {seed})")
+        figures = []
+        if draw is not None:
+            figures = list(draw(stage, wind, aileron, aircraft=ac.name, seed=seed, config=config))
         write_json(stage / "manifest.json", {
             "stage": "flight",
             "aircraft": ac.name,
@@ -530,11 +530,10 @@ def fly(aircraft: str, config: FlightConfig, out_dir: str | os.PathLike, seed: i
             "excitation": {"wind": config.wind_excitation.describe("ft/s"),
                            "aileron": config.aileron_excitation.describe("(normalised command)")},
             "columns": list(COLUMNS),
-            "files": ["trim.json", "wind.csv", "aileron.csv", "flight_wind.png", "flight_aileron.png"],
+            "files": ["trim.json", "wind.csv", "aileron.csv", *figures],
             "source": f"JSBSim {versions().get('jsbsim')} simulation of the bundled {ac.model} model",
             "versions": versions(),
         })
-    files = {name: out_dir / name for name in ("trim.json", "wind.csv", "aileron.csv",
-                                                "flight_wind.png", "flight_aileron.png",
+    files = {name: out_dir / name for name in ("trim.json", "wind.csv", "aileron.csv", *figures,
                                                 "manifest.json")}
     return FlightResult(aircraft=ac.name, seed=seed, trim=trim, wind=wind, aileron=aileron, files=files)

@@ -49,7 +49,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 import numpy as np
 
@@ -434,8 +434,9 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
               params: Mapping[str, float] | None = None, seed: int = 0,
               config: FlightConfig = FlightConfig(), aircraft_effects: AircraftEffects = AircraftEffects(),
               remnant_share: float | None = None, max_bank_deg: float = MAX_BANK_DEG,
-              run_id: str = "pilot", figure: bool = True) -> PilotFlight:
-    """Fly one pilot in JSBSim and write ``<run_id>.csv``, ``.truth.json`` and ``.png`` to `out_dir`.
+              run_id: str = "pilot", draw: Callable | None = None) -> PilotFlight:
+    """Fly one pilot in JSBSim and write ``<run_id>.csv``, ``.truth.json`` and the figures
+    of `draw` (:func:`hesspipe.viz.pilotflight.draw_pilot_flight`: ``<run_id>.png``) to `out_dir`.
 
     All files or none (staged output).
 
@@ -450,8 +451,9 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
         Output folder (new, empty, or a fly-pilot folder hesspipe wrote).
     model, params, seed, config, aircraft_effects, remnant_share, max_bank_deg, run_id
         As in :func:`fly_pilot_record`.
-    figure : bool
-        Also draw ``<run_id>.png``.
+    draw : callable, optional
+        ``draw(folder, flight)`` writes figures into the staging folder
+        `folder` and returns their file names (None: no figure).
 
     Returns
     -------
@@ -471,8 +473,6 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
             flight.truth, trim=flight.trim, versions=versions(),
             plants={"control_to_output": tf_coefficients(plants.control_to_output),
                     "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}))
-        if figure:
-            from ..viz.pilotflight import plot_pilot_flight
-
-            plot_pilot_flight(flight, stage / f"{run_id}.png")
+        if draw is not None:
+            draw(stage, flight)
     return flight

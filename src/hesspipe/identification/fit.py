@@ -27,6 +27,7 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy.optimize import differential_evolution
 
+from ..core.choices import OPTIMIZERS  # one list, in a light module: the command line reads it too
 from ..core.errors import HesspipeError
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover
@@ -40,8 +41,6 @@ from .problem import (
     _resolve,
 )
 from .spectra import PaperWelch
-
-OPTIMIZERS = ("apid", "scipy", "differential_evolution")
 
 # Relative singular values below NULL_TOL: not identifiable (a structural
 # null direction, e.g. K1*K2, sits at 1e-10 or below); below WEAK_TOL: only

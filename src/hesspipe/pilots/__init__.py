@@ -6,6 +6,7 @@ from ..core.lazy import attach
 
 __getattr__, __dir__, __all__ = attach(__name__, {
     "CohortSpec": "cohort", "synth_cohort": "cohort", "synth_pilot": "cohort", "Comparison": "compare",
-    "PilotsConfig": "compare", "compare_pilots": "compare", "compare_run": "compare", "fly_cohort": "flown",
+    "PilotsConfig": "settings", "CompareSettings": "settings", "compare_pilots": "compare",
+    "compare_run": "compare", "fly_cohort": "flown",
     "cohort_verdict": "verdict", "motion_test": "verdict",
 })

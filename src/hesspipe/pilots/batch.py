@@ -48,6 +48,13 @@ def _mp_context():
     return multiprocessing.get_context("spawn")
 
 
+def check_workers(workers) -> int:
+    """Return `workers` if it is an integer >= 1 (the one rule; callers check early with it)."""
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise HesspipeError(f"workers: expected an integer >= 1, got {workers!r}")
+    return workers
+
+
 def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
               scheduler: str | None = None, desc: str = "batch", unit: str = "item",
               progress: bool | None = None, connect_timeout: float = 10.0) -> list:
@@ -81,9 +88,7 @@ def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
         return _run_dask(func, items, scheduler, desc, unit, progress, connect_timeout)
     if workers is None:
         workers = default_workers()
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise HesspipeError(f"workers: expected an integer >= 1, got {workers!r}")
-    workers = min(workers, max(len(items), 1))
+    workers = min(check_workers(workers), max(len(items), 1))
     results: list = [None] * len(items)
     with progress_bar(len(items), desc, enable=progress, unit=unit) as bar:
         if workers == 1:

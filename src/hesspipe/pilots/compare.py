@@ -28,89 +28,28 @@ import functools
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Iterable, Mapping, Sequence
+from typing import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from ..core.config import Fields
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, Run, _parse_columns, read_run, record_samples
-from ..core.io import write_json, write_text
-from ..core.seeds import MAX_SEED, check_seed, derive_seed
-from ..identification.criteria import CRITERIA, DEFAULT_CRITERION, check_criterion
+from ..core.formats import Plants, Run, _parse_columns, read_run
+from ..core.seeds import derive_seed
 from .batch import run_batch
-from .verdict import safe_motion_test, verdict_lines
 
-CONFIGURATIONS = ("original", "expanded_fixed", "expanded")
-#: Parameters shown in the comparison table (Table 5's columns).
-TABLE_PARAMETERS = ("Ke", "K1", "K2", "Km")
-#: Optimizers of :func:`hesspipe.identification.fit.identify` (each followed by a local polish).
-OPTIMIZERS = ("apid", "scipy", "differential_evolution")
-#: Where the expanded search starts (see :class:`CompareSettings`).
-STARTS = ("warm", "random")
-#: Fewest samples a run needs: one Welch segment of the paper's spectra (Eq. 9 pads the rest).
-MIN_SAMPLES = 1024  # = hesspipe.identification.spectra.PaperWelch().nperseg; checked in tests
-
-
-@dataclass(frozen=True)
-class CompareSettings:
-    """What every pilot's identification uses (picklable, sent to workers).
-
-    Attributes
-    ----------
-    seed : int
-        Base seed; each pilot and configuration gets
-        ``derive_seed(seed, pilot_id, configuration)``.
-    optimizer : str
-        "apid" (the paper's bit-climbing GA, default), "scipy" (bounded Powell
-        from Table 1, cheap) or "differential_evolution".
-    passes : int
-        APID pass budget (paper: 10).
-    band : (float, float)
-        Fitness band in Hz (paper: 0-5 Hz).
-    k : int
-        Hess model order for the controlled element (1: rate-like, the roll-rate task).
-    km_fixed : float or None
-        Km of the ``expanded_fixed`` configuration (None: Table 1's 0.1 times
-        :func:`hesspipe.pilot.crossover.gain_scale` of the plants, like every default loop gain).
-    start : {"warm", "random"}
-        Every search is the optimizer (APID: `restarts` climbs, best kept)
-        followed by a local bounded-Powell polish from its result. "warm"
-        (default): the first climb of the expanded search starts from the
-        expanded_fixed point (the paper's step 3 re-tuning step 2), its other
-        restarts at random; then the two models exchange optima (the original
-        searches again from the expanded optimum with Km removed, the expanded
-        from the original's with Km = 0) until the original stops improving.
-        Each model thus gets the best point either search found for it: the
-        expanded model, which contains the original at Km = 0, is never worse,
-        and the improvement measures what identifying Km adds, not search luck.
-        "random": each model searched once from random chromosomes (APID as
-        described); results then also carry the luck of each search.
-    restarts : int
-        APID climbs per identification (the best is kept). 2: with the local
-        polish and the exchange of optima, 4 changed neither conclusion of
-        benchmarks/bench_compare.py (measured on the first, nearly remnant-free
-        cohort: mean improvement 88.3 % with motion feedback, 1.4 vs 1.6 %
-        without) and costs a quarter more.
-    benchmark : bool
-        Also fit the McRuer precision model (the paper's benchmark score);
-        off by default: it costs as much as the three configurations together.
-    criterion : str
-        Fit criterion of every identification (:data:`hesspipe.identification.criteria.CRITERIA`):
-        "paper" (Eq. 10; the library's default, the paper's study) or a phase-aware
-        one ("df", the command line's and the pipeline's default).
-    """
-
-    seed: int = 0
-    optimizer: str = "apid"
-    passes: int = 10
-    band: tuple[float, float] = (0.0, 5.0)
-    k: int = 1
-    km_fixed: float | None = None
-    start: str = "warm"
-    restarts: int = 2
-    benchmark: bool = False
-    criterion: str = "paper"
+# The stage's settings live in .settings and its text in .report; their names are imported
+# here too, where users and older code look for them.
+from .report import TABLE_PARAMETERS, _fmt, format_table, write_comparison  # noqa: F401
+from .settings import (  # noqa: F401
+    CONFIGURATIONS,
+    MIN_SAMPLES,
+    OPTIMIZERS,
+    SIMULATORS,
+    STARTS,
+    CompareSettings,
+    PilotsConfig,
+)
+from .verdict import safe_motion_test
 
 
 @dataclass(frozen=True)
@@ -413,6 +352,15 @@ def _search(run, plants, model, seed, common, initial=None):
     return best, first.evaluations + polished.evaluations
 
 
+def _with_k(settings: CompareSettings, plants: Plants) -> CompareSettings:
+    """`settings` with ``k`` chosen by Hess's rule on the control plant when it is None."""
+    if settings.k is not None:
+        return settings
+    from ..identification.criteria import choose_k
+
+    return replace(settings, k=choose_k(plants)[0])
+
+
 def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSettings()) -> PilotComparison:
     """Identify the three configurations on one run.
 
@@ -428,6 +376,7 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
     -------
     PilotComparison
     """
+    settings = _with_k(settings, plants)
     common = dict(optimizer=settings.optimizer, passes=settings.passes, band=tuple(settings.band),
                   k=settings.k, restarts=settings.restarts, with_benchmark=settings.benchmark)
     frf = None
@@ -514,7 +463,7 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
         return [path]
     files = [Path(p) for p in paths_or_dir]
     if not files:
-        raise HesspipeError("compare-pilots: no run files given")
+        raise HesspipeError("paths_or_dir: no run files given; expected a folder or a list of run CSV files")
     return files
 
 
@@ -538,13 +487,10 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
     return runs, failures
 
 
-def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
-                   scheduler: str | None = None, seed: int = 0, optimizer: str = "apid",
-                   passes: int = 10, band: tuple[float, float] = (0.0, 5.0), k: int | None = None,
-                   km_fixed: float | None = None, start: str = "warm", restarts: int = 2,
-                   benchmark: bool = False, columns=None,
+def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | None = None, *,
+                   workers: int | None = None, scheduler: str | None = None, columns=None,
                    resample: bool = False, progress: bool | None = None, job=None,
-                   criterion: str = "paper") -> Comparison:
+                   **fields) -> Comparison:
     """Identify original, expanded-fixed-Km and expanded models on each pilot's run.
 
     Parameters
@@ -557,10 +503,11 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
         Local processes (default all cores; 1: in this process).
     scheduler : str, optional
         Dask distributed scheduler address; the work is submitted there instead.
-    seed : int
-        Base seed (pilot seeds derive from it and the pilot id).
-    optimizer, passes, band, k, km_fixed, start, restarts, benchmark, criterion
-        See :class:`CompareSettings`.
+    settings : CompareSettings, optional
+        What every identification uses (default ``CompareSettings()``).
+    **fields
+        Fields of :class:`CompareSettings` replacing those of `settings`, e.g.
+        ``compare_pilots(folder, plants, seed=3, restarts=1)``.
     columns, resample
         Passed to :func:`hesspipe.core.formats.read_run`.
     progress : bool, optional
@@ -580,17 +527,7 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
     HesspipeError
         No run files at all, bad settings, or an unreachable scheduler.
     """
-    if start not in STARTS:
-        raise HesspipeError(f"start: expected one of {', '.join(STARTS)}, got {start!r}")
-    if k is None:
-        from ..identification.criteria import choose_k
-
-        k = choose_k(plants)[0]  # Hess's rule on the control plant
-    settings = CompareSettings(seed=check_seed(seed), optimizer=optimizer, passes=int(passes),
-                               band=(float(band[0]), float(band[1])), k=int(k),
-                               km_fixed=None if km_fixed is None else float(km_fixed), start=start,
-                               restarts=int(restarts), benchmark=bool(benchmark),
-                               criterion=check_criterion(criterion))
+    settings = _with_k(replace(settings or CompareSettings(), **fields), plants)  # validated here
     if job is None and settings.km_fixed is None:
         settings = replace(settings, km_fixed=_km_fixed(settings, plants))
     _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
@@ -611,212 +548,8 @@ def compare_pilots(paths_or_dir, plants: Plants, *, workers: int | None = None,
                               "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)})
 
 
-# -- reporting --------------------------------------------------------------------------------
-
-def _fmt(x, spec=".3g") -> str:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "-"
-    return format(x, spec)
-
-
-def format_table(comparison: Comparison) -> str:
-    """Plain-text comparison: one row per pilot and configuration, then mean and spread."""
-    head = ("pilot", "configuration", *TABLE_PARAMETERS, "fitness", "improvement", "wc rad/s", "PM deg")
-    rows = []
-    for p in comparison.pilots:
-        for name in CONFIGURATIONS:
-            conf = p.configuration(name)
-            params = conf.get("parameters", {})
-            cross = conf.get("crossover") or {}
-            rows.append((p.id + (" *" if p.synthetic else "") if name == "original" else "", name,
-                         *(_fmt(params.get(k)) if k in params else "x" for k in TABLE_PARAMETERS),
-                         _fmt(conf.get("fitness"), ".4g"),
-                         f"{100 * p.improvement:.1f} %" if name == "expanded" and math.isfinite(p.improvement)
-                         else "",
-                         _fmt(cross.get("frequency_rad_s")), _fmt(cross.get("phase_margin_deg"))))
-    widths = [max(len(str(r[i])) for r in [head, *rows]) for i in range(len(head))]
-    line = lambda r: "  ".join(str(c).ljust(w) if i < 2 else str(c).rjust(w)  # noqa: E731
-                               for i, (c, w) in enumerate(zip(r, widths)))
-    out = []
-    if comparison.synthetic:
-        out.append("SYNTHETIC DATA (* = run generated by a model, not measured)")
-    out += verdict_lines(comparison.verdict()) + [""]
-    out += [line(head), line(["-" * w for w in widths]), *(line(r) for r in rows)]
-    s = comparison.improvement_stats()
-    if s["n"]:
-        spread = f", sd {100 * s['std']:.1f} %" if math.isfinite(s["std"]) else ""
-        out.append(f"improvement (1 - expanded/original fitness) over {s['n']} pilot(s): mean "
-                   f"{100 * s['mean']:.1f} %{spread}, range {100 * s['min']:.1f} .. {100 * s['max']:.1f} %")
-    notes: dict[str, int] = {}
-    for p in comparison.pilots:
-        for name in ("original", "expanded"):
-            for u in (p.configuration(name).get("identifiability") or {}).get("unidentifiable", []):
-                notes[u["meaning"]] = notes.get(u["meaning"], 0) + 1
-    for meaning, count in notes.items():
-        out.append(f"identifiability: {meaning} ({count} of {2 * len(comparison.pilots)} "
-                   "identifications); only that combination is determined")
-    out.append(f"expanded_fixed: original's parameters with Km = {_fmt(comparison.km_fixed_value(), 'g')}, "
-               "not re-identified; x = not in the model")
-    for f in comparison.failures:
-        out.append(f"FAILED {f.id}: {f.error}")
-    return "\n".join(out)
-
-
-def write_comparison(comparison: Comparison, out_dir: str | Path, *, figures: bool = True,
-                     json_name: str = "comparison.json", table_name: str = "comparison.md") -> list[Path]:
-    """Write ``comparison.json``, ``comparison.md`` and ``figures/<pilot>.png`` into `out_dir`.
-
-    Each file is written atomically; callers that need all-or-nothing wrap
-    this in :func:`hesspipe.core.io.staged_output`.
-    """
-    out_dir = Path(out_dir)
-    record = comparison.to_dict()
-    # Runs made inside out_dir (the pipeline's cohort) are named relative to it: the folder
-    # may be a staging folder that is renamed once the stage succeeds.
-    for entry in record["pilots"] + record["failures"]:
-        src = Path(entry["source"])
-        if src.is_absolute() and src.is_relative_to(out_dir.resolve()):
-            entry["source"] = str(src.relative_to(out_dir.resolve()))
-    written = [write_json(out_dir / json_name, record),
-               write_text(out_dir / table_name, "```\n" + comparison.table() + "\n```\n")]
-    if figures:
-        from ..viz.compare import plot_pilot
-
-        for p in comparison.pilots:
-            written.append(plot_pilot(p, out_dir / "figures" / f"{p.id}.png"))
-            if p.frf is not None:
-                written.append(_df_figure(p, out_dir / "figures" / f"{p.id}_df.png"))
-    return written
-
-
-def _df_figure(p: PilotComparison, path: Path) -> Path:
-    """The identified models' describing functions over the pilot's measured one."""
-    from ..identification.criteria import model_df
-    from ..pilot.hess import model_from_name
-    from ..viz.frf import frf_figure
-
-    models = {}
-    for name in ("original", "expanded"):
-        d = getattr(p, name)
-        loop = model_from_name(d["model"]).loop(d["parameters"])
-        models[name] = (lambda lp: (lambda s: model_df(lp, s)))(loop)
-    return frf_figure(path, p.frf, models)
-
-
-# -- pipeline configuration --------------------------------------------------------------------
-
-#: How the pipeline's synthetic cohort is simulated (``[pilots] simulator``).
-SIMULATORS = ("jsbsim", "fft")
-
-
-@dataclass(frozen=True)
-class PilotsConfig:
-    """The ``[pilots]`` table of the pipeline configuration.
-
-    Attributes
-    ----------
-    data : str
-        Folder of measured runs; empty: a synthetic cohort is generated.
-    n : int
-        Synthetic cohort size.
-    seed : int or None
-        Cohort and identification seed (None: the pipeline seed).
-    effects : tuple of str
-        Effects in every synthetic pilot (remnant noise is always added).
-    duration_s, dt_s : float
-        Synthetic record length and sample interval.
-    workers : int
-        Local processes (0: all cores).
-    scheduler : str
-        Dask scheduler address ("" : local processes).
-    optimizer : str
-        "apid", "scipy" or "differential_evolution".
-    passes : int
-        APID pass budget.
-    band_hz : (float, float)
-        Fitness band.
-    km_fixed : float or None
-        Km of the expanded_fixed configuration (None: Table 1 times the plants' gain scale).
-    start : str
-        "warm" or "random" (see :class:`CompareSettings`).
-    restarts : int
-        APID climbs per identification.
-    benchmark : bool
-        Also compute the McRuer benchmark score per pilot.
-    figures : bool
-        Write a PSD figure per pilot (and a describing-function figure).
-    columns : str
-        Column names of the data's files, "ROLE=NAME,..." ("": the format's names).
-    resample : bool
-        Interpolate non-uniform time columns onto a uniform grid instead of refusing them.
-    simulator : str
-        How the synthetic cohort is made: "jsbsim" (the pilots fly the JSBSim
-        aircraft in closed loop, :func:`hesspipe.pilots.flown.fly_cohort`) or "fft"
-        (the linear frequency-domain model around the fitted plants).
-    criterion : str
-        Fit criterion (see :class:`CompareSettings`); default
-        :data:`hesspipe.identification.criteria.DEFAULT_CRITERION`, as the identify command.
-    """
-
-    data: str = ""
-    n: int = 6
-    seed: int | None = None
-    effects: tuple[str, ...] = ("motion_feedback",)
-    duration_s: float = 70.0
-    dt_s: float = 0.02
-    workers: int = 0
-    scheduler: str = ""
-    optimizer: str = "apid"
-    passes: int = 10
-    band_hz: tuple[float, float] = (0.0, 5.0)
-    km_fixed: float | None = None
-    start: str = "warm"
-    restarts: int = 2
-    benchmark: bool = False
-    figures: bool = True
-    columns: str = ""
-    resample: bool = False
-    simulator: str = "jsbsim"
-    criterion: str = DEFAULT_CRITERION
-
-    @classmethod
-    def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
-        f = Fields(table, source, prefix)
-        d = cls()
-        effects = f.strings("effects", d.effects)
-        _check_effects(effects, f"{source}: field '{prefix}.effects'")
-        seed = f.integer("seed", None, min=0, max=MAX_SEED)
-        band = f.numbers("band_hz", list(d.band_hz), length=2)
-        if not 0 <= band[0] < band[1]:
-            raise f.error("band_hz", "[low, high] Hz with 0 <= low < high", list(band))
-        km = f.number("km_fixed", None, min=0.0)
-        cfg = cls(data=f.string("data", d.data), n=f.integer("n", d.n, min=1),
-                  seed=seed, effects=tuple(effects),
-                  duration_s=f.number("duration_s", d.duration_s, min=0.0, strict_min=True),
-                  dt_s=f.number("dt_s", d.dt_s, min=0.0, max=0.1, strict_min=True),
-                  workers=f.integer("workers", d.workers, min=0),
-                  scheduler=f.string("scheduler", d.scheduler),
-                  optimizer=f.string("optimizer", d.optimizer, choices=OPTIMIZERS),
-                  passes=f.integer("passes", d.passes, min=1),
-                  band_hz=band, km_fixed=km, start=f.string("start", d.start, choices=STARTS),
-                  restarts=f.integer("restarts", d.restarts, min=1),
-                  benchmark=f.boolean("benchmark", d.benchmark),
-                  figures=f.boolean("figures", d.figures),
-                  columns=f.string("columns", d.columns), resample=f.boolean("resample", d.resample),
-                  simulator=f.string("simulator", d.simulator, choices=SIMULATORS),
-                  criterion=f.string("criterion", d.criterion, choices=CRITERIA))
-        f.reject_unknown()
-        try:
-            _parse_columns(cfg.columns)
-            record_samples(cfg.duration_s, cfg.dt_s, min_samples=MIN_SAMPLES)
-        except HesspipeError as exc:
-            field = "columns" if str(exc).startswith("columns") else "duration_s"
-            raise HesspipeError(f"{source}: field '{prefix}.{field}': {exc}") from None
-        return cfg
-
-
 def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed: int = 0,
-              progress: bool | None = None) -> Comparison:
+              progress: bool | None = None, draw: Callable | None = None) -> Comparison:
     """The pipeline's pilots stage: cohort (or data folder) → comparison files in `out_dir`.
 
     Without ``config.data`` a synthetic frequency-domain cohort of ``config.n`` pilots
@@ -825,34 +558,23 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
     ``data``: :func:`hesspipe.pilots.flown.fly_pipeline_cohort`); then every run is compared and ``comparison.json``,
     ``comparison.md`` and ``figures/<pilot>.png`` are written. Failed pilots
     are listed in the outputs; the caller decides whether ``not result.ok``
-    fails the stage.
+    fails the stage. `draw` is :func:`write_comparison`'s, used when ``config.figures``.
     """
     from .cohort import CohortSpec, synth_cohort
 
     out_dir = Path(out_dir)
-    seed = config.seed if config.seed is not None else int(seed)
+    settings = config.settings(seed)
+    seed = settings.seed
     if config.data:
         source = Path(config.data)
     else:
         source = out_dir / "cohort"
         synth_cohort(plants, config.n, seed, config.effects, source,
                      spec=CohortSpec(duration_s=config.duration_s, dt_s=config.dt_s))
-    result = compare_pilots(source, plants, workers=config.workers or None,
-                            scheduler=config.scheduler or None, seed=seed, optimizer=config.optimizer,
-                            passes=config.passes, band=config.band_hz, km_fixed=config.km_fixed,
-                            start=config.start, restarts=config.restarts, benchmark=config.benchmark,
-                            columns=config.columns or None, resample=config.resample, progress=progress,
-                            criterion=config.criterion)
-    write_comparison(result, out_dir, figures=config.figures)
+    result = compare_pilots(source, plants, settings, workers=config.workers or None,
+                            scheduler=config.scheduler or None, columns=config.columns or None,
+                            resample=config.resample, progress=progress)
+    write_comparison(result, out_dir, draw=draw if config.figures else None)
     return result
 
 
-def _check_effects(effects: tuple[str, ...], where: str) -> None:
-    """Raise unless every effect id is known (the registry lives in hesspipe.pilot.effects)."""
-    try:
-        from ..pilot.effects import EFFECTS
-    except ImportError:  # registry not available: accept, synth_cohort checks again
-        return
-    for e in effects:
-        if e not in EFFECTS:
-            raise HesspipeError(f"{where}: unknown effect {e!r}; expected one of {', '.join(EFFECTS)}")

@@ -125,17 +125,20 @@ def flight_inputs(section: dict, config: dict) -> list:
 
 def flight(ctx) -> None:
     from ..flight.approach import FlightConfig, fly
+    from ..viz.flight import draw_flight
 
     table, (aircraft,) = _split(ctx.section, "aircraft")
-    fly(aircraft or "737", FlightConfig.from_table(table, ctx.source), ctx.out_dir, ctx.seed)
+    fly(aircraft or "737", FlightConfig.from_table(table, ctx.source), ctx.out_dir, ctx.seed, draw=draw_flight)
 
 
 # -- plants -------------------------------------------------------------------------------
 
 def plants(ctx) -> None:
     from ..plants.fit import PlantsConfig, fit_plants
+    from ..viz.plants import draw_plants
 
-    fit_plants(ctx.upstream["flight"], ctx.out_dir, PlantsConfig.from_table(ctx.section, ctx.source))
+    fit_plants(ctx.upstream["flight"], ctx.out_dir, PlantsConfig.from_table(ctx.section, ctx.source),
+               draw=draw_plants)
 
 
 def analytic_inputs(section: dict, config: dict) -> list:
@@ -145,9 +148,10 @@ def analytic_inputs(section: dict, config: dict) -> list:
 
 def analytic(ctx) -> None:
     from ..plants.fit import AnalyticConfig, analytic_plants
+    from ..viz.plants import draw_analytic
 
     config = AnalyticConfig.from_table(ctx.section, ctx.source)
-    analytic_plants(config.model, ctx.out_dir, config)
+    analytic_plants(config.model, ctx.out_dir, config, draw=draw_analytic)
 
 
 # -- pilots -------------------------------------------------------------------------------
@@ -160,6 +164,7 @@ def pilots_inputs(section: dict, config: dict) -> list:
 def pilots(ctx) -> None:
     from ..core.formats import read_plants
     from ..pilots.compare import PilotsConfig, run_study
+    from ..viz.compare import draw_comparison
 
     config = PilotsConfig.from_table(ctx.section, ctx.source)
     plants_ = read_plants(ctx.upstream["plants"] / "plants.json")
@@ -167,7 +172,7 @@ def pilots(ctx) -> None:
         from ..pilots.flown import fly_pipeline_cohort
 
         config = fly_pipeline_cohort(config, plants_, ctx)
-    result = run_study(config, plants_, ctx.out_dir, seed=ctx.seed, progress=False)
+    result = run_study(config, plants_, ctx.out_dir, seed=ctx.seed, progress=False, draw=draw_comparison)
     if not result.ok:
         failed = ", ".join(f"{f.id} ({_config_terms(f.error)})" for f in result.failures)
         raise HesspipeError(f"pilots: {len(result.failures)} run(s) failed: {failed}")

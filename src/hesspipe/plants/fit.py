@@ -70,31 +70,38 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 import control as ct
 import numpy as np
 from scipy import signal
 
-from ..core.config import Fields, aircraft_file
+from ..core.config import Fields, Settings, aircraft_file
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, read_csv_columns, sample_interval, tf_coefficients, write_plants
+from ..core.formats import Plants, read_csv_columns, sample_interval, write_plants
 from ..core.io import staged_output, write_json, write_text
 from ..core.provenance import file_hash, versions
 from ..pilot.motion import paper_motion_path
 from ..pilot.simulation import growth_limit
 from . import arx as _arx
-from .analytic import AnalyticPlants, analytic_transfer_functions, dimensional_derivatives, load_analytic, modes
+from .analytic import analytic_transfer_functions, load_analytic
 from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
+
+# The report's text lives in .report; PAPER_EQ16, describe_tf, format_tf, roots_table are
+# imported here too, where users and older code look for them.
+from .report import (  # noqa: F401
+    PAPER_EQ16,
+    UNITS,
+    _analytic_markdown,
+    _analytic_report,
+    _channel_report,
+    _eq16_report,
+    _markdown,
+    describe_tf,
+    format_tf,
+    roots_table,
+)
 from .slow_roots import SlowRoots, phase_change, reflect_slow_roots
-
-#: The paper's Eq. 16: lateral wind → roll rate of its Boeing 757 (ARX, units as printed).
-PAPER_EQ16 = ((-0.2554, 14.4, -272.6, 25.72), (1.0, 84.37, 452.2, 1510.0, 628.8))
-
-UNITS = {"control_to_output": "aileron_cmd (normalised -1..1, positive -> positive roll rate) "
-                              "-> roll rate (rad/s)",
-         "disturbance_to_output": "lateral wind (ft/s, positive towards the right wing) "
-                                  "-> roll rate (rad/s)"}
 
 
 @dataclass(frozen=True)
@@ -117,7 +124,7 @@ CHANNELS = (
 
 
 @dataclass(frozen=True)
-class PlantsConfig:
+class PlantsConfig(Settings):
     """Configuration of stage two (the ``[plants]`` table).
 
     Attributes
@@ -178,39 +185,39 @@ class PlantsConfig:
     on_check_failure: str = "error"
     slow_roots: str = "keep"
 
+    def _checked(self, f: Fields) -> dict:
+        cfg = dict(
+            decimate=f.integer("decimate", min=1, max=50),
+            criterion=f.string("criterion", choices=_arx.CRITERIA),
+            focus=f.string("focus", choices=_arx.FOCUS),
+            iterations=f.integer("iterations", min=1, max=200),
+            na_max=f.integer("na_max", min=1, max=30),
+            nb_max=f.integer("nb_max", min=1, max=30),
+            nk_min=f.integer("nk_min", min=0, max=50),
+            nk_max=f.integer("nk_max", min=0, max=50),
+            validation_fraction=f.number("validation_fraction", min=0.05, max=0.8),
+            min_excitation_order=f.integer("min_excitation_order", min=1, max=30),
+            excitation_rcond=f.number("excitation_rcond", min=0, max=0.5, strict_min=True),
+            residual_max_lag=f.integer("residual_max_lag", min=1, max=1000),
+            residual_confidence=f.number("residual_confidence", min=0.5, max=0.9999),
+            check_band_hz=f.numbers("check_band_hz", length=2),
+            check_gain_db=f.number("check_gain_db", min=0, strict_min=True),
+            check_phase_deg=f.number("check_phase_deg", min=0, strict_min=True),
+            on_check_failure=f.string("on_check_failure", choices=("error", "warn")),
+            slow_roots=f.string("slow_roots", choices=("keep", "reflect")),
+        )
+        if cfg["nk_max"] < cfg["nk_min"]:
+            raise f.error("nk_max", f"an integer >= nk_min = {cfg['nk_min']}", cfg["nk_max"])
+        lo, hi = cfg["check_band_hz"]
+        if not 0 < lo < hi:
+            raise f.error("check_band_hz", "[low, high] with 0 < low < high (Hz)", list(cfg["check_band_hz"]))
+        return cfg
+
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<plants defaults>",
                    prefix: str = "plants") -> "PlantsConfig":
         """Build from the ``[plants]`` TOML table; unknown keys are rejected."""
-        f = Fields(table, source, prefix)
-        d = cls()
-        cfg = cls(
-            decimate=f.integer("decimate", d.decimate, min=1, max=50),
-            criterion=f.string("criterion", d.criterion, choices=_arx.CRITERIA),
-            focus=f.string("focus", d.focus, choices=_arx.FOCUS),
-            iterations=f.integer("iterations", d.iterations, min=1, max=200),
-            na_max=f.integer("na_max", d.na_max, min=1, max=30),
-            nb_max=f.integer("nb_max", d.nb_max, min=1, max=30),
-            nk_min=f.integer("nk_min", d.nk_min, min=0, max=50),
-            nk_max=f.integer("nk_max", d.nk_max, min=0, max=50),
-            validation_fraction=f.number("validation_fraction", d.validation_fraction, min=0.05, max=0.8),
-            min_excitation_order=f.integer("min_excitation_order", d.min_excitation_order, min=1, max=30),
-            excitation_rcond=f.number("excitation_rcond", d.excitation_rcond, min=0, max=0.5, strict_min=True),
-            residual_max_lag=f.integer("residual_max_lag", d.residual_max_lag, min=1, max=1000),
-            residual_confidence=f.number("residual_confidence", d.residual_confidence, min=0.5, max=0.9999),
-            check_band_hz=f.numbers("check_band_hz", d.check_band_hz, length=2),
-            check_gain_db=f.number("check_gain_db", d.check_gain_db, min=0, strict_min=True),
-            check_phase_deg=f.number("check_phase_deg", d.check_phase_deg, min=0, strict_min=True),
-            on_check_failure=f.string("on_check_failure", d.on_check_failure, choices=("error", "warn")),
-            slow_roots=f.string("slow_roots", d.slow_roots, choices=("keep", "reflect")),
-        )
-        if cfg.nk_max < cfg.nk_min:
-            raise f.error("nk_max", f"an integer >= nk_min = {cfg.nk_min}", cfg.nk_max)
-        lo, hi = cfg.check_band_hz
-        if not 0 < lo < hi:
-            raise f.error("check_band_hz", "[low, high] with 0 < low < high (Hz)", list(cfg.check_band_hz))
-        f.reject_unknown()
-        return cfg
+        return cls._from_fields(Fields(table, source, prefix))
 
     def to_dict(self) -> dict:
         out = asdict(self)
@@ -401,61 +408,6 @@ def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
         synthetic=record.synthetic, slow_roots=slow)
 
 
-# -- descriptions of transfer functions ---------------------------------------------------
-
-def roots_table(roots) -> list[dict]:
-    """Continuous roots with natural frequency (rad/s) and damping ratio."""
-    out = []
-    for r in sorted(np.atleast_1d(roots), key=lambda z: (abs(z), z.imag)):
-        if r.imag < -1e-12:
-            continue  # conjugate listed once
-        wn = abs(r)
-        out.append({"re": float(r.real), "im": float(r.imag), "wn_rad_s": float(wn),
-                    "zeta": float(-r.real / wn) if wn > 0 else None})
-    return out
-
-
-def describe_tf(sys: ct.TransferFunction) -> dict:
-    """Coefficients, poles, zeros (with wn, zeta) and DC gain of a continuous SISO tf."""
-    co = tf_coefficients(sys)
-    num, den = np.array(co["num"]), np.array(co["den"])
-    zeros = np.roots(np.trim_zeros(num, "f")) if np.any(num) else np.array([])
-    dc = ct.dcgain(sys)
-    return {**co, "poles": roots_table(np.roots(den)), "zeros": roots_table(zeros),
-            "dc_gain": float(np.real(dc)) if np.isfinite(dc) else None}
-
-
-def format_tf(sys_or_coeffs) -> str:
-    """``(num) / (den)`` in descending powers of s, of a tf or a ``{"num", "den"}`` mapping."""
-    co = sys_or_coeffs if isinstance(sys_or_coeffs, dict) else tf_coefficients(sys_or_coeffs)
-
-    def poly(c):
-        c = list(c)
-        n = len(c) - 1
-        terms = []
-        for i, v in enumerate(c):
-            if v == 0:
-                continue
-            p = n - i
-            s = "" if p == 0 else ("s" if p == 1 else f"s^{p}")
-            coef = "" if (v == 1 and s) else ("-" if (v == -1 and s) else f"{v:.4g} ")
-            terms.append((coef + s).strip())
-        return " + ".join(terms).replace("+ -", "- ") or "0"
-
-    return f"({poly(co['num'])}) / ({poly(co['den'])})"
-
-
-def _roots_md(rows: list[dict]) -> str:
-    if not rows:
-        return "none"
-    parts = []
-    for r in rows:
-        z = f"{r['re']:.4g}" + (f" ± {abs(r['im']):.4g}j" if abs(r["im"]) > 1e-12 else "")
-        zeta = "" if r["zeta"] is None else f", ζ {r['zeta']:.3f}"
-        parts.append(f"{z} (ωn {r['wn_rad_s']:.4g} rad/s{zeta})")
-    return "; ".join(parts)
-
-
 # -- the stage -----------------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -468,124 +420,15 @@ class PlantsResult:
     files: dict = field(default_factory=dict)
 
 
-def _channel_report(fit: ChannelFit, config: PlantsConfig) -> dict:
-    m = fit.model
-    sel = fit.selection
-    poles_d = np.roots(m.polynomials()[1])
-    return {
-        "file": fit.source, "input": fit.channel.input, "output": fit.channel.output,
-        "units": UNITS[fit.channel.key],
-        "trim": {"input": fit.trim_input, "output": fit.trim_output},
-        "raw_dt_s": fit.raw_dt, "decimate": config.decimate, "model_dt_s": m.dt,
-        "samples": {"estimation": fit.n_estimation, "validation": len(fit.time) - fit.n_estimation,
-                    "validation_start_s": fit.validation_start_s},
-        "orders": {"na": m.na, "nb": m.nb, "nk": m.nk},
-        "criterion": {"name": sel.criterion, "value": sel.best.criterion, "focus": config.focus,
-                      "variance": ("simulation error" if config.focus == "simulation"
-                                   else "one-step prediction error") + " on the estimation data",
-                      "n_samples": sel.n_samples, "grid_size": len(sel.candidates),
-                      "max_growth_1_per_s": fit.slow_roots.limit, "growth_rate_1_per_s": m.growth_rate(),
-                      "ranked": [c.to_dict() for c in sel.ranked(10)]},
-        "excitation_order": sel.excitation_order,
-        "fit_percent": {"estimation": fit.fit_estimation, "validation": fit.fit_validation,
-                        "validation_continuous": fit.fit_validation_continuous,
-                        "definition": "100 (1 - ||y - y_sim|| / ||y - mean(y)||), simulated output"},
-        "residual_tests": fit.residuals.to_dict(),
-        "discrete": {**m.to_dict(), "poles_z": [{"re": float(p.real), "im": float(p.imag)}
-                                               for p in poles_d]},
-        "continuous": describe_tf(fit.continuous),
-        "conversion": {"method": "tustin (inverse bilinear)", "notes": list(fit.conversion_notes),
-                       "check": fit.check.to_dict()},
-        "slow_roots": fit.slow_roots.to_dict(),
-    }
-
-
-def _eq16_report() -> dict:
-    sys = ct.tf(*PAPER_EQ16)
-    return {**describe_tf(sys), "what": "paper Eq. 16: lateral wind -> roll rate, Boeing 757 "
-            "(NASA Langley model), ARX fit, units as printed (not stated)"}
-
-
-def _markdown(report: dict, synthetic: bool) -> str:
-    lines = ["# Stage two: plants identified from the flight records", ""]
-    if synthetic:
-        lines += ["**SYNTHETIC DATA**: the flight records were generated by a model, not measured.", ""]
-    lines += [f"Flight folder: `{report['source']['flight_dir']}`.", "",
-              f"Validation data: {report['validation_data']}.", "",
-              "Residual tests use the one-step residuals on the validation tail. On noise-free "
-              "simulated records the residuals are model error, not noise, so they are rarely white: "
-              "a failed test there says the model is not exact, the fit percent says how close it is.", ""]
-    for key, ch in report["channels"].items():
-        o, fp, rt = ch["orders"], ch["fit_percent"], ch["residual_tests"]
-        chk = ch["conversion"]["check"]
-        lines += [f"## {key}: {ch['units']}", "",
-                  f"Record `{ch['file']}`, input `{ch['input']}`, output `{ch['output']}`; sample "
-                  f"interval {ch['raw_dt_s']:.6g} s decimated by {ch['decimate']} to {ch['model_dt_s']:.6g} s; "
-                  f"{ch['samples']['estimation']} estimation and {ch['samples']['validation']} validation "
-                  f"samples (validation from t = {ch['samples']['validation_start_s']:.2f} s).", "",
-                  f"- ARX orders: na = {o['na']}, nb = {o['nb']}, nk = {o['nk']} "
-                  f"(chosen by {ch['criterion']['name'].upper()} = {ch['criterion']['value']:.6g} of the "
-                  f"{ch['criterion']['variance']}, over {ch['criterion']['grid_size']} candidates, "
-                  f"eligible if their poles grow slower than ln 2 / duration = "
-                  f"{ch['criterion']['max_growth_1_per_s']:.3g} 1/s (stable on the record), "
-                  f"{ch['criterion']['focus']} focus; input excitation order "
-                  f"{ch['excitation_order']}; the chosen model's fastest pole: "
-                  f"{ch['criterion']['growth_rate_1_per_s']:.3g} 1/s)",
-                  f"- Fit (simulated output): estimation {fp['estimation']:.2f} %, **validation "
-                  f"{fp['validation']:.2f} %**, continuous model on validation "
-                  f"{fp['validation_continuous']:.2f} %",
-                  f"- Residual whiteness ({rt['whiteness']['test']}, {100 * rt['confidence']:g} %): "
-                  f"{'pass' if rt['whiteness']['pass'] else 'FAIL'} (p = {rt['whiteness']['p_value']:.3g}; "
-                  f"max |r| {rt['whiteness']['max_abs']:.3g}, bound ±{rt['whiteness']['bound']:.3g}, "
-                  f"{rt['whiteness']['lags_outside_bound']} of {rt['max_lag']} lags outside)",
-                  f"- Residual/input independence: {'pass' if rt['independence']['pass'] else 'FAIL'} "
-                  f"(p = {rt['independence']['p_value']:.3g}; max |r| {rt['independence']['max_abs']:.3g}, "
-                  f"bound ±{rt['independence']['bound']:.3g}, {rt['independence']['lags_outside_bound']} "
-                  f"of {2 * rt['max_lag'] + 1} lags outside)",
-                  f"- Continuous vs discrete ({chk['band_hz'][0]:g}-{chk['band_hz'][1]:g} Hz): "
-                  f"max {chk['max_gain_error_db']:.3f} dB, {chk['max_phase_error_deg']:.2f} deg "
-                  f"(limits {chk['gain_limit_db']:g} dB, {chk['phase_limit_deg']:g} deg): "
-                  f"{'pass' if chk['pass'] else 'FAIL'}",
-                  "", f"Continuous: `{format_tf(ch['continuous'])}`", "",
-                  f"- poles: {_roots_md(ch['continuous']['poles'])}",
-                  f"- zeros: {_roots_md(ch['continuous']['zeros'])}",
-                  f"- DC gain: {ch['continuous']['dc_gain']}", ""]
-        sr = ch["slow_roots"]
-        if sr["roots"]:
-            moved = "; ".join(f"{r['kind']} {r['before']['re']:.4g}"
-                              + (f" ± {abs(r['before']['im']):.4g}j" if r["before"]["im"] else "")
-                              for r in sr["roots"])
-            lines += [f"Right-half-plane roots slower than the record resolves (|s| < ln 2 / duration "
-                      f"= {sr['limit_1_per_s']:.3g} 1/s): {moved}. Continuous validation fit as fitted "
-                      f"{sr['fit_validation_continuous_as_fitted']:.2f} %, reflected into the left half "
-                      f"plane {sr['fit_validation_continuous_reflected']:.2f} % (phase change up to "
-                      f"{sr['max_phase_change_deg']:.2f} deg on the check band, gain unchanged); "
-                      f"plants.json holds them **{'as fitted' if sr['applied'] == 'keep' else 'reflected'}** "
-                      "(`slow_roots`).", ""]
-        if ch["conversion"]["notes"]:
-            lines += ["Conversion notes:", ""] + [f"- {n}" for n in ch["conversion"]["notes"]] + [""]
-        ranked = ch["criterion"]["ranked"]
-        lines += ["Best candidates:", "", "| na | nb | nk | criterion | residual variance |",
-                  "|---|---|---|---|---|"]
-        lines += [f"| {c['na']} | {c['nb']} | {c['nk']} | {c['criterion']:.6g} | {c['noise_variance']:.4g} |"
-                  for c in ranked[:5]] + [""]
-        if key == "disturbance_to_output":
-            e = report["paper_eq16"]
-            lines += ["For comparison, the paper's Eq. 16 (Boeing 757, NASA Langley model; its units "
-                      "are not stated):", "", f"`{format_tf(e)}`", "",
-                      f"- poles: {_roots_md(e['poles'])}", f"- zeros: {_roots_md(e['zeros'])}",
-                      f"- DC gain: {e['dc_gain']:.4g}", ""]
-    return "\n".join(lines) + "\n"
-
-
 def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig | None = None, *,
-               figures: bool = True) -> PlantsResult:
+               draw: Callable | None = None) -> PlantsResult:
     """Stage two: identify both plants from a flight folder and write the outputs.
 
     Writes ``plants.json`` (SPEC.md format, plus ``units``, ``orders``, ``fit``,
-    ``source``), ``plants_report.md``, ``plants_report.json``, figures
-    ``plants_validation.png``, ``plants_bode.png``, ``plants_residuals.png`` and
-    ``manifest.json`` into `out_dir`, all or none.
+    ``source``), ``plants_report.md``, ``plants_report.json``, the figures
+    `draw` makes (:func:`hesspipe.viz.plants.draw_plants`: ``plants_validation.png``,
+    ``plants_bode.png``, ``plants_residuals.png``) and ``manifest.json`` into
+    `out_dir`, all or none.
 
     Parameters
     ----------
@@ -597,8 +440,9 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
     config : PlantsConfig, optional
         Decimation, hold-out share, order ranges, slow-root handling
         (default: ``PlantsConfig()``).
-    figures : bool
-        Also draw the validation, Bode and residual figures.
+    draw : callable, optional
+        ``draw(folder, fits, synthetic=bool)`` writes figures into the staging
+        folder `folder` and returns their file names (None: no figures).
 
     Returns
     -------
@@ -654,13 +498,8 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
                      synthetic=synthetic)
         write_json(stage / "plants_report.json", report)
         write_text(stage / "plants_report.md", _markdown(report, synthetic))
-        if figures:
-            from ..viz.plants import plot_bode, plot_residuals, plot_validation
-
-            plot_validation(fits, stage / "plants_validation.png", synthetic=synthetic)
-            plot_bode(fits, stage / "plants_bode.png", synthetic=synthetic, reference=ct.tf(*PAPER_EQ16))
-            plot_residuals(fits, stage / "plants_residuals.png", synthetic=synthetic)
-            names[3:3] = ["plants_validation.png", "plants_bode.png", "plants_residuals.png"]
+        if draw is not None:
+            names[3:3] = list(draw(stage, fits, synthetic=synthetic))
         write_json(stage / "manifest.json", {
             "stage": "plants", "inputs": inputs, "flight_dir": str(flight_dir),
             "config": config.to_dict(), "synthetic": synthetic, "files": names, "versions": versions()})
@@ -671,7 +510,7 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
 # -- the analytic aircraft ------------------------------------------------------------------
 
 @dataclass(frozen=True)
-class AnalyticConfig:
+class AnalyticConfig(Settings):
     """The ``[analytic]`` table.
 
     Attributes
@@ -691,72 +530,23 @@ class AnalyticConfig:
     control: str = "rolling"
     disturbance: str = "full"
 
+    def _checked(self, f: Fields) -> dict:
+        return dict(model=f.string("model"), control=f.string("control", choices=("rolling", "full")),
+                    disturbance=f.string("disturbance", choices=("full", "rolling")))
+
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<analytic defaults>",
                    prefix: str = "analytic") -> "AnalyticConfig":
-        f = Fields(table, source, prefix)
-        d = cls()
-        cfg = cls(model=f.string("model", d.model),
-                  control=f.string("control", d.control, choices=("rolling", "full")),
-                  disturbance=f.string("disturbance", d.disturbance, choices=("full", "rolling")))
-        f.reject_unknown()
-        return cfg
-
-
-def _analytic_report(ap: AnalyticPlants, config: AnalyticConfig) -> dict:
-    ac = ap.aircraft
-    d = dimensional_derivatives(ac)
-    m = modes(ac)
-    eq15 = None
-    if ac.paper_eq15:
-        eq15 = {**describe_tf(ct.tf(*ac.paper_eq15)),
-                "what": "paper Eq. 15 as printed; it does not follow from Table 4 (Eq. 14 with "
-                        "Table 3 gives the rolling approximation reported here)"}
-    return {
-        "stage": "analytic", "synthetic": False, "aircraft": ac.name, "file": ac.path,
-        "units": {"control_to_output": "aileron (rad, positive -> positive roll rate) -> roll rate (rad/s)",
-                  "disturbance_to_output": UNITS["disturbance_to_output"]},
-        "choice": {"control_to_output": config.control, "disturbance_to_output": config.disturbance},
-        "mass_slug": ac.mass_slug,
-        "dimensional_derivatives": d,
-        "modes": {k: {"re": v.real, "im": v.imag} for k, v in m.items()},
-        "models": {"full_control": describe_tf(ap.full_control),
-                   "full_disturbance": describe_tf(ap.full_disturbance),
-                   "rolling_control": describe_tf(ap.rolling_control),
-                   "rolling_disturbance": describe_tf(ap.rolling_disturbance)},
-        "paper_eq15": eq15,
-    }
-
-
-def _analytic_markdown(r: dict) -> str:
-    d = r["dimensional_derivatives"]
-    mo = r["modes"]
-    lines = [f"# Analytic aircraft `{r['aircraft']}` (paper Tables 3-4, Eqs. 11-14)", "",
-             f"From `{r['file']}`. Mass {r['mass_slug']:.1f} slug (Table 4's \"564000 slug\" is the "
-             "weight in lb).", "",
-             f"- q = {d['q']:.4g} lb/ft², Lδa = {d['Lda']:.4g} 1/s², Lp = {d['Lp']:.5g} 1/s, "
-             f"Lβ = {d['Lb']:.4g} 1/s², Nβ = {d['Nb']:.4g} 1/s², Nr = {d['Nr']:.4g} 1/s, "
-             f"Yβ = {d['Yb']:.4g} ft/s²",
-             f"- Roll mode {mo['roll']['re']:.4g} 1/s; Dutch roll {mo['dutch_roll']['re']:.4g} ± "
-             f"{abs(mo['dutch_roll']['im']):.4g}j 1/s; spiral {mo['spiral']['re']:.4g} 1/s", "",
-             "| plant | transfer function | in plants.json |", "|---|---|---|"]
-    chosen = {f"{r['choice']['control_to_output']}_control": "control_to_output",
-              f"{r['choice']['disturbance_to_output']}_disturbance": "disturbance_to_output"}
-    for k, v in r["models"].items():
-        lines.append(f"| {k} | `{format_tf(v)}` | {chosen.get(k, '')} |")
-    lines += ["", f"Units: {r['units']['control_to_output']}; {r['units']['disturbance_to_output']}.", ""]
-    if r["paper_eq15"]:
-        e = r["paper_eq15"]
-        lines += [f"The paper's Eq. 15 prints p/δa = `{format_tf(e)}`; computed from Table 4 with Eq. 14 "
-                  f"it is `{format_tf(r['models']['rolling_control'])}`. **The paper's Eq. 15 does not "
-                  "follow from its Table 4**; it is shown here only for comparison and not used.", ""]
-    return "\n".join(lines) + "\n"
+        """Build from the ``[analytic]`` TOML table; unknown keys are rejected."""
+        return cls._from_fields(Fields(table, source, prefix))
 
 
 def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
-                    config: AnalyticConfig | None = None, *, figures: bool = True) -> Plants:
+                    config: AnalyticConfig | None = None, *, draw: Callable | None = None) -> Plants:
     """Write the analytic aircraft's plants: ``plants.json``, ``plants_report.md``,
-    ``plants_report.json``, ``analytic_bode.png`` and ``manifest.json`` (all or none)."""
+    ``plants_report.json``, the figures of ``draw(folder, analytic_plants) -> names``
+    (:func:`hesspipe.viz.plants.draw_analytic`: ``analytic_bode.png``) and
+    ``manifest.json`` (all or none)."""
     config = config or AnalyticConfig()
     ac = load_analytic(name_or_path)
     ap = analytic_transfer_functions(ac)
@@ -778,11 +568,8 @@ def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
                      synthetic=False)
         write_json(stage / "plants_report.json", report)
         write_text(stage / "plants_report.md", _analytic_markdown(report))
-        if figures:
-            from ..viz.plants import plot_analytic
-
-            plot_analytic(ap, stage / "analytic_bode.png")
-            names.insert(3, "analytic_bode.png")
+        if draw is not None:
+            names[3:3] = list(draw(stage, ap))
         write_json(stage / "manifest.json", {
             "stage": "analytic", "inputs": {str(path): file_hash(path)}, "config": asdict(config),
             "files": names, "versions": versions()})

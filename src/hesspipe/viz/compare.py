@@ -33,3 +33,35 @@ def plot_pilot(pilot, path: str | Path) -> Path:
                               measured_label="synthetic 'measured' control" if pilot.synthetic
                               else "measured control")
     return save_figure(fig, path, synthetic=pilot.synthetic)
+
+
+def plot_df(pilot, path: str | Path) -> Path:
+    """The identified models' describing functions over the pilot's measured one (``pilot.frf``)."""
+    from ..identification.criteria import model_df
+    from ..pilot.hess import model_from_name
+    from .frf import frf_figure
+
+    models = {}
+    for name in ("original", "expanded"):
+        d = getattr(pilot, name)
+        loop = model_from_name(d["model"]).loop(d["parameters"])
+        models[name] = (lambda lp: (lambda s: model_df(lp, s)))(loop)
+    return frf_figure(path, pilot.frf, models)
+
+
+def draw_pilots(folder: str | Path, pilots) -> list[str]:
+    """``<pilot>.png`` (and ``<pilot>_df.png`` when the pilot has a describing function)
+    for each pilot in `folder`; returns their names."""
+    folder = Path(folder)
+    names = []
+    for p in pilots:
+        names.append(plot_pilot(p, folder / f"{p.id}.png").name)
+        if p.frf is not None:
+            names.append(plot_df(p, folder / f"{p.id}_df.png").name)
+    return names
+
+
+def draw_comparison(folder: str | Path, comparison) -> list[str]:
+    """The figures of :func:`hesspipe.pilots.compare.write_comparison` (its ``draw``):
+    :func:`draw_pilots` into ``folder/figures``; returns names relative to `folder`."""
+    return [f"figures/{name}" for name in draw_pilots(Path(folder) / "figures", comparison.pilots)]

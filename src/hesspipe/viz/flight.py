@@ -41,3 +41,14 @@ def plot_record(record, path: str | Path, *, kind: str, title: str = "") -> Path
         fig.suptitle(title)
     fig.tight_layout()
     return save_figure(fig, path)
+
+
+def draw_flight(folder: str | Path, wind, aileron, *, aircraft: str, seed: int, config) -> list[str]:
+    """The figures of :func:`hesspipe.flight.approach.fly` (its ``draw``): ``flight_wind.png``
+    and ``flight_aileron.png`` in `folder`; returns their names."""
+    folder = Path(folder)
+    plot_record(wind, folder / "flight_wind.png", kind="wind", title=f"{aircraft}: side-wind "
+                f"record ({config.wind_excitation.kind} excitation, seed {seed})")
+    plot_record(aileron, folder / "flight_aileron.png", kind="aileron", title=f"{aircraft}: "
+                f"aileron record ({config.aileron_excitation.kind} excitation, seed {seed})")
+    return ["flight_wind.png", "flight_aileron.png"]

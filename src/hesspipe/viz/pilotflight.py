@@ -39,3 +39,11 @@ def plot_pilot_flight(flight, path: str | Path) -> Path:
                     if effects else ""), fontsize=10)
     fig.tight_layout()
     return save_figure(fig, path, synthetic=True)
+
+
+def draw_pilot_flight(folder: str | Path, flight) -> list[str]:
+    """The figure of :func:`hesspipe.flight.closed_loop.fly_pilot` (its ``draw``):
+    ``<run id>.png`` in `folder`; returns its name."""
+    name = f"{flight.run.id}.png"
+    plot_pilot_flight(flight, Path(folder) / name)
+    return [name]

@@ -104,3 +104,23 @@ def plot_analytic(ap, path: str | Path) -> Path:
             ax.grid(True, which="both", lw=0.3)
     fig.tight_layout()
     return save_figure(fig, path)
+
+
+def draw_plants(folder: str | Path, fits: dict, *, synthetic: bool = False) -> list[str]:
+    """The figures of :func:`hesspipe.plants.fit.fit_plants` (its ``draw``) in `folder`:
+    validation, Bode (with the paper's Eq. 16) and residuals; returns their names."""
+    import control as ct
+
+    from ..plants.report import PAPER_EQ16
+
+    folder = Path(folder)
+    plot_validation(fits, folder / "plants_validation.png", synthetic=synthetic)
+    plot_bode(fits, folder / "plants_bode.png", synthetic=synthetic, reference=ct.tf(*PAPER_EQ16))
+    plot_residuals(fits, folder / "plants_residuals.png", synthetic=synthetic)
+    return ["plants_validation.png", "plants_bode.png", "plants_residuals.png"]
+
+
+def draw_analytic(folder: str | Path, ap) -> list[str]:
+    """The figure of :func:`hesspipe.plants.fit.analytic_plants` (its ``draw``): ``analytic_bode.png``."""
+    plot_analytic(ap, Path(folder) / "analytic_bode.png")
+    return ["analytic_bode.png"]

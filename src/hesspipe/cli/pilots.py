@@ -1,14 +1,16 @@
-"""``hesspipe compare-pilots``: original vs expanded Hess model on a folder of pilot runs."""
+"""``hesspipe pilots`` (alias ``compare-pilots``): original vs expanded Hess model on a folder of pilot runs."""
 
 from __future__ import annotations
 
 import sys
 
-from ..core.choices import CRITERIA, DEFAULT_CRITERION
+from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 
 
 def register(sub) -> None:
-    p = sub.add_parser("compare-pilots", help="identify original / expanded-fixed-Km / expanded models per pilot",
+    # The stage, its package and its command share one name; compare-pilots is kept for old scripts.
+    p = sub.add_parser("pilots", aliases=["compare-pilots"],
+                       help="identify original / expanded-fixed-Km / expanded models per pilot",
                        description="For each run CSV in DIR (the file stem is the pilot id) identify the "
                                    "original Hess model, the expanded model with Km fixed, and the expanded "
                                    "model with Km identified; print a table and the mean improvement "
@@ -20,13 +22,15 @@ def register(sub) -> None:
                    help="Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 (needs hesspipe[dask])")
     p.add_argument("--json", metavar="OUT.json", help="write the comparison as JSON")
     p.add_argument("--figures", metavar="DIR", help="write a PSD figure per pilot into DIR")
-    from ._options import add_run_options, add_seed, add_terms
+    from ._options import add_run_options, add_seed, add_terms, field_terms
 
     add_run_options(p)
     # The library names its settings (workers, scheduler); this command spells them as flags.
-    add_terms(p, {r"(^|: )workers: ": r"\1--workers: ", r"(^|: )scheduler ": r"\1--scheduler "})
+    add_terms(p, {r"(^|: )workers: ": r"\1--workers: ", r"(^|: )scheduler ": r"\1--scheduler ",
+                  **field_terms("CompareSettings", {k: "--" + k for k in ("seed", "passes", "restarts", "optimizer",
+                                                                        "start", "criterion")})})
     add_seed(p, 0, "base seed")
-    p.add_argument("--optimizer", choices=("apid", "scipy", "differential_evolution"), default="apid",
+    p.add_argument("--optimizer", choices=OPTIMIZERS, default="apid",
                    help="identification optimizer (default: %(default)s, the paper's)")
     p.add_argument("--passes", type=int, default=10, help="APID pass budget (default: %(default)s)")
     p.add_argument("--restarts", type=int, default=2, help="APID climbs per identification, best kept "
@@ -44,11 +48,11 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
-    from ..core.errors import HesspipeError
     from ..core.formats import read_plants
     from ..core.io import check_output_dir, check_output_file, staged_output, write_json
     from ..pilots.batch import check_scheduler_address
     from ..pilots.compare import compare_pilots
+    from ..pilots.settings import CompareSettings
     from ._options import cli_message, run_options
 
     # Every output and the scheduler address are checked before any work.
@@ -58,29 +62,25 @@ def _run(args) -> int:
         check_output_dir(args.figures, "figures")
     if args.scheduler is not None:
         check_scheduler_address(args.scheduler, "--scheduler")
-    if args.workers is not None and args.workers < 1:
-        raise HesspipeError(f"--workers: expected an integer >= 1, got {args.workers}")
-    if args.passes < 1:
-        raise HesspipeError(f"--passes: expected an integer >= 1, got {args.passes}")
-    if args.restarts < 1:
-        raise HesspipeError(f"--restarts: expected an integer >= 1, got {args.restarts}")
+    # The library checks the settings (CompareSettings) and workers (run_batch); cli_message
+    # names the flags. Both are checked before any run is read.
+    settings = CompareSettings(seed=args.seed, optimizer=args.optimizer, passes=args.passes, start=args.start,
+                               restarts=args.restarts, benchmark=args.benchmark, criterion=args.criterion)
+    if args.workers is not None:
+        from ..pilots.batch import check_workers
+
+        check_workers(args.workers)
     plants = read_plants(args.plants)
-    result = compare_pilots(args.dir, plants, workers=args.workers, scheduler=args.scheduler,
-                            seed=args.seed, optimizer=args.optimizer, passes=args.passes,
-                            start=args.start, restarts=args.restarts, benchmark=args.benchmark,
-                            criterion=args.criterion, **run_options(args))
+    result = compare_pilots(args.dir, plants, settings, workers=args.workers, scheduler=args.scheduler,
+                            **run_options(args))
     print(result.table())
     if args.json:
         write_json(args.json, result.to_dict())
     if args.figures:
-        from ..pilots.compare import _df_figure
-        from ..viz.compare import plot_pilot
+        from ..viz.compare import draw_pilots
 
         with staged_output(args.figures, kind="figures") as stage:
-            for p in result.pilots:
-                plot_pilot(p, stage / f"{p.id}.png")
-                if p.frf is not None:
-                    _df_figure(p, stage / f"{p.id}_df.png")
+            draw_pilots(stage, result.pilots)
     for f in result.failures:
         print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
     if result.failures:
