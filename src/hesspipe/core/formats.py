@@ -30,6 +30,7 @@ import pandas as pd
 
 from .errors import HesspipeError
 from .io import write_json, write_text
+from .paper import WELCH_SEGMENT
 
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
 OPTIONAL_COLUMNS = ("reference",)
@@ -197,7 +198,7 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
                comments=comments, source=str(path), interval=dt)
 
 
-def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = 1024,
+def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = WELCH_SEGMENT,
                    max_dt_s: float = 0.1) -> int:
     """Samples of a record of `duration_s` at `dt_s`, checked before anything is allocated.
 
@@ -208,7 +209,8 @@ def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_sample
     names : (str, str)
         How the caller calls the two values (for messages).
     min_samples : int
-        Fewest samples (one spectral segment by default).
+        Fewest samples (one spectral segment, :data:`hesspipe.core.paper.WELCH_SEGMENT`,
+        by default).
     max_dt_s : float
         Longest sample interval, s.
 
@@ -428,10 +430,41 @@ class Plants:
         return self.disturbance_to_output
 
 
-def tf_coefficients(sys: ct.TransferFunction) -> dict:
-    """Return ``{"num": [...], "den": [...]}`` of a SISO continuous transfer function."""
+def siso_coefficients(sys) -> tuple[np.ndarray, np.ndarray]:
+    """Numerator and denominator of a SISO transfer function as 1-D float arrays.
+
+    The one place that reaches into python-control's nested ``num[0][0]``.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        Single-input single-output, continuous or discrete.
+
+    Returns
+    -------
+    num, den : ndarray
+        Coefficients in descending powers of s (or z), at least one each, as
+        stored (not normalised; leading zeros kept).
+    """
     num = np.atleast_1d(np.squeeze(sys.num[0][0])).astype(float)
     den = np.atleast_1d(np.squeeze(sys.den[0][0])).astype(float)
+    return num, den
+
+
+def tf_coefficients(sys: ct.TransferFunction) -> dict:
+    """Return ``{"num": [...], "den": [...]}`` of a SISO continuous transfer function.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        Single-input single-output.
+
+    Returns
+    -------
+    dict
+        Lists of floats, descending powers of s (see :func:`siso_coefficients`).
+    """
+    num, den = siso_coefficients(sys)
     return {"num": num.tolist(), "den": den.tolist()}
 
 

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.paper import EQ16 as _PAPER_EQ16
 from .lti import StateSpace, freqresp, series, ss_from_tf, stack_inputs, tf
 
 # Paper Table 4 (Roskam's wide-body transport, approach), SPEC "analytic aircraft".
@@ -31,7 +32,7 @@ TABLE4 = dict(U=227.0, rho=0.002389, S=5500.0, b=196.0, weight_lb=564000.0, g=32
               Cn_beta=0.184, Cn_p=-0.222, Cn_r=-0.36, Cn_da=0.0083)
 
 # The paper's Eq. 16: wind (ft/s) -> roll rate (rad/s) ARX model of a Boeing 757.
-EQ16 = ([-0.2554, 14.4, -272.6, 25.72], [1.0, 84.37, 452.2, 1510.0, 628.8])
+EQ16 = (list(_PAPER_EQ16[0]), list(_PAPER_EQ16[1]))  # as lists, as the generator builds them
 
 # SPEC "Expanded model": washout and motion platform of the paper's simulator.
 WASHOUT = ([1.0, 0.0, 0.0], [1.0, 2 * 1.0 * 1.02, 1.02 ** 2])

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from ..core.errors import HesspipeError
+from ..core.formats import siso_coefficients
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover
 from ..pilot.hess import PilotModel, model_from_name
@@ -59,7 +60,7 @@ def _benchmark_key(run, plants, band, psd_method) -> str:
     for arr in (run.control, run.disturbance, run.reference, run.time[:2]):
         h.update(np.ascontiguousarray(arr, dtype=float).tobytes())
     for sys in (plants.control_to_output, plants.disturbance_to_output):
-        h.update(repr((np.asarray(sys.num[0][0]).tolist(), np.asarray(sys.den[0][0]).tolist())).encode())
+        h.update(repr(tuple(c.tolist() for c in siso_coefficients(sys))).encode())
     h.update(repr((band, psd_method)).encode())
     return h.hexdigest()
 

@@ -17,7 +17,7 @@ from ..pilot.crossover import Crossover, gain_scale
 from ..pilot.hess import LOOP_GAINS, STRUCTURAL, PilotModel, model_from_name
 from ..pilot.simulation import UNSTABLE_FITNESS, Simulator, unstable_fitness
 from .apid import ClimbResult, Field
-from .spectra import band_mask, psd
+from .spectra import band_mask, psd, rms_difference
 
 STABLE_CAP = UNSTABLE_FITNESS / 10
 CORE_FREE = ("Ke", "K1", "K2")
@@ -79,6 +79,23 @@ class SpectralObjective:
             return None
         return psd(delta, self.fs, method=self.psd_method)[1]
 
+    def psd_fitness(self, simulated_psd) -> float:
+        """Eq. 10 fitness of a simulated control PSD against the measured one.
+
+        Parameters
+        ----------
+        simulated_psd : array
+            Control PSD on :attr:`freq_hz` (all bins), control units^2/Hz, as
+            :meth:`loop_psd` returns it.
+
+        Returns
+        -------
+        float
+            RMS difference over the band's bins, control^2/Hz
+            (:func:`hesspipe.identification.spectra.rms_difference`).
+        """
+        return rms_difference(np.asarray(simulated_psd)[self.mask], self.measured[self.mask])
+
     def unstable_fitness(self, loop) -> float:
         """Graded worst fitness: >= UNSTABLE_FITNESS, growing with the loop's growth rate
         beyond the record's limit (:func:`hesspipe.pilot.simulation.growth_limit`)."""
@@ -100,8 +117,7 @@ class SpectralObjective:
         sim = self.loop_psd(loop, check_stability=False)
         if sim is None:
             return self.unstable_fitness(loop)
-        d = sim[self.mask] - self.measured[self.mask]
-        value = float(np.sqrt(np.mean(d * d)))   # spectra.fitness with the mask kept
+        value = self.psd_fitness(sim)
         if not np.isfinite(value):
             return self.unstable_fitness(loop)
         if threshold is not None and value < threshold and not self.sim.stable(loop):

@@ -27,6 +27,7 @@ from typing import Iterable
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.formats import siso_coefficients
 
 
 def _poly(coeffs) -> tuple[float, ...]:
@@ -197,8 +198,7 @@ def pade(tau: float, order: int) -> tuple[np.ndarray, np.ndarray]:
 
 def from_tf(sys) -> Block:
     """Block from a SISO python-control TransferFunction (continuous time)."""
-    num = np.atleast_1d(np.squeeze(sys.num[0][0])).astype(float)
-    den = np.atleast_1d(np.squeeze(sys.den[0][0])).astype(float)
+    num, den = siso_coefficients(sys)
     return tf(num, den)
 
 
@@ -243,14 +243,87 @@ class Loop:
     def pilot_open_loop(self, s, yc, cache=None) -> np.ndarray:
         """Open loop broken at the displayed error, ``L = Y_pilot Yc``, at `s`.
 
-        `yc` is the control plant's response at `s` (without :attr:`plant`).
+        ``L = NM visual Yc' / (1 + NM PF + NM vestibular Yc')`` with
+        ``Yc' = Yc plant`` (the inner loops closed, see :meth:`return_difference`).
+
+        Parameters
+        ----------
+        s : array of complex
+            Laplace variable, 1/s (``1j * omega`` with omega in rad/s).
+        yc : array of complex
+            The control plant's response at `s` (without :attr:`plant`),
+            output units per control unit.
+        cache : dict, optional
+            Shape cache tied to `s` (see :meth:`Block.response`).
+
+        Returns
+        -------
+        ndarray of complex
+            L at `s`, dimensionless; the loop is negative feedback (``1 + L``).
         """
         nm = self.neuromuscular.response(s, cache)
-        pf = self.proprioceptive.response(s, cache)
         v = self.visual.response(s, cache)
-        m = self.vestibular.response(s, cache)
         ycp = yc * self.plant.response(s, cache)
-        return nm * v * ycp / (1.0 + nm * pf + nm * m * ycp)
+        return nm * v * ycp / self._return_difference(s, ycp, cache, nm, visual=False)
+
+    def return_difference(self, s, yc, cache=None, *, visual: bool = True) -> np.ndarray:
+        """The loop's denominator ``1 + NM PF + NM (visual + vestibular) Yc plant`` at `s`.
+
+        The one frequency-response form of the closed loop's denominator: the
+        control is ``delta = (NM visual R - NM (visual + vestibular) Yd W + N n) / D``.
+        :meth:`characteristic` is its numerator polynomial and
+        :meth:`return_difference_products` its products (for cached evaluation).
+
+        Parameters
+        ----------
+        s : array of complex
+            Laplace variable, 1/s (``1j * omega`` with omega in rad/s).
+        yc : array of complex
+            The control plant's response at `s` (without :attr:`plant`),
+            output units per control unit.
+        cache : dict, optional
+            Shape cache tied to `s` (see :meth:`Block.response`).
+        visual : bool
+            False: leave the visual path out, ``1 + NM PF + NM vestibular Yc plant``
+            (the denominator of :meth:`pilot_open_loop`, the loop broken at the
+            displayed error).
+
+        Returns
+        -------
+        ndarray of complex
+            D at `s`, dimensionless; its zeros are the closed loop's modes.
+        """
+        ycp = yc * self.plant.response(s, cache)
+        return self._return_difference(s, ycp, cache, self.neuromuscular.response(s, cache), visual)
+
+    def _return_difference(self, s, ycp, cache, nm, visual: bool) -> np.ndarray:
+        pf = self.proprioceptive.response(s, cache)
+        m = self.vestibular.response(s, cache)
+        if visual:
+            m = self.visual.response(s, cache) + m
+        return 1.0 + nm * pf + nm * m * ycp
+
+    def return_difference_products(self, yc: "Block") -> list[tuple["Block", ...]]:
+        """The products that :meth:`return_difference` sums to 1, as blocks.
+
+        ``NM visual Yc'``, ``NM vestibular Yc'`` (left out when the vestibular
+        block is zero) and ``NM PF`` (left out when PF is zero), in that order;
+        :class:`hesspipe.pilot.simulation.Simulator` evaluates them with shapes
+        cached across gain changes.
+
+        Parameters
+        ----------
+        yc : Block
+            The control plant including :attr:`plant` (``Yc' = Yc plant``).
+
+        Returns
+        -------
+        list of tuple of Block
+            Each tuple's blocks multiply; the denominator is ``1 + sum``.
+        """
+        nm, pf = self.neuromuscular, self.proprioceptive
+        paths = [self.visual] if self.vestibular.is_zero else [self.visual, self.vestibular]
+        return [(nm, p, yc) for p in paths] + ([] if pf.is_zero else [(nm, pf)])
 
     def characteristic(self, yc: Block, pade_order: int = 8) -> np.ndarray:
         """Characteristic polynomial of the closed loop (delays as Padé approximants).

@@ -275,10 +275,10 @@ class Simulator:
         self._trim_cache()
         loop = self.prepare(loop)
         yc = self.yc_block if loop.plant.terms == ONE.terms else self.yc_block * loop.plant
-        nm, pf, vis, ves = loop.neuromuscular, loop.proprioceptive, loop.visual, loop.vestibular
+        nm, vis, ves = loop.neuromuscular, loop.visual, loop.vestibular
         paths = [vis] if ves.is_zero else [vis, ves]
         local: dict = {}
-        den = self._sum([(nm, p, yc) for p in paths] + ([] if pf.is_zero else [(nm, pf)]), local)
+        den = self._sum(loop.return_difference_products(yc), local)
         den += 1.0
         num = self._sum([(nm, p, "ydw") for p in paths], local)
         np.negative(num, out=num)

@@ -35,6 +35,7 @@ import numpy as np
 
 from ..core.config import Fields, aircraft_file, data_dir, load_toml
 from ..core.errors import HesspipeError
+from ..core.formats import siso_coefficients
 
 _DERIVATIVES = ("Cy_beta", "Cy_p", "Cy_r", "Cy_da", "Cl_beta", "Cl_p", "Cl_r", "Cl_da",
                 "Cn_beta", "Cn_p", "Cn_r", "Cn_Tbeta", "Cn_da")
@@ -191,8 +192,7 @@ def modes(ac: AnalyticAircraft) -> dict[str, complex]:
 
 def _siso(sys: ct.StateSpace, inp: int, out: int) -> ct.TransferFunction:
     tf = ct.ss2tf(sys[out, inp])
-    num = np.atleast_1d(np.squeeze(tf.num[0][0]))
-    den = np.atleast_1d(np.squeeze(tf.den[0][0]))
+    num, den = siso_coefficients(tf)
     # ss2tf leaves round-off (~1e-16) where the structure has exact zeros, e.g. the zero at
     # s = 0 of p/da (p = s phi) and the double zero of the wind path (a steady wind only
     # drifts the aircraft): make them exact so the file shows the structure.

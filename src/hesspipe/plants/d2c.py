@@ -37,6 +37,7 @@ import control as ct
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.formats import siso_coefficients
 
 
 def _poly_power(p: np.ndarray, k: int) -> np.ndarray:
@@ -70,8 +71,7 @@ def tustin_d2c(sysd: ct.TransferFunction, *, nyquist_tol: float = 1e-6,
     dt = sysd.dt
     if dt is None or dt is True or not dt or dt <= 0:
         raise HesspipeError(f"{label}: expected a discrete transfer function with a sample time, got dt={dt!r}")
-    num = np.atleast_1d(np.squeeze(sysd.num[0][0])).astype(float)
-    den = np.atleast_1d(np.squeeze(sysd.den[0][0])).astype(float)
+    num, den = siso_coefficients(sysd)
     n = max(len(num), len(den)) - 1
     num = np.r_[np.zeros(n + 1 - len(num)), num]
     den = np.r_[np.zeros(n + 1 - len(den)), den]

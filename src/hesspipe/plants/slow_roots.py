@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from ..core.formats import siso_coefficients
+
 
 @dataclass(frozen=True)
 class SlowRoots:
@@ -82,8 +84,7 @@ def reflect_slow_roots(sys: ct.TransferFunction, limit: float) -> tuple[ct.Trans
     ``2 atan(Re r / w)`` per real root. Returns the new continuous transfer
     function and one entry per reflected root (see :class:`SlowRoots`).
     """
-    num = np.squeeze(sys.num[0][0]).astype(float)
-    den = np.squeeze(sys.den[0][0]).astype(float)
+    num, den = siso_coefficients(sys)
     num, zeros = _reflect(num, limit, "zero")
     den, poles = _reflect(den, limit, "pole")
     if not zeros and not poles:
