@@ -342,6 +342,23 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     two written times explains (SPEC.md "Time"). For non-uniform times the
     median interval is returned (the grid of a resampling).
 
+    Parameters
+    ----------
+    path : str or Path
+        The file `t` comes from (for messages).
+    t : array
+        Sample times, s.
+    column : str
+        Name of the time column (for messages).
+    rtol : float
+        Relative tolerance of a uniform interval.
+
+    Returns
+    -------
+    dt : float
+        Sample interval, s (> 0).
+    uniform : bool
+
     Raises
     ------
     HesspipeError
@@ -423,10 +440,12 @@ class Plants:
 
     @property
     def Yc(self) -> ct.TransferFunction:
+        """``Yc``: the control-to-output transfer function (the paper's name)."""
         return self.control_to_output
 
     @property
     def Yd(self) -> ct.TransferFunction:
+        """``Yd``: the disturbance-to-output transfer function (the paper's name)."""
         return self.disturbance_to_output
 
 
