@@ -66,7 +66,23 @@ def _benchmark_key(run, plants, band, psd_method) -> str:
 
 
 def benchmark(run, plants, *, band=(0.0, 5.0), psd_method: str = "paper"):
-    """McRuer precision-model fit to `run` (cached per run, plants, band, method)."""
+    """McRuer precision-model fit to `run` (cached per run, plants, band, method).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run.
+    plants : hesspipe.core.formats.Plants
+    band : (float, float)
+        Fitness band, Hz.
+    psd_method : {"paper", "scipy"}
+        PSD estimate.
+
+    Returns
+    -------
+    PrecisionFit
+        Parameters and Eq. 10 fitness (control^2/Hz) of the benchmark.
+    """
     from ..pilot.mcruer import fit_precision
 
     key = _benchmark_key(run, plants, band, psd_method)
@@ -101,6 +117,11 @@ def _scipy_search(objective, fields, x0, *, optimizer, seed, passes):
 
 def check_control(run) -> None:
     """Refuse a run whose control never moves: it holds no control power to match.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run.
 
     Raises
     ------
@@ -268,6 +289,19 @@ def identifiability(objective: SpectralObjective, values: Mapping[str, float],
     times the largest is a direction the data cannot see; it is confirmed by
     a profile scan (fitness at +-10 % along it) and described, e.g. "K1*K2
     only" for a (+1, -1) direction in log coordinates.
+
+    Parameters
+    ----------
+    objective : SpectralObjective
+        The fit's objective.
+    values : mapping
+        The fitted free parameters, name → value.
+    fields : sequence of Field
+        Their bit fields (spans scale parameters at zero).
+    rel_step : float
+        Relative finite-difference step.
+    tol : float
+        Relative singular value below which a direction is unidentifiable.
 
     Returns
     -------

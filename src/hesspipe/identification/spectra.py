@@ -63,7 +63,13 @@ class PaperWelch:
                                 f"{self.nperseg}, noverlap={self.noverlap}")
 
     def segments(self, n: int) -> int:
-        """Number of segments covering `n` samples after padding (Eq. 9)."""
+        """Number of segments covering `n` samples after padding (Eq. 9).
+
+        Parameters
+        ----------
+        n : int
+            Samples of the record.
+        """
         if n < self.nperseg:
             raise HesspipeError(f"record of {n} samples is shorter than one spectral segment "
                                 f"({self.nperseg} samples); expected at least {self.nperseg}")
@@ -71,10 +77,18 @@ class PaperWelch:
         return 1 + -(-(n - self.nperseg) // step)
 
     def frequencies(self, fs: float) -> np.ndarray:
+        """Frequencies of the estimate's bins, Hz (0 to fs/2, ``nperseg // 2 + 1`` of them).
+
+        Parameters
+        ----------
+        fs : float
+            Sample rate, Hz.
+        """
         return _rfftfreq(self.nperseg, float(fs)).copy()
 
     @property
     def window(self) -> np.ndarray:
+        """The Hamming window of one segment (read-only)."""
         return _hamming(self.nperseg)
 
     def __call__(self, x, fs: float, trim: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -125,7 +139,15 @@ def psd(x, fs: float, *, method: str = "paper", trim: float | None = None,
 
 
 def band_mask(freq_hz, band=(0.0, 5.0)) -> np.ndarray:
-    """Boolean mask of the bins with ``band[0] <= f <= band[1]``."""
+    """Boolean mask of the bins with ``band[0] <= f <= band[1]``.
+
+    Parameters
+    ----------
+    freq_hz : array
+        Bin frequencies, Hz, ascending up to the Nyquist frequency.
+    band : (float, float)
+        Lowest and highest frequency, Hz (0 <= low < high <= Nyquist).
+    """
     lo, hi = float(band[0]), float(band[1])
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
         raise HesspipeError(f"band: expected 0 <= low < high in Hz, got {band!r}")
