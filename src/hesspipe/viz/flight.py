@@ -16,6 +16,17 @@ def plot_record(record, path: str | Path, *, kind: str, title: str = "") -> Path
     Panels: the record's input (`kind` ``"wind"``: lateral wind, ft/s;
     ``"aileron"``: aileron command), roll and yaw rate (rad/s), bank and
     sideslip (deg), calibrated airspeed (kt) and height AGL (ft).
+
+    Parameters
+    ----------
+    record : mapping
+        Columns by name (time in s).
+    path : str or Path
+        The image file.
+    kind : {"wind", "aileron"}
+        Which input the record was flown with.
+    title : str
+        Figure title.
     """
     column, label = _INPUTS[kind]
     t = record["time"]

@@ -14,6 +14,12 @@ def plot_pilot_flight(flight, path: str | Path) -> Path:
     aileron command and the command JSBSim got after any hidden actuator
     (normalised), bank (deg), airspeed (kt) and height above the record
     terrain (ft).
+
+    Parameters
+    ----------
+    flight : hesspipe.flight.closed_loop.PilotFlight
+    path : str or Path
+        The image file.
     """
     rec, tr = flight.record, flight.truth
     t = rec["time"]

@@ -11,7 +11,17 @@ from . import save_figure, subplots
 
 
 def plot_validation(fits: dict, path: str | Path, *, synthetic: bool = False) -> Path:
-    """Measured vs simulated roll rate for each channel; validation tail shaded."""
+    """Measured vs simulated roll rate for each channel; validation tail shaded.
+
+    Parameters
+    ----------
+    fits : dict
+        :class:`hesspipe.plants.fit.ChannelFit` by channel key.
+    path : str or Path
+        The image file.
+    synthetic : bool
+        Stamp "SYNTHETIC DATA".
+    """
     fig, axes = subplots(len(fits), 1, figsize=(9, 3.2 * len(fits)), squeeze=False)
     for ax, fit in zip(axes[:, 0], fits.values()):
         t = fit.time
@@ -34,6 +44,17 @@ def plot_bode(fits: dict, path: str | Path, *, synthetic: bool = False, referenc
 
     `reference` (a continuous tf, e.g. the paper's Eq. 16) is drawn on the
     wind channel for comparison.
+
+    Parameters
+    ----------
+    fits : dict
+        :class:`hesspipe.plants.fit.ChannelFit` by channel key.
+    path : str or Path
+        The image file.
+    synthetic : bool
+        Stamp "SYNTHETIC DATA".
+    reference : control.TransferFunction, optional
+        A continuous tf to draw on the wind channel.
     """
     fig, axes = subplots(2, len(fits), figsize=(5.5 * len(fits), 6), squeeze=False, sharex="col")
     for j, (key, fit) in enumerate(fits.items()):
@@ -65,7 +86,17 @@ def plot_bode(fits: dict, path: str | Path, *, synthetic: bool = False, referenc
 
 
 def plot_residuals(fits: dict, path: str | Path, *, synthetic: bool = False) -> Path:
-    """Residual autocorrelation and residual/input cross-correlation with bounds."""
+    """Residual autocorrelation and residual/input cross-correlation with bounds.
+
+    Parameters
+    ----------
+    fits : dict
+        :class:`hesspipe.plants.fit.ChannelFit` by channel key.
+    path : str or Path
+        The image file.
+    synthetic : bool
+        Stamp "SYNTHETIC DATA".
+    """
     fig, axes = subplots(len(fits), 2, figsize=(10, 3 * len(fits)), squeeze=False)
     for i, fit in enumerate(fits.values()):
         r = fit.residuals
@@ -85,7 +116,14 @@ def plot_residuals(fits: dict, path: str | Path, *, synthetic: bool = False) -> 
 
 
 def plot_analytic(ap, path: str | Path) -> Path:
-    """Bode of the analytic aircraft: full model and rolling approximation, both inputs."""
+    """Bode of the analytic aircraft: full model and rolling approximation, both inputs.
+
+    Parameters
+    ----------
+    ap : hesspipe.plants.analytic.AnalyticPlants
+    path : str or Path
+        The image file.
+    """
     f = np.logspace(-3, 1, 500)
     fig, axes = subplots(2, 2, figsize=(11, 6), sharex=True)
     pairs = (("aileron (rad) -> roll rate", ap.full_control, ap.rolling_control),
