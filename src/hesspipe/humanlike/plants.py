@@ -83,7 +83,13 @@ class Plant:
     info: dict = field(default_factory=dict)
 
     def yc(self, w) -> np.ndarray:
-        """True control -> output frequency response at `w` (rad/s)."""
+        """True control -> output frequency response at `w` (rad/s).
+
+        Parameters
+        ----------
+        w : array
+            Angular frequencies, rad/s.
+        """
         return self.true.freqresp(w, 0)
 
     def motion(self) -> tuple:
@@ -99,6 +105,11 @@ def dimensional(t: dict = TABLE4) -> dict:
     """Dimensional lateral-directional derivatives (paper Table 3).
 
     Returns Y_* in ft/s^2 per rad, L_*, N_* in 1/s^2 (per rad) or 1/s (per rad/s).
+
+    Parameters
+    ----------
+    t : dict
+        Table 4 values (:data:`TABLE4`).
     """
     q = 0.5 * t["rho"] * t["U"] ** 2
     m = t["weight_lb"] / t["g"]
@@ -125,6 +136,13 @@ def lateral_model(output: str = "rate", t: dict = TABLE4) -> StateSpace:
     Inputs: aileron (rad) and side wind v_w (ft/s, positive towards the right
     wing, so the aerodynamic sideslip is ``beta - v_w/U``). Output roll rate p
     (rad/s) or roll angle phi (rad).
+
+    Parameters
+    ----------
+    output : {"rate", "angle"}
+        Roll rate (rad/s) or roll angle (rad).
+    t : dict
+        Table 4 values.
     """
     d = dimensional(t)
     U = d["U"]
@@ -148,7 +166,20 @@ def lateral_model(output: str = "rate", t: dict = TABLE4) -> StateSpace:
 
 
 def rolling_approximation(output: str = "rate", t: dict = TABLE4) -> tuple[tuple, tuple]:
-    """Rolling approximation (paper Eq. 14): aileron and side-wind paths to p or phi."""
+    """Rolling approximation (paper Eq. 14): aileron and side-wind paths to p or phi.
+
+    Parameters
+    ----------
+    output : {"rate", "angle"}
+        Roll rate (rad/s) or roll angle (rad).
+    t : dict
+        Table 4 values.
+
+    Returns
+    -------
+    yc, yd : (num, den)
+        Aileron (rad) and side wind (ft/s) to the output.
+    """
     d = dimensional(t)
     den = [1.0, -d["L_p"]]
     yc = ([d["L_da"]], den)
@@ -257,7 +288,14 @@ def _from_dict(obj, where: str, disturbance, dutch_roll) -> Plant:
 
 
 def nominal_check(plant: Plant, w) -> float:
-    """Largest relative difference between the true and nominal control paths at `w`."""
+    """Largest relative difference between the true and nominal control paths at `w`.
+
+    Parameters
+    ----------
+    plant : Plant
+    w : array
+        Angular frequencies, rad/s.
+    """
     true = plant.yc(w)
     nom = freqresp(*plant.nominal_yc, w)
     return float(np.max(np.abs(true - nom) / np.abs(nom)))
