@@ -142,3 +142,10 @@ def _problems_at(path: Path) -> list[str]:
         return [p.split(": ", 1)[1] for p in _problems(path)]
     finally:
         PACKAGE = saved
+
+
+def test_fitness_states_its_units():
+    from hesspipe.identification import spectra
+
+    for fn in (spectra.fitness, spectra.rms_difference):
+        assert "control^2/Hz" in fn.__doc__, fn.__name__
