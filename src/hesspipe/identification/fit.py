@@ -29,6 +29,7 @@ from scipy.optimize import differential_evolution
 
 from ..core.errors import HesspipeError
 from ..core.formats import siso_coefficients
+from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover
 from ..pilot.hess import PilotModel, model_from_name
@@ -40,7 +41,6 @@ from .problem import (
     SpectralObjective,
     _resolve,
 )
-from .spectra import PaperWelch
 
 OPTIMIZERS = ("apid", "scipy", "differential_evolution")
 
@@ -216,7 +216,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     if optimizer not in OPTIMIZERS:
         raise HesspipeError(f"optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
     where = run.source or run.id
-    nper = PaperWelch().nperseg
+    nper = WELCH_SEGMENT
     if len(run) < nper:
         raise HesspipeError(f"{where}: {len(run)} samples is shorter than one spectral segment "
                             f"({nper} samples); expected a longer record")
