@@ -37,6 +37,10 @@ def test_return_difference_forms_agree(loop):
     inner = loop.return_difference(S, yc, visual=False)
     # Closing the visual loop around the open loop L gives the full denominator.
     assert np.allclose((1.0 + loop.pilot_open_loop(S, yc)) * inner, full, rtol=1e-12)
+    # Opened at the plant: the pilot's own 1 + NM PF.
+    nm, pf = loop.neuromuscular.response(S), loop.proprioceptive.response(S)
+    assert np.allclose(loop.return_difference(S, None), 1.0 + nm * pf, rtol=1e-12)
+    assert not np.allclose(loop.return_difference(S, None), full, rtol=1e-3)
     # The Simulator's products sum to the same denominator.
     ycp = yc_block if loop.plant.terms == ONE.terms else yc_block * loop.plant
     total = 1.0 + sum(np.prod([b.response(S) for b in prod], axis=0)

@@ -132,11 +132,10 @@ def model_df(loop, s: np.ndarray) -> np.ndarray:
         Control per unit displayed error (``u = H e``, e = r - y).
     """
     nm = loop.neuromuscular.response(s)
-    pf = loop.proprioceptive.response(s)
     v = loop.visual.response(s)
     if not loop.vestibular.is_zero:
         v = v + loop.vestibular.response(s)
-    return nm * v / (1.0 + nm * pf)
+    return nm * v / loop.return_difference(s, None)
 
 
 class _Base:

@@ -351,9 +351,11 @@ class Loop:
         ----------
         s : array of complex
             Laplace variable, 1/s (``1j * omega`` with omega in rad/s).
-        yc : array of complex
+        yc : array of complex or None
             The control plant's response at `s` (without :attr:`plant`),
-            output units per control unit.
+            output units per control unit. None: the loop opened at the plant,
+            the pilot's own ``1 + NM PF`` (``NM / (1 + NM PF)`` is the pilot's
+            command-to-control response).
         cache : dict, optional
             Shape cache tied to `s` (see :meth:`Block.response`).
         visual : bool
@@ -366,8 +368,11 @@ class Loop:
         ndarray of complex
             D at `s`, dimensionless; its zeros are the closed loop's modes.
         """
+        nm = self.neuromuscular.response(s, cache)
+        if yc is None:
+            return 1.0 + nm * self.proprioceptive.response(s, cache)
         ycp = yc * self.plant.response(s, cache)
-        return self._return_difference(s, ycp, cache, self.neuromuscular.response(s, cache), visual)
+        return self._return_difference(s, ycp, cache, nm, visual)
 
     def _return_difference(self, s, ycp, cache, nm, visual: bool) -> np.ndarray:
         pf = self.proprioceptive.response(s, cache)

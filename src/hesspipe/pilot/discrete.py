@@ -280,8 +280,8 @@ def continuous_paths(loop: Loop, omega) -> dict[str, np.ndarray]:
         negative feedback), ``"noise"`` (w to delta), complex arrays.
     """
     s = 1j * np.asarray(omega, dtype=float)
-    nm, pf = loop.neuromuscular.response(s), loop.proprioceptive.response(s)
-    h1 = nm / (1.0 + nm * pf)
+    nm, inner = loop.neuromuscular.response(s), loop.return_difference(s, None)
+    h1 = nm / inner
     return {"visual": h1 * loop.visual.response(s),
             "vestibular": -h1 * loop.vestibular.response(s),
-            "noise": loop.noise.response(s) / (1.0 + nm * pf)}
+            "noise": loop.noise.response(s) / inner}
