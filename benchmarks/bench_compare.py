@@ -32,14 +32,14 @@ import numpy as np
 
 from hesspipe.core.formats import Plants, read_plants
 from hesspipe.core.io import to_json
+from hesspipe.core.paper import EQ14, EQ16
 from hesspipe.pilots.cohort import CohortSpec, synth_cohort
 from hesspipe.pilots.compare import compare_pilots
 
 
 def paper_plants() -> Plants:
     """Yc = 2.436/(s+1.0496) (Table 4 rolling approximation), Yd = SPEC.md Eq. 16."""
-    return Plants(ct.tf([2.436], [1.0, 1.0496]),
-                  ct.tf([-0.2554, 14.4, -272.6, 25.72], [1.0, 84.37, 452.2, 1510.0, 628.8]))
+    return Plants(ct.tf(*EQ14), ct.tf(*EQ16))
 
 
 def summary(label: str, result) -> None:

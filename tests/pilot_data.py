@@ -11,11 +11,12 @@ import control as ct
 import numpy as np
 
 from hesspipe.core.formats import Plants
+from hesspipe.core.paper import EQ14, EQ16
 
 DT = 0.02
 N = 3500
-YC = ct.tf([2.436], [1.0, 1.0496])
-YD = ct.tf([-0.2554, 14.4, -272.6, 25.72], [1.0, 84.37, 452.2, 1510.0, 628.8])
+YC = ct.tf(*EQ14)
+YD = ct.tf(*EQ16)
 
 
 def plants() -> Plants:

@@ -11,6 +11,7 @@ import pytest
 from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Plants, read_run, write_plants
+from hesspipe.core.paper import EQ14, EQ16
 from hesspipe.identification.spectra import psd
 from hesspipe.pilot.crossover import gain_scale
 from hesspipe.pilot.hess import PilotModel, table1
@@ -21,8 +22,7 @@ SHORT = CohortSpec(duration_s=24.0)  # 1200 samples at 50 Hz: one spectral segme
 
 
 def paper_plants() -> Plants:
-    return Plants(ct.tf([2.436], [1.0, 1.0496]),
-                  ct.tf([-0.2554, 14.4, -272.6, 25.72], [1.0, 84.37, 452.2, 1510.0, 628.8]))
+    return Plants(ct.tf(*EQ14), ct.tf(*EQ16))
 
 
 def test_cohort_files_truth_and_labels(tmp_path):

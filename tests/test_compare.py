@@ -14,6 +14,7 @@ from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Plants, Run, write_plants, write_run
 from hesspipe.core.io import to_json
+from hesspipe.core.paper import EQ14, EQ16
 from hesspipe.core.seeds import derive_seed
 from hesspipe.pilots import compare as compare_mod
 from hesspipe.pilots.batch import run_batch
@@ -22,8 +23,7 @@ from hesspipe.pilots.compare import CONFIGURATIONS, Comparison, PilotComparison,
 
 def paper_plants() -> Plants:
     """Yc = 2.436/(s+1.0496) (Table 4 rolling approximation), Yd = SPEC.md Eq. 16."""
-    return Plants(ct.tf([2.436], [1.0, 1.0496]),
-                  ct.tf([-0.2554, 14.4, -272.6, 25.72], [1.0, 84.37, 452.2, 1510.0, 628.8]))
+    return Plants(ct.tf(*EQ14), ct.tf(*EQ16))
 
 
 # -- a stand-in for the identification (test double: exercises the batch, not the model) --------

@@ -11,6 +11,7 @@ import pytest
 
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Plants, Run, read_plants, read_run, write_plants, write_run
+from hesspipe.core.paper import EQ14, EQ16
 
 
 def _run(n=200, dt=0.02, synthetic=False, run_id="p1"):
@@ -148,8 +149,7 @@ def test_folder_is_not_a_run(tmp_path):
 
 
 def _plants():
-    return Plants(ct.tf([2.436], [1, 1.0496]),
-                  ct.tf([-0.2554, 14.4, -272.6, 25.72], [1, 84.37, 452.2, 1510, 628.8]),
+    return Plants(ct.tf(*EQ14), ct.tf(*EQ16),
                   {"source": "SPEC.md Eq. 14/16"})
 
 

@@ -15,6 +15,7 @@ import pytest
 
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Plants
+from hesspipe.core.paper import EQ14, EQ16
 from hesspipe.identification.apid import Field
 from hesspipe.identification.fit import identify
 from hesspipe.identification.problem import default_fields
@@ -28,8 +29,7 @@ SHORT = CohortSpec(duration_s=24.0)  # 1200 samples: one spectral segment and a 
 
 
 def paper_plants() -> Plants:
-    return Plants(ct.tf([2.436], [1.0, 1.0496]),
-                  ct.tf([-0.2554, 14.4, -272.6, 25.72], [1.0, 84.37, 452.2, 1510.0, 628.8]))
+    return Plants(ct.tf(*EQ14), ct.tf(*EQ16))
 
 
 def jsbsim_plants() -> Plants:

@@ -36,6 +36,16 @@ def data_dir(name: str) -> Path:
 
     From a checkout, the checkout's own folder (the one users edit); from an
     installed package, the copy the build placed in ``hesspipe/_data``.
+
+    Parameters
+    ----------
+    name : {"aircraft", "pipeline"}
+        Which folder.
+
+    Returns
+    -------
+    Path
+        The folder (it exists).
     """
     checkout = PROJECT_ROOT / name
     if (PROJECT_ROOT / "pyproject.toml").is_file() and checkout.is_dir():
@@ -48,7 +58,18 @@ def data_dir(name: str) -> Path:
 
 
 def aircraft_file(name_or_path: str | Path) -> Path:
-    """``aircraft/<name>.toml`` for a bare name, else the path itself."""
+    """``aircraft/<name>.toml`` for a bare name, else the path itself.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A bare aircraft name (``"b757"``) or a path to a ``.toml`` file.
+
+    Returns
+    -------
+    Path
+        Not checked for existence (:func:`load_toml` reports a missing file).
+    """
     p = Path(name_or_path)
     if p.suffix == ".toml" or p.parent != Path("."):
         return p
@@ -56,7 +77,18 @@ def aircraft_file(name_or_path: str | Path) -> Path:
 
 
 def load_toml(path: str | Path) -> dict:
-    """Load a TOML file, turning I/O and syntax errors into one-line errors."""
+    """Load a TOML file, turning I/O and syntax errors into one-line errors.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file (UTF-8, a byte-order mark allowed).
+
+    Returns
+    -------
+    dict
+        Its tables and values.
+    """
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -80,7 +112,17 @@ def load_toml(path: str | Path) -> dict:
 
 
 def merge(base: Mapping, override: Mapping) -> dict:
-    """Deep-merge `override` into a copy of `base` (tables merge, values replace)."""
+    """Deep-merge `override` into a copy of `base` (tables merge, values replace).
+
+    Parameters
+    ----------
+    base, override : mapping
+        Nested tables (``override`` wins key by key); neither is modified.
+
+    Returns
+    -------
+    dict
+    """
     out = dict(base)
     for key, value in override.items():
         if isinstance(value, Mapping) and isinstance(out.get(key), Mapping):
@@ -99,6 +141,15 @@ class FieldError(HesspipeError):
     ``field`` is the field's name in its table (or settings class) and
     ``detail`` the rest of the message (``"expected ..., got ..."``), so a
     caller can name the field where it came from (a file's table, a flag).
+
+    Parameters
+    ----------
+    message : str
+        The whole one-line message.
+    field : str
+        The field's name.
+    detail : str
+        The message without the field's name.
     """
 
     def __init__(self, message: str, field: str, detail: str):
@@ -132,12 +183,30 @@ class Fields:
         return f"{self.prefix}.{key}" if self.prefix else key
 
     def error(self, key: str, expected: str, got: Any = _MISSING) -> FieldError:
-        """Return (not raise) the error for field `key`."""
+        """Return (not raise) the error for field `key`.
+
+        Parameters
+        ----------
+        key : str
+            Field name inside this table (the message names it with the table's prefix).
+        expected : str
+            What the field should hold, e.g. ``"a number >= 0"``.
+        got : object, optional
+            The offending value (left out: the field is missing).
+        """
         tail = "missing" if got is _MISSING else f"got {got!r}"
         return self.fail(key, f"expected {expected}, {tail}")
 
     def fail(self, key: str, detail: str) -> FieldError:
-        """Return (not raise) an error for field `key` with a free-form `detail`."""
+        """Return (not raise) an error for field `key` with a free-form `detail`.
+
+        Parameters
+        ----------
+        key : str
+            Field name inside this table.
+        detail : str
+            What is wrong, e.g. ``"expected one of a, b, got 'c'"``.
+        """
         return FieldError(f"{self.source}: field '{self._name(key)}': {detail}", key, detail)
 
     def _get(self, key, default):
@@ -154,6 +223,18 @@ class Fields:
 
         With ``default=None`` the field is optional and None is returned when absent
         (likewise for :meth:`integer` and :meth:`strings`).
+
+        Parameters
+        ----------
+        key : str
+            Field name.
+        default : object, optional
+            Value when the field is absent (left out: the field is required; None:
+            optional).
+        min, max : float, optional
+            Bounds, in the field's own units.
+        strict_min : bool
+            True: require ``x > min``.
         """
         what = "a number"
         if min is not None:
@@ -175,7 +256,17 @@ class Fields:
 
     def integer(self, key: str, default: Any = _MISSING, *, min: int | None = None,
                 max: int | None = None) -> int | None:
-        """An integer, optionally bounded."""
+        """An integer, optionally bounded.
+
+        Parameters
+        ----------
+        key : str
+            Field name.
+        default : object, optional
+            Value when absent (left out: required; None: optional).
+        min, max : int, optional
+            Inclusive bounds.
+        """
         what = "an integer" + (f" >= {min}" if min is not None else "") + (
             f" <= {max}" if max is not None else "")
         value = self._get(key, default)
@@ -190,7 +281,17 @@ class Fields:
         return int(value)
 
     def string(self, key: str, default: Any = _MISSING, *, choices: Sequence[str] | None = None) -> str:
-        """A string, optionally one of `choices`."""
+        """A string, optionally one of `choices`.
+
+        Parameters
+        ----------
+        key : str
+            Field name.
+        default : object, optional
+            Value when absent (left out: required).
+        choices : sequence of str, optional
+            The allowed values.
+        """
         what = "one of " + ", ".join(repr(c) for c in choices) if choices else "a string"
         value = self._get(key, default)
         if value is _MISSING:
@@ -200,7 +301,15 @@ class Fields:
         return value
 
     def boolean(self, key: str, default: Any = _MISSING) -> bool:
-        """true or false."""
+        """true or false.
+
+        Parameters
+        ----------
+        key : str
+            Field name.
+        default : object, optional
+            Value when absent (left out: required).
+        """
         value = self._get(key, default)
         if value is _MISSING:
             raise self.error(key, "true or false")
@@ -209,7 +318,17 @@ class Fields:
         return value
 
     def numbers(self, key: str, default: Any = _MISSING, *, length: int | None = None) -> tuple[float, ...]:
-        """A list of finite numbers, optionally of a fixed length."""
+        """A list of finite numbers, optionally of a fixed length.
+
+        Parameters
+        ----------
+        key : str
+            Field name.
+        default : object, optional
+            Value when absent (left out: required).
+        length : int, optional
+            Required number of elements.
+        """
         what = f"a list of {length} numbers" if length else "a list of numbers"
         value = self._get(key, default)
         if value is _MISSING:
@@ -223,7 +342,17 @@ class Fields:
     def strings(self, key: str, default: Any = _MISSING, *,
                 choices: Sequence[str] | None = None) -> tuple[str, ...] | None:
         """A list of non-empty strings (optionally each one of `choices`); None if
-        absent and `default` is None."""
+        absent and `default` is None.
+
+        Parameters
+        ----------
+        key : str
+            Field name.
+        default : object, optional
+            Value when absent (left out: required; None: optional).
+        choices : sequence of str, optional
+            The allowed values of each element.
+        """
         what = "a list of " + ("names from " + ", ".join(repr(c) for c in choices) if choices
                                else "non-empty strings")
         value = self._get(key, default)
@@ -238,7 +367,13 @@ class Fields:
         return tuple(value)
 
     def table_(self, key: str) -> "Fields":
-        """The sub-table `key` (empty if absent) as a new :class:`Fields`."""
+        """The sub-table `key` (empty if absent) as a new :class:`Fields`.
+
+        Parameters
+        ----------
+        key : str
+            Name of the sub-table.
+        """
         self.used.add(key)
         return Fields(self.table.get(key), self.source, self._name(key))
 

@@ -20,7 +20,15 @@ class HesspipeError(Exception):
 
 
 def where(path, field=None) -> str:
-    """Return ``"path: field 'x'"`` for error messages."""
+    """Return ``"path: field 'x'"`` for error messages.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file the message is about.
+    field : str, optional
+        The field inside it.
+    """
     out = str(path)
     if field:
         out += f": field '{field}'"

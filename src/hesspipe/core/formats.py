@@ -30,6 +30,7 @@ import pandas as pd
 
 from .errors import HesspipeError
 from .io import write_json, write_text
+from .paper import WELCH_SEGMENT
 
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
 OPTIONAL_COLUMNS = ("reference",)
@@ -197,7 +198,7 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
                comments=comments, source=str(path), interval=dt)
 
 
-def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = 1024,
+def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = WELCH_SEGMENT,
                    max_dt_s: float = 0.1) -> int:
     """Samples of a record of `duration_s` at `dt_s`, checked before anything is allocated.
 
@@ -208,7 +209,8 @@ def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_sample
     names : (str, str)
         How the caller calls the two values (for messages).
     min_samples : int
-        Fewest samples (one spectral segment by default).
+        Fewest samples (one spectral segment, :data:`hesspipe.core.paper.WELCH_SEGMENT`,
+        by default).
     max_dt_s : float
         Longest sample interval, s.
 
@@ -340,6 +342,23 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     two written times explains (SPEC.md "Time"). For non-uniform times the
     median interval is returned (the grid of a resampling).
 
+    Parameters
+    ----------
+    path : str or Path
+        The file `t` comes from (for messages).
+    t : array
+        Sample times, s.
+    column : str
+        Name of the time column (for messages).
+    rtol : float
+        Relative tolerance of a uniform interval.
+
+    Returns
+    -------
+    dt : float
+        Sample interval, s (> 0).
+    uniform : bool
+
     Raises
     ------
     HesspipeError
@@ -421,17 +440,50 @@ class Plants:
 
     @property
     def Yc(self) -> ct.TransferFunction:
+        """``Yc``: the control-to-output transfer function (the paper's name)."""
         return self.control_to_output
 
     @property
     def Yd(self) -> ct.TransferFunction:
+        """``Yd``: the disturbance-to-output transfer function (the paper's name)."""
         return self.disturbance_to_output
 
 
-def tf_coefficients(sys: ct.TransferFunction) -> dict:
-    """Return ``{"num": [...], "den": [...]}`` of a SISO continuous transfer function."""
+def siso_coefficients(sys) -> tuple[np.ndarray, np.ndarray]:
+    """Numerator and denominator of a SISO transfer function as 1-D float arrays.
+
+    The one place that reaches into python-control's nested ``num[0][0]``.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        Single-input single-output, continuous or discrete.
+
+    Returns
+    -------
+    num, den : ndarray
+        Coefficients in descending powers of s (or z), at least one each, as
+        stored (not normalised; leading zeros kept).
+    """
     num = np.atleast_1d(np.squeeze(sys.num[0][0])).astype(float)
     den = np.atleast_1d(np.squeeze(sys.den[0][0])).astype(float)
+    return num, den
+
+
+def tf_coefficients(sys: ct.TransferFunction) -> dict:
+    """Return ``{"num": [...], "den": [...]}`` of a SISO continuous transfer function.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        Single-input single-output.
+
+    Returns
+    -------
+    dict
+        Lists of floats, descending powers of s (see :func:`siso_coefficients`).
+    """
+    num, den = siso_coefficients(sys)
     return {"num": num.tolist(), "den": den.tolist()}
 
 

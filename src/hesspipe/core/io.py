@@ -49,6 +49,11 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     format from the extension (matplotlib, pandas) still work. A file system
     that refuses the write (permission, read-only, full) raises
     :class:`~hesspipe.core.errors.HesspipeError` naming `path`.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The final file; its folder is created if needed.
     """
     path = Path(path)
     try:
@@ -80,7 +85,15 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
 
 
 def write_text(path: str | os.PathLike, text: str) -> Path:
-    """Write `text` to `path` atomically (UTF-8) and return the path."""
+    """Write `text` to `path` atomically (UTF-8) and return the path.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file (replaced atomically if it exists).
+    text : str
+        Its content.
+    """
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return Path(path)
@@ -102,6 +115,11 @@ def to_json(obj: Any) -> str:
     """Serialise `obj` (numpy scalars and arrays allowed) as indented JSON.
 
     Non-finite floats are written as ``null``: JSON has no NaN.
+
+    Parameters
+    ----------
+    obj : object
+        Dicts, lists, numbers, strings, numpy scalars and arrays, Paths.
     """
     return json.dumps(_finite(obj), indent=2, default=_json_default, allow_nan=False) + "\n"
 
@@ -119,7 +137,15 @@ def _finite(obj: Any) -> Any:
 
 
 def write_json(path: str | os.PathLike, obj: Any) -> Path:
-    """Write `obj` as JSON to `path` atomically and return the path."""
+    """Write `obj` as JSON to `path` atomically and return the path.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file (replaced atomically if it exists).
+    obj : object
+        What :func:`to_json` accepts.
+    """
     return write_text(path, to_json(obj))
 
 
@@ -172,7 +198,13 @@ def _legacy_manifest(folder: Path) -> tuple[str, set[str]] | None:
 
 
 def output_kind(folder: str | os.PathLike) -> str | None:
-    """The kind of hesspipe output `folder` holds, or None if it is not hesspipe's."""
+    """The kind of hesspipe output `folder` holds, or None if it is not hesspipe's.
+
+    Parameters
+    ----------
+    folder : str or PathLike
+        The folder to look at (its marker file).
+    """
     folder = Path(folder)
     marker = _read_marker(folder)
     if marker is not None:
@@ -215,6 +247,11 @@ def remove_leftovers(folder: str | os.PathLike) -> list[Path]:
 
     Only entries named with hesspipe's prefixes whose process is gone are removed;
     a user's own hidden files are never touched. Returns what was removed.
+
+    Parameters
+    ----------
+    folder : str or PathLike
+        The output folder to clean (nothing happens if it does not exist).
     """
     folder = Path(folder)
     removed = []
@@ -259,6 +296,20 @@ def check_output_dir(path: str | os.PathLike, kind: str, *, write: bool = True) 
     saying why and what to do: a file, a non-empty folder that is not hesspipe's, another
     kind of hesspipe output, and (with `write`) a location that cannot be written to. Call
     it before computing, so no result is lost to a failed write.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The output folder.
+    kind : str
+        The kind of output, e.g. ``"flight"`` or ``"plants"`` (what the marker records).
+    write : bool
+        Also check that the location can be written to.
+
+    Returns
+    -------
+    Path
+        `path`.
     """
     path = Path(path)
     if path.is_dir():
@@ -288,6 +339,16 @@ def check_output_file(path: str | os.PathLike) -> Path:
 
     `path` may exist (a file the user named is replaced, atomically); it must not be
     a folder, and the folder it goes in must exist or be creatable, and be writable.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file to be written.
+
+    Returns
+    -------
+    Path
+        `path`.
     """
     path = Path(path)
     if path.is_dir():
@@ -310,7 +371,20 @@ def _write_marker(folder: Path, kind: str, files) -> None:
 
 
 def mark_output_dir(path: str | os.PathLike, kind: str) -> Path:
-    """Create `path` (checked with :func:`check_output_dir`) and mark it as `kind` output."""
+    """Create `path` (checked with :func:`check_output_dir`) and mark it as `kind` output.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The output folder.
+    kind : str
+        The kind of output it holds.
+
+    Returns
+    -------
+    Path
+        `path`, existing and marked.
+    """
     path = check_output_dir(path, kind)
     path.mkdir(parents=True, exist_ok=True)
     if _read_marker(path) is None:
@@ -366,6 +440,13 @@ def staged_output(out_dir: str | os.PathLike, kind: str = "output") -> Iterator[
     `out_dir` (sub-folders included) and the files of an earlier publication that this
     one does not hold are removed; when it raises, the temporary folder is removed and
     `out_dir` is left as it was (and removed again if this call created it).
+
+    Parameters
+    ----------
+    out_dir : str or PathLike
+        The output folder.
+    kind : str
+        The kind of output (what the marker records).
     """
     out_dir = check_output_dir(out_dir, kind)
     remove_leftovers(out_dir)

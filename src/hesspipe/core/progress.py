@@ -19,7 +19,13 @@ class _Bar(tqdm):
 
 
 def progress_enabled(stream=None) -> bool:
-    """True if `stream` (default ``sys.stderr``) is an interactive terminal."""
+    """True if `stream` (default ``sys.stderr``) is an interactive terminal.
+
+    Parameters
+    ----------
+    stream : file-like, optional
+        The stream progress would be written to.
+    """
     stream = sys.stderr if stream is None else stream
     try:
         return bool(stream.isatty())

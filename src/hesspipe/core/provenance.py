@@ -24,7 +24,13 @@ def versions() -> dict[str, str]:
 
 
 def file_hash(path: str | Path) -> str:
-    """SHA-256 of a file's bytes, as ``"sha256:<hex>"``."""
+    """SHA-256 of a file's bytes, as ``"sha256:<hex>"``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (read in 1 MiB chunks).
+    """
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for chunk in iter(lambda: fh.read(1 << 20), b""):

@@ -23,6 +23,13 @@ MAX_SEED = 2 ** 63 - 1
 def check_seed(seed, what: str = "seed") -> int:
     """Return `seed` as an int if it is an integer ``0 <= seed <= MAX_SEED``.
 
+    Parameters
+    ----------
+    seed : int
+        The seed to check.
+    what : str
+        How the caller names it (for the message).
+
     Raises
     ------
     HesspipeError
@@ -40,6 +47,13 @@ def derive_seed(base: int, *keys: str) -> int:
     The keys are hashed with SHA-256 (Python's ``hash`` is salted per
     process) and mixed with `base` by :class:`numpy.random.SeedSequence`.
     `base` must satisfy :func:`check_seed`.
+
+    Parameters
+    ----------
+    base : int
+        The user's seed.
+    *keys : str
+        What the seed is for (stage, pilot id, run ...); order matters.
     """
     import numpy as np  # here, not at import: the command line checks seeds at start-up
 

@@ -20,7 +20,23 @@ DEFAULT_AIRCRAFT = "737"
 
 @dataclass(frozen=True)
 class Approach:
-    """Trim condition. Units: ft, kt (calibrated), deg; flaps/gear normalised 0..1."""
+    """Trim condition. Units: ft, kt (calibrated), deg; flaps/gear normalised 0..1.
+
+    Attributes
+    ----------
+    h_sl_ft : float
+        Altitude above sea level, ft.
+    terrain_ft : float
+        Terrain elevation, ft.
+    vc_kts : float
+        Calibrated airspeed, kt.
+    psi_deg : float
+        True heading, deg (clockwise from north).
+    gamma_deg : float
+        Flight-path angle, deg (negative: descending).
+    flaps_norm, gear_norm : float
+        Flap and gear positions, 0 (up) to 1 (down).
+    """
 
     h_sl_ft: float = 1300.0
     terrain_ft: float = 603.0
@@ -68,6 +84,11 @@ def known_aircraft() -> list[str]:
 
 def load_aircraft(name: str) -> AircraftConfig:
     """Load ``aircraft/<name>.toml``.
+
+    Parameters
+    ----------
+    name : str
+        A file name in ``aircraft/`` without ``.toml``.
 
     Raises
     ------

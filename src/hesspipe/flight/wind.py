@@ -62,6 +62,14 @@ def heading_to_ned(along, lateral, psi_rad):
 
     `psi_rad` is the true heading (radians, clockwise from north); it may be
     a scalar or an array matching the components.
+
+    Parameters
+    ----------
+    along, lateral : float or array
+        Components along the heading (positive forward) and across it
+        (positive to the right), ft/s.
+    psi_rad : float or array
+        True heading, rad.
     """
     c, s = np.cos(psi_rad), np.sin(psi_rad)
     along = np.asarray(along, dtype=float)
@@ -70,7 +78,15 @@ def heading_to_ned(along, lateral, psi_rad):
 
 
 def ned_to_heading(north, east, psi_rad):
-    """Inverse of :func:`heading_to_ned`: (north, east) -> (along, lateral), ft/s."""
+    """Inverse of :func:`heading_to_ned`: (north, east) -> (along, lateral), ft/s.
+
+    Parameters
+    ----------
+    north, east : float or array
+        Wind components, ft/s.
+    psi_rad : float or array
+        True heading, rad.
+    """
     c, s = np.cos(psi_rad), np.sin(psi_rad)
     north = np.asarray(north, dtype=float)
     east = np.asarray(east, dtype=float)
@@ -92,6 +108,14 @@ class SideWind:
     Fig. 7. The paper plots the magnitude; with the clockwise turn the wind
     comes from the right, so the signed lateral component here is negative.
     A negative `theta_end_deg` turns the wind anticlockwise instead.
+
+    Attributes
+    ----------
+    speed_start_fps, speed_end_fps : float
+        Wind speed at the start and end of the record, ft/s (>= 0).
+    theta_start_deg, theta_end_deg : float
+        Direction the wind comes from relative to the reference heading, deg,
+        at the start and end (increasing: clockwise).
     """
 
     speed_start_fps: float = 0.0
@@ -101,7 +125,13 @@ class SideWind:
 
     @classmethod
     def from_fields(cls, f: Fields) -> "SideWind":
-        """Build from a TOML table (keys as the attribute names)."""
+        """Build from a TOML table (keys as the attribute names).
+
+        Parameters
+        ----------
+        f : hesspipe.core.config.Fields
+            The ``[wind]`` table.
+        """
         out = cls(
             speed_start_fps=f.number("speed_start_fps", cls.speed_start_fps, min=0, max=100),
             speed_end_fps=f.number("speed_end_fps", cls.speed_end_fps, min=0, max=100),
@@ -166,6 +196,19 @@ def prbs(n: int, *, dt: float, clock_s: float, amplitude: float, seed):
     period of at least the record (in clock periods) is started from a
     non-zero state drawn from `seed`; each bit is held for `clock_s`.
     The power is flat up to about ``0.44 / clock_s`` Hz.
+
+    Parameters
+    ----------
+    n : int
+        Samples.
+    dt : float
+        Sample interval, s.
+    clock_s : float
+        Bit length, s.
+    amplitude : float
+        Level of each bit (signal units).
+    seed : int or numpy seed
+        Seed of the register's start.
     """
     hold = max(1, int(round(clock_s / dt)))
     bits_needed = -(-n // hold)
@@ -186,6 +229,19 @@ def filtered_noise(n: int, *, dt: float, corner_hz: float, rms: float, seed):
     """Gaussian white noise through a first-order low-pass, scaled to `rms`.
 
     A Dryden-like gust shape: flat to `corner_hz`, then -20 dB/decade.
+
+    Parameters
+    ----------
+    n : int
+        Samples.
+    dt : float
+        Sample interval, s.
+    corner_hz : float
+        Low-pass corner, Hz.
+    rms : float
+        RMS of the result (signal units).
+    seed : int or numpy seed
+        Seed of the white noise.
     """
     from scipy.signal import lfilter
 
@@ -195,7 +251,15 @@ def filtered_noise(n: int, *, dt: float, corner_hz: float, rms: float, seed):
 
 
 def taper(t, taper_s: float):
-    """Raised-cosine fade-in and fade-out of `taper_s` seconds at both ends (0..1)."""
+    """Raised-cosine fade-in and fade-out of `taper_s` seconds at both ends (0..1).
+
+    Parameters
+    ----------
+    t : array
+        Sample times, s.
+    taper_s : float
+        Fade length, s (<= 0: no taper).
+    """
     t = np.asarray(t, dtype=float)
     if taper_s <= 0 or t.size < 2:
         return np.ones_like(t)
@@ -240,7 +304,15 @@ class Excitation:
 
     @classmethod
     def from_fields(cls, f: Fields, defaults: "Excitation") -> "Excitation":
-        """Build from a TOML table; absent keys take `defaults`."""
+        """Build from a TOML table; absent keys take `defaults`.
+
+        Parameters
+        ----------
+        f : hesspipe.core.config.Fields
+            The excitation's table.
+        defaults : Excitation
+            Values of absent keys.
+        """
         d = defaults
         kind = f.string("kind", d.kind, choices=EXCITATION_KINDS)
         out = cls(
@@ -257,7 +329,20 @@ class Excitation:
         return out
 
     def signal(self, t, seed):
-        """The excitation sampled at uniform times `t` (s), reproducible from `seed`."""
+        """The excitation sampled at uniform times `t` (s), reproducible from `seed`.
+
+        Parameters
+        ----------
+        t : array
+            Uniform sample times, s.
+        seed : int or numpy seed
+            Seed of the random phases, register or noise.
+
+        Returns
+        -------
+        ndarray
+            In the excitation's units (e.g. ft/s of wind), tapered at both ends.
+        """
         t = np.asarray(t, dtype=float)
         n = t.size
         dt = float(t[1] - t[0]) if n > 1 else 1.0
@@ -274,7 +359,13 @@ class Excitation:
         return x * taper(t, self.taper_s)
 
     def describe(self, units: str) -> str:
-        """One line for record headers, e.g. ``multisine 0.02-2 Hz, rms 3 ft/s``."""
+        """One line for record headers, e.g. ``multisine 0.02-2 Hz, rms 3 ft/s``.
+
+        Parameters
+        ----------
+        units : str
+            Units of the signal, e.g. ``"ft/s"``.
+        """
         if self.kind == "none" or self.rms == 0:
             return "none"
         if self.kind == "multisine":

@@ -46,6 +46,21 @@ def make_trials(folder, plant, n: int, seed: int, *, task: str = "disturbance",
     effects, i)``; the folder gets one ``plants.json``. Arguments as
     :func:`draw_trial`; `style` None draws a logger style per trial.
 
+    Parameters
+    ----------
+    folder : str or Path
+        Output folder.
+    plant : str, dict, path or Plant
+        See :func:`hesspipe.humanlike.plants.make_plant`.
+    n : int
+        Number of trials.
+    seed : int
+        Base seed.
+    task, pilot, effects, style, **overrides
+        As :func:`draw_trial`.
+    prefix : str
+        Pilot id prefix.
+
     Returns
     -------
     list of Path

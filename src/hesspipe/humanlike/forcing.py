@@ -44,9 +44,11 @@ class Multisine:
         return out
 
     def rms(self) -> float:
+        """RMS of the signal over a whole period, the signal's units."""
         return float(np.sqrt(np.sum(self.a ** 2) / 2.0))
 
     def as_dict(self) -> dict:
+        """The lines as JSON-ready lists (k, rad/s, amplitude, rad)."""
         return {"k": self.k.tolist(), "frequency_rad_s": self.w.tolist(),
                 "amplitude": self.a.tolist(), "phase_rad": self.phase.tolist()}
 
@@ -57,6 +59,19 @@ def line_sets(T_m: float, n_lines: int, w_lo: float = 0.1, w_hi: float = 20.0):
     Disturbance lines are log-spaced between `w_lo` and `w_hi` (rad/s), at least
     two apart and never below k = 2 (a record then holds two periods of the
     lowest line); the target uses k + 1 of each, so the sets are disjoint.
+
+    Parameters
+    ----------
+    T_m : float
+        Measurement period, s (lines at multiples of ``2 pi / T_m``).
+    n_lines : int
+        Lines per set.
+    w_lo, w_hi : float
+        Frequency range, rad/s.
+
+    Returns
+    -------
+    k_disturbance, k_target : ndarray of int
     """
     w0 = 2 * np.pi / T_m
     k_lo = max(2, int(round(w_lo / w0)))
@@ -81,6 +96,21 @@ def design(k, T_m: float, rms: float, rng: np.random.Generator, *, w_corner: flo
     Amplitudes follow ``|(1 + t_a jw)^2 / (1 + jw/w_corner)^2|`` (flat below
     `w_corner`, about 1.5-2 rad/s, reduced by 20-30 times at 20 rad/s), scaled so
     that the signal's RMS is `rms`. Phases uniform on [0, 2 pi).
+
+    Parameters
+    ----------
+    k : array of int
+        Line numbers.
+    T_m : float
+        Measurement period, s.
+    rms : float
+        RMS of the signal, its units.
+    rng : numpy.random.Generator
+        Source of the phases.
+    w_corner : float
+        Corner of the amplitude shape, rad/s.
+    t_a : float
+        Lead time constant of the shape, s.
     """
     k = np.asarray(k, dtype=int)
     w = k * 2 * np.pi / T_m
@@ -91,6 +121,16 @@ def design(k, T_m: float, rms: float, rng: np.random.Generator, *, w_corner: flo
 
 
 def fade(t, t_start: float, length: float) -> np.ndarray:
-    """Raised-cosine fade-in from 0 at `t_start` to 1 at `t_start + length` (s)."""
+    """Raised-cosine fade-in from 0 at `t_start` to 1 at `t_start + length` (s).
+
+    Parameters
+    ----------
+    t : array
+        Times, s.
+    t_start : float
+        Start of the fade, s.
+    length : float
+        Its length, s (> 0).
+    """
     x = np.clip((np.asarray(t, dtype=float) - t_start) / length, 0.0, 1.0)
     return 0.5 - 0.5 * np.cos(np.pi * x)

@@ -21,6 +21,13 @@ from ..core.errors import HesspipeError
 def tf(num, den, what: str = "transfer function") -> tuple[np.ndarray, np.ndarray]:
     """Return ``(num, den)`` as float arrays with leading zeros stripped.
 
+    Parameters
+    ----------
+    num, den : sequence of float
+        Descending powers of s.
+    what : str
+        What the messages call it.
+
     Raises
     ------
     HesspipeError
@@ -48,13 +55,27 @@ def tf(num, den, what: str = "transfer function") -> tuple[np.ndarray, np.ndarra
 
 
 def freqresp(num, den, w) -> np.ndarray:
-    """Frequency response ``num(jw)/den(jw)`` (complex) at `w` (rad/s)."""
+    """Frequency response ``num(jw)/den(jw)`` (complex) at `w` (rad/s).
+
+    Parameters
+    ----------
+    num, den : array
+        Descending powers of s.
+    w : array
+        Angular frequencies, rad/s.
+    """
     s = 1j * np.asarray(w, dtype=float)
     return np.polyval(num, s) / np.polyval(den, s)
 
 
 def series(*tfs) -> tuple[np.ndarray, np.ndarray]:
-    """Product of transfer functions given as ``(num, den)`` pairs."""
+    """Product of transfer functions given as ``(num, den)`` pairs.
+
+    Parameters
+    ----------
+    *tfs : (num, den)
+        Transfer functions, descending powers of s.
+    """
     num, den = np.ones(1), np.ones(1)
     for n, d in tfs:
         num, den = np.polymul(num, n), np.polymul(den, d)
@@ -66,6 +87,17 @@ class StateSpace:
     """Continuous state space ``x' = A x + B u``, ``y = C x + D u`` (single output).
 
     ``B`` is (n, m) for m inputs, ``C`` is (n,), ``D`` is (m,).
+
+    Attributes
+    ----------
+    A : ndarray
+        (n, n), 1/s.
+    B : ndarray
+        (n, m).
+    C : ndarray
+        (n,).
+    D : ndarray
+        (m,), feedthrough.
     """
 
     A: np.ndarray
@@ -75,10 +107,19 @@ class StateSpace:
 
     @property
     def order(self) -> int:
+        """Number of states n."""
         return self.A.shape[0]
 
     def freqresp(self, w, inp: int = 0) -> np.ndarray:
-        """Frequency response from input `inp` to the output at `w` (rad/s)."""
+        """Frequency response from input `inp` to the output at `w` (rad/s).
+
+        Parameters
+        ----------
+        w : array
+            Angular frequencies, rad/s.
+        inp : int
+            Input index.
+        """
         w = np.atleast_1d(np.asarray(w, dtype=float))
         n = self.order
         out = np.empty(w.shape, dtype=complex)
@@ -92,7 +133,13 @@ class StateSpace:
 
 
 def ss_from_tf(num, den) -> StateSpace:
-    """Controllable-canonical realisation of a proper SISO transfer function."""
+    """Controllable-canonical realisation of a proper SISO transfer function.
+
+    Parameters
+    ----------
+    num, den : sequence of float
+        Descending powers of s (proper).
+    """
     num, den = tf(num, den)
     a0 = den[0]
     den = den / a0
@@ -115,6 +162,11 @@ def stack_inputs(*systems: StateSpace) -> StateSpace:
     """Sum of SISO systems, each driven by its own input (block-diagonal).
 
     The result has one input per system and one output: the sum of theirs.
+
+    Parameters
+    ----------
+    *systems : StateSpace
+        Single-input systems.
     """
     n = sum(s.order for s in systems)
     A = np.zeros((n, n))
@@ -134,7 +186,15 @@ def stack_inputs(*systems: StateSpace) -> StateSpace:
 
 @dataclass(frozen=True)
 class Discrete:
-    """Exact zero-order-hold discretisation of a :class:`StateSpace` at step `h` (s)."""
+    """Exact zero-order-hold discretisation of a :class:`StateSpace` at step `h` (s).
+
+    Attributes
+    ----------
+    Ad, Bd : ndarray
+        Discrete state and input matrices for one step.
+    C, D : ndarray
+        Output and feedthrough (as the continuous system's).
+    """
 
     Ad: np.ndarray
     Bd: np.ndarray
@@ -146,6 +206,12 @@ def zoh(sys: StateSpace, h: float) -> Discrete:
     """Discretise `sys` with a zero-order hold on its inputs (exact for piecewise-constant u).
 
     Uses the matrix exponential of the augmented matrix ``[[A, B], [0, 0]] h``.
+
+    Parameters
+    ----------
+    sys : StateSpace
+    h : float
+        Step, s.
     """
     n, m = sys.B.shape
     M = np.zeros((n + m, n + m))
@@ -162,6 +228,12 @@ def discretise(sys: StateSpace, h: float) -> Discrete:
     the motion path s/(0.01 s + 1)) mixes the current input with a state that
     lags half a step, which distorts its output by several per cent at h = 1/1200 s;
     the bilinear map keeps both parts consistent while staying causal.
+
+    Parameters
+    ----------
+    sys : StateSpace
+    h : float
+        Step, s.
     """
     if not np.any(sys.D):
         return zoh(sys, h)
@@ -176,6 +248,13 @@ def is_stable(den, *, allow_integrators: int = 0) -> bool:
 
     Up to `allow_integrators` roots exactly at the origin (trailing zero
     coefficients) are allowed: a plant's integrators.
+
+    Parameters
+    ----------
+    den : array
+        Denominator, descending powers of s.
+    allow_integrators : int
+        How many roots at s = 0 are allowed.
     """
     den = np.trim_zeros(np.asarray(den, dtype=float), "f")
     k = 0

@@ -34,12 +34,36 @@ SCC = ([80 * 5.73, 0.0, 0.0], [80 * 5.73, 80 + 5.73, 1.0])
 
 
 def nm_tf(wn: float, zn: float) -> tuple:
-    """Neuromuscular system ``wn^2 / (s^2 + 2 zn wn s + wn^2)``."""
+    """Neuromuscular system ``wn^2 / (s^2 + 2 zn wn s + wn^2)``.
+
+    Parameters
+    ----------
+    wn : float
+        Natural frequency, rad/s.
+    zn : float
+        Damping ratio.
+
+    Returns
+    -------
+    (num, den)
+        Descending powers of s.
+    """
     return [wn * wn], [1.0, 2 * zn * wn, wn * wn]
 
 
 def pf_tf(p: dict) -> tuple:
-    """Proprioceptive feedback ``K1 K2 s / ((s + 1/T1)(s + 1/T2)^(k-1))``."""
+    """Proprioceptive feedback ``K1 K2 s / ((s + 1/T1)(s + 1/T2)^(k-1))``.
+
+    Parameters
+    ----------
+    p : dict
+        ``K1``, ``K2`` (gains), ``inv_T1``, ``inv_T2`` (1/s), ``k`` (1 or 2).
+
+    Returns
+    -------
+    (num, den)
+        Descending powers of s.
+    """
     num = [p["K1"] * p["K2"], 0.0]
     den = [1.0, p["inv_T1"]]
     if p["k"] == 2:
@@ -48,12 +72,31 @@ def pf_tf(p: dict) -> tuple:
 
 
 def equaliser_nm_tf(p: dict) -> tuple:
-    """Precision pilot without delay: ``Kp (1 + TL s)/(1 + TI s) Y_NM`` (one block)."""
+    """Precision pilot without delay: ``Kp (1 + TL s)/(1 + TI s) Y_NM`` (one block).
+
+    Parameters
+    ----------
+    p : dict
+        ``Kp`` (control per error unit), ``TL``, ``TI`` (s), ``wn`` (rad/s), ``zn``.
+
+    Returns
+    -------
+    (num, den)
+        Descending powers of s.
+    """
     return series(([p["Kp"] * p["TL"], p["Kp"]], [p["TI"], 1.0]), nm_tf(p["wn"], p["zn"]))
 
 
 def inner_loop(p: dict, w) -> np.ndarray:
-    """``G = Y_NM / (1 + Y_NM Y_PF)`` of the hess pilot at `w`."""
+    """``G = Y_NM / (1 + Y_NM Y_PF)`` of the hess pilot at `w`.
+
+    Parameters
+    ----------
+    p : dict
+        The pilot's parameters (see :func:`pf_tf`, :func:`nm_tf`).
+    w : array
+        Angular frequencies, rad/s.
+    """
     nm = freqresp(*nm_tf(p["wn"], p["zn"]), w)
     return nm / (1.0 + nm * freqresp(*pf_tf(p), w))
 
@@ -62,6 +105,21 @@ def parts(p: dict, w, motion_tf=None) -> tuple[np.ndarray, np.ndarray]:
     """Visual part A(jw) and vestibular part B(jw) of a pilot (see module doc).
 
     `p["tau"]` is the total visual delay (pilot plus any display delay).
+
+    Parameters
+    ----------
+    p : dict
+        The pilot's parameters (``structure`` "precision" or "hess").
+    w : array
+        Angular frequencies, rad/s.
+    motion_tf : (num, den), optional
+        Cab motion per unit plant output (None: no vestibular part).
+
+    Returns
+    -------
+    A, B : ndarray of complex
+        Control per unit error (visual) and per unit output (vestibular, its sign
+        as it enters the control).
     """
     w = np.asarray(w, dtype=float)
     delay = np.exp(-1j * w * p["tau"])
@@ -83,6 +141,13 @@ def loop_metrics(L, w_lo: float = 0.02, w_hi: float = 200.0) -> dict:
 
     The crossover is the first frequency (scanning up) where |L| falls through 1;
     the phase margin ``180 + angle L(j wc)`` wrapped into (-180, 180] degrees.
+
+    Parameters
+    ----------
+    L : callable
+        Open loop of angular frequency (rad/s), complex values.
+    w_lo, w_hi : float
+        Scan range, rad/s.
 
     Returns
     -------
@@ -135,6 +200,22 @@ def draw_precision(rng, yc, sign: int, order: int, ranges: dict, extra_delay: fl
     The equalisation is chosen as a human would for the plant: a lag (or
     nothing) when the plant is K/s-like near crossover (`order` <= 1), a lead
     when it is K/s^2-like. Returns None when no draw in the budget fits.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    yc : callable
+        The plant's control path of angular frequency (rad/s).
+    sign : {1, -1}
+        Sign that makes the plant's steady response positive.
+    order : int
+        The plant's slope order near crossover (1: K/s, 2: K/s^2).
+    ranges : dict
+        Parameter ranges, (low, high).
+    extra_delay : float
+        Added visual delay, s.
+    fixed : dict
+        Values that are not drawn.
     """
     for _ in range(20):
         p = {"structure": "precision", **_common(rng, ranges), **fixed.get("common", {})}
@@ -169,6 +250,28 @@ def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, 
     K1*K2 is solved so the loop phase at wc is ``-180 + PM`` and Ke so that
     ``|L(j wc)| = 1``. ``Km = km_ratio * Ke`` (vestibular gain relative to the
     visual one). Returns None when no draw in the budget fits.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    yc : callable
+        The plant's control path of angular frequency (rad/s).
+    sign : {1, -1}
+        Sign that makes the plant's steady response positive.
+    order : int
+        The plant's slope order near crossover.
+    ranges : dict
+        Parameter ranges, (low, high).
+    extra_delay : float
+        Added visual delay, s.
+    fixed : dict
+        Values that are not drawn.
+    motion_tf : (num, den), optional
+        Cab motion per unit plant output.
+    km_ratio : float
+        Km / Ke.
+    tau_m : float
+        Vestibular delay, s.
     """
     k = 1 if order <= 1 else 2
     for _ in range(20):

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.paper import EQ16 as _PAPER_EQ16
 from .lti import StateSpace, freqresp, series, ss_from_tf, stack_inputs, tf
 
 # Paper Table 4 (Roskam's wide-body transport, approach), SPEC "analytic aircraft".
@@ -31,7 +32,7 @@ TABLE4 = dict(U=227.0, rho=0.002389, S=5500.0, b=196.0, weight_lb=564000.0, g=32
               Cn_beta=0.184, Cn_p=-0.222, Cn_r=-0.36, Cn_da=0.0083)
 
 # The paper's Eq. 16: wind (ft/s) -> roll rate (rad/s) ARX model of a Boeing 757.
-EQ16 = ([-0.2554, 14.4, -272.6, 25.72], [1.0, 84.37, 452.2, 1510.0, 628.8])
+EQ16 = (list(_PAPER_EQ16[0]), list(_PAPER_EQ16[1]))  # as lists, as the generator builds them
 
 # SPEC "Expanded model": washout and motion platform of the paper's simulator.
 WASHOUT = ([1.0, 0.0, 0.0], [1.0, 2 * 1.0 * 1.02, 1.02 ** 2])
@@ -82,7 +83,13 @@ class Plant:
     info: dict = field(default_factory=dict)
 
     def yc(self, w) -> np.ndarray:
-        """True control -> output frequency response at `w` (rad/s)."""
+        """True control -> output frequency response at `w` (rad/s).
+
+        Parameters
+        ----------
+        w : array
+            Angular frequencies, rad/s.
+        """
         return self.true.freqresp(w, 0)
 
     def motion(self) -> tuple:
@@ -98,6 +105,11 @@ def dimensional(t: dict = TABLE4) -> dict:
     """Dimensional lateral-directional derivatives (paper Table 3).
 
     Returns Y_* in ft/s^2 per rad, L_*, N_* in 1/s^2 (per rad) or 1/s (per rad/s).
+
+    Parameters
+    ----------
+    t : dict
+        Table 4 values (:data:`TABLE4`).
     """
     q = 0.5 * t["rho"] * t["U"] ** 2
     m = t["weight_lb"] / t["g"]
@@ -124,6 +136,13 @@ def lateral_model(output: str = "rate", t: dict = TABLE4) -> StateSpace:
     Inputs: aileron (rad) and side wind v_w (ft/s, positive towards the right
     wing, so the aerodynamic sideslip is ``beta - v_w/U``). Output roll rate p
     (rad/s) or roll angle phi (rad).
+
+    Parameters
+    ----------
+    output : {"rate", "angle"}
+        Roll rate (rad/s) or roll angle (rad).
+    t : dict
+        Table 4 values.
     """
     d = dimensional(t)
     U = d["U"]
@@ -147,7 +166,20 @@ def lateral_model(output: str = "rate", t: dict = TABLE4) -> StateSpace:
 
 
 def rolling_approximation(output: str = "rate", t: dict = TABLE4) -> tuple[tuple, tuple]:
-    """Rolling approximation (paper Eq. 14): aileron and side-wind paths to p or phi."""
+    """Rolling approximation (paper Eq. 14): aileron and side-wind paths to p or phi.
+
+    Parameters
+    ----------
+    output : {"rate", "angle"}
+        Roll rate (rad/s) or roll angle (rad).
+    t : dict
+        Table 4 values.
+
+    Returns
+    -------
+    yc, yd : (num, den)
+        Aileron (rad) and side wind (ft/s) to the output.
+    """
     d = dimensional(t)
     den = [1.0, -d["L_p"]]
     yc = ([d["L_da"]], den)
@@ -256,7 +288,14 @@ def _from_dict(obj, where: str, disturbance, dutch_roll) -> Plant:
 
 
 def nominal_check(plant: Plant, w) -> float:
-    """Largest relative difference between the true and nominal control paths at `w`."""
+    """Largest relative difference between the true and nominal control paths at `w`.
+
+    Parameters
+    ----------
+    plant : Plant
+    w : array
+        Angular frequencies, rad/s.
+    """
     true = plant.yc(w)
     nom = freqresp(*plant.nominal_yc, w)
     return float(np.max(np.abs(true - nom) / np.abs(nom)))

@@ -28,6 +28,26 @@ class Wiring:
     inputs (plant input, side wind). `pilot` is ``"precision"`` (block
     ``eqnm`` driven by the delayed error) or ``"hess"`` (blocks ``nm``, ``pf``
     and, with motion, ``motion`` and ``scc``).
+
+    Attributes
+    ----------
+    h : float
+        Fine step, s.
+    delay_steps : int
+        Visual delay buffer, fine steps.
+    pilot : {"precision", "hess"}
+    blocks : dict
+        Discretised blocks by name.
+    Ke, Km : float
+        Visual and vestibular gains.
+    motion_delay_steps : int
+        Vestibular delay, fine steps.
+    remnant_at : {"control", "error"}
+        Where the remnant enters.
+    rate_limit : float or None
+        Actuator rate limit, control units/s.
+    disturbance : {"input", "wind"}
+        Where the disturbance enters.
     """
 
     h: float
@@ -49,6 +69,15 @@ def delay_steps(tau: float, h: float, holds: int) -> int:
     actuator input, plant input: `holds` of them) adds on average half a step
     of lag; the buffer is shortened by that, so the loop's total delay is
     ``(steps + holds/2) h`` (the value the truth reports).
+
+    Parameters
+    ----------
+    tau : float
+        Delay, s.
+    h : float
+        Fine step, s.
+    holds : int
+        Zero-order holds on the outer loop.
     """
     return max(1, int(round(tau / h - holds / 2.0)))
 
@@ -137,6 +166,10 @@ def compile_loop(wr: Wiring):
     output, ``u`` the pilot's control (stick, remnant included when injected
     at the control), ``a`` the actuator output after the rate limit, at every
     fine step.
+
+    Parameters
+    ----------
+    wr : Wiring
     """
     if wr.delay_steps < 1:
         raise ValueError("the visual delay must be at least one fine step")

@@ -80,12 +80,24 @@ class TrialSpec:
     style: dict | None = None
 
     def yc_effective(self, w) -> np.ndarray:
-        """True control -> output response the pilot flies (actuator included)."""
+        """True control -> output response the pilot flies (actuator included).
+
+        Parameters
+        ----------
+        w : array
+            Angular frequencies, rad/s.
+        """
         tau = self.actuator["tau"]
         return self.plant.yc(w) / (1.0 + 1j * np.asarray(w, dtype=float) * tau)
 
     def pilot_parts(self, w) -> tuple[np.ndarray, np.ndarray]:
-        """Visual part A and vestibular part B of the pilot at `w` (rad/s)."""
+        """Visual part A and vestibular part B of the pilot at `w` (rad/s).
+
+        Parameters
+        ----------
+        w : array
+            Angular frequencies, rad/s.
+        """
         return pilots.parts(self.pilot, w, self.motion_tf)
 
 
@@ -97,6 +109,15 @@ class Trial:
     (input of Yd: control units for a plant-input disturbance, ft/s for side
     wind), ``output`` (controlled variable), ``control`` (pilot's stick, remnant
     included), ``reference`` (target r; zeros without one).
+
+    Attributes
+    ----------
+    spec : TrialSpec
+        What was drawn.
+    time, disturbance, output, control, reference : ndarray
+        The logged signals (see above).
+    truth : dict
+        The true pilot, plant and responses (JSON-ready).
     """
 
     spec: TrialSpec

@@ -27,7 +27,12 @@ GENERATOR = "hesspipe.humanlike 1"
 
 
 def outer_holds(spec) -> int:
-    """Zero-order holds on the outer loop: pilot input, plant input, actuator input."""
+    """Zero-order holds on the outer loop: pilot input, plant input, actuator input.
+
+    Parameters
+    ----------
+    spec : TrialSpec
+    """
     return 2 + (1 if spec.actuator["tau"] > 0 else 0)
 
 
@@ -44,7 +49,14 @@ def _tf_dict(t) -> dict:
 
 
 def realised_pilot(spec, h: float) -> dict:
-    """Pilot parameters with the visual (and vestibular) delay the stepper realised."""
+    """Pilot parameters with the visual (and vestibular) delay the stepper realised.
+
+    Parameters
+    ----------
+    spec : TrialSpec
+    h : float
+        Fine step, s.
+    """
     p = dict(spec.pilot)
     holds = outer_holds(spec)
     p["tau"] = (delay_steps(p["tau"], h, holds) + holds / 2.0) * h
@@ -56,6 +68,14 @@ def pilot_frf(spec, w, h: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(H_pe, U/E at a target line)`` of the trial's pilot at `w` (rad/s).
 
     With `h` (fine step, s) the delays are those the stepper realised.
+
+    Parameters
+    ----------
+    spec : TrialSpec
+    w : array
+        Angular frequencies, rad/s.
+    h : float, optional
+        Fine step, s.
     """
     p = realised_pilot(spec, h) if h else spec.pilot
     a, b = pilots.parts(p, np.asarray(w, dtype=float), spec.motion_tf)
@@ -68,6 +88,14 @@ def closed_loop(spec, w, h: float | None = None) -> dict:
     Returns complex arrays ``u_d``, ``y_d`` (per unit disturbance at its input:
     control units for a plant-input disturbance, ft/s for wind) and ``u_r``,
     ``y_r`` (per unit target).
+
+    Parameters
+    ----------
+    spec : TrialSpec
+    w : array
+        Angular frequencies, rad/s.
+    h : float, optional
+        Fine step, s (delays as realised).
     """
     p = realised_pilot(spec, h) if h else spec.pilot
     w = np.asarray(w, dtype=float)
@@ -81,7 +109,14 @@ def closed_loop(spec, w, h: float | None = None) -> dict:
 
 
 def build_truth(spec, sim: dict) -> dict:
-    """The truth dict written beside each trial (JSON-ready; see module doc)."""
+    """The truth dict written beside each trial (JSON-ready; see module doc).
+
+    Parameters
+    ----------
+    spec : TrialSpec
+    sim : dict
+        What the stepper returned (``h``, the fine step in s, and signals).
+    """
     h = sim["h"]
     p = realised_pilot(spec, h)
     lines = []

@@ -41,7 +41,12 @@ PLAIN = {"time": "g17", "values": "%.6g", "newline": "\n", "bom": False,
 
 
 def draw_style(rng: np.random.Generator) -> dict:
-    """Draw a logger style (time format, line ends, BOM, column order)."""
+    """Draw a logger style (time format, line ends, BOM, column order).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    """
     cols = list(COLUMNS) if rng.uniform() < 0.7 else \
         ["time", "reference", "output", "control", "disturbance"]
     return {"time": str(rng.choice(TIME_STYLES, p=[0.35, 0.25, 0.15, 0.15, 0.10])),
@@ -83,7 +88,14 @@ def _times(t: np.ndarray, st: dict) -> list[str]:
 
 
 def csv_bytes(trial, style=None) -> bytes:
-    """The CSV file of `trial` in `style` (see module doc), as bytes."""
+    """The CSV file of `trial` in `style` (see module doc), as bytes.
+
+    Parameters
+    ----------
+    trial : Trial
+    style : dict, optional
+        A style from :func:`draw_style` (None: the plain default).
+    """
     st = _style(style)
     cols = {"time": _times(trial.time, st)}
     fmt = st["values"]
@@ -98,7 +110,12 @@ def csv_bytes(trial, style=None) -> bytes:
 
 
 def plants_dict(spec) -> dict:
-    """The SPEC plants JSON a researcher would hand hesspipe for this trial."""
+    """The SPEC plants JSON a researcher would hand hesspipe for this trial.
+
+    Parameters
+    ----------
+    spec : TrialSpec
+    """
     p = spec.plant
 
     def tfd(t):

@@ -50,25 +50,52 @@ class Field:
 
     @property
     def lo(self) -> float:
+        """Smallest value the field decodes (integer 0), parameter units."""
         return float(self.offset)
 
     @property
     def hi(self) -> float:
+        """Largest value the field decodes (all bits set), parameter units."""
         return float(self.offset + (2 ** self.bits - 1) / self.scale)
 
     @property
     def resolution(self) -> float:
+        """Step between neighbouring values, parameter units (``1 / scale``)."""
         return 1.0 / float(self.scale)
 
     def decode(self, integer: int) -> float:
+        """Parameter value of the field's integer.
+
+        Parameters
+        ----------
+        integer : int
+            In ``0 .. 2**bits - 1`` (binary, not Gray).
+
+        Returns
+        -------
+        float
+            ``offset + integer / scale``, parameter units.
+        """
         return float(self.offset + int(integer) / self.scale)
 
     def encode(self, value: float) -> int:
-        """Nearest representable integer (clipped to the field)."""
+        """Nearest representable integer (clipped to the field).
+
+        Parameters
+        ----------
+        value : float
+            Parameter value, its units.
+        """
         return int(np.clip(round((value - self.offset) * self.scale), 0, 2 ** self.bits - 1))
 
     def check_within(self, lo: float, hi: float) -> None:
-        """Raise unless every value the field can decode lies in [lo, hi]."""
+        """Raise unless every value the field can decode lies in [lo, hi].
+
+        Parameters
+        ----------
+        lo, hi : float
+            The parameter's bounds, its units.
+        """
         tol = 1e-9 * max(1.0, abs(lo), abs(hi))
         if self.lo < lo - tol or self.hi > hi + tol:
             raise HesspipeError(
@@ -78,7 +105,13 @@ class Field:
 
 
 def gray_to_int(g: int) -> int:
-    """Integer whose reflected Gray code is `g`."""
+    """Integer whose reflected Gray code is `g`.
+
+    Parameters
+    ----------
+    g : int
+        A reflected Gray code (>= 0).
+    """
     n = g
     shift = 1
     while g >> shift:
@@ -88,12 +121,33 @@ def gray_to_int(g: int) -> int:
 
 
 def int_to_gray(n: int) -> int:
+    """Reflected Gray code of `n`.
+
+    Parameters
+    ----------
+    n : int
+        Non-negative integer.
+    """
     return n ^ (n >> 1)
 
 
 @dataclass(frozen=True)
 class Evaluation:
-    """One fitness evaluation of the climb."""
+    """One fitness evaluation of the climb.
+
+    Attributes
+    ----------
+    index : int
+        Evaluation number, from 0.
+    pass_ : int
+        Pass over the chromosome's bits, from 0.
+    bit : int
+        The flipped bit (-1: the initial chromosome).
+    fitness : float
+        Fitness of the candidate (the objective's units; lower is better).
+    accepted : bool
+        Whether the flip was kept.
+    """
 
     index: int
     pass_: int

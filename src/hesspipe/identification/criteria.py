@@ -53,13 +53,33 @@ FIT_RELIABLE = 3.0
 
 
 def check_criterion(criterion: str) -> str:
+    """Return `criterion` if it is one of :data:`CRITERIA`, else raise.
+
+    Parameters
+    ----------
+    criterion : str
+        A criterion name, e.g. ``"psd"`` or ``"df"``.
+
+    Raises
+    ------
+    HesspipeError
+        Unknown name (the message lists the known ones).
+    """
     if criterion not in CRITERIA:
         raise HesspipeError(f"criterion: expected one of {', '.join(CRITERIA)}, got {criterion!r}")
     return criterion
 
 
 def plant_slope(plants, band=(1.0, 5.0)) -> float:
-    """Mean slope of ln|Yc| against ln w over `band` (rad/s): -1 for K/s, -2 for K/s^2."""
+    """Mean slope of ln|Yc| against ln w over `band` (rad/s): -1 for K/s, -2 for K/s^2.
+
+    Parameters
+    ----------
+    plants : Plants or control.TransferFunction
+        The plants (their control-to-output tf is used) or Yc itself.
+    band : (float, float)
+        Angular frequencies, rad/s.
+    """
     from ..pilot.blocks import from_tf
 
     yc = from_tf(getattr(plants, "control_to_output", plants))
@@ -74,6 +94,13 @@ def choose_k(plants, band=(1.0, 5.0)) -> tuple[int, str]:
     Around the expected crossover (`band`, rad/s: the crossover model's 1-5
     rad/s) a plant whose gain falls like 1/s (slope above -1.5) takes k = 1,
     one falling like 1/s^2 takes k = 2 (the pilot must generate lead).
+
+    Parameters
+    ----------
+    plants : Plants or control.TransferFunction
+        The plants or Yc.
+    band : (float, float)
+        Angular frequencies of the expected crossover, rad/s.
 
     Returns
     -------
@@ -91,13 +118,24 @@ def model_df(loop, s: np.ndarray) -> np.ndarray:
 
     With r = 0 at those lines, e = -y, so the motion path (which senses y) acts
     like the visual one: ``H = NM (visual + vestibular) / (1 + NM PF)``.
+
+    Parameters
+    ----------
+    loop : Loop
+        The pilot's loop (vestibular block through the plants' motion path).
+    s : array of complex
+        Laplace variable at the lines, 1/s.
+
+    Returns
+    -------
+    ndarray of complex
+        Control per unit displayed error (``u = H e``, e = r - y).
     """
     nm = loop.neuromuscular.response(s)
-    pf = loop.proprioceptive.response(s)
     v = loop.visual.response(s)
     if not loop.vestibular.is_zero:
         v = v + loop.vestibular.response(s)
-    return nm * v / (1.0 + nm * pf)
+    return nm * v / loop.return_difference(s, None)
 
 
 class _Base:
@@ -142,7 +180,21 @@ class _Base:
 
 
 class DFObjective(_Base):
-    """Describing-function error at the lines, weighted by their uncertainty (see module)."""
+    """Describing-function error at the lines, weighted by their uncertainty (see module).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run.
+    plants : hesspipe.core.formats.Plants
+    model : PilotModel
+    base : mapping
+        Complete parameter values (free ones overwritten per call).
+    frf : hesspipe.identification.frf.Frf
+        The run's describing-function estimate at the disturbance lines.
+    sim : Simulator, optional
+        A prepared simulator of the run (built if not given).
+    """
 
     units = "RMS describing-function error in line standard deviations (dimensionless)"
     # The search down-weights lines far outside their stated error (a Cauchy loss on
@@ -170,12 +222,39 @@ class DFObjective(_Base):
         self.prior_weight = self.norm
 
     def residuals_loop(self, loop) -> np.ndarray:
+        """Residuals of a loop: per-line describing-function errors over their standard deviations.
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+
+        Returns
+        -------
+        ndarray
+            Real and imaginary parts, scaled so that the sum of squares is the mean
+            squared error in line standard deviations (dimensionless).
+        """
         e = (model_df(self.sim.prepare(loop), self.s) - self.H) / self.scale  # plants' motion_path
         return np.concatenate((e.real, e.imag)) * (np.sqrt(2) * self.norm)
 
 
 class OutputObjective(_Base):
-    """Output error on the control signal (see module)."""
+    """Output error on the control signal (see module).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run.
+    plants : hesspipe.core.formats.Plants
+    model : PilotModel
+    base : mapping
+        Complete parameter values (free ones overwritten per call).
+    frf : object, optional
+        Unused (the same signature as :class:`DFObjective`).
+    sim : Simulator, optional
+        A prepared simulator of the run.
+    """
 
     units = "RMS control error relative to the control's RMS (dimensionless)"
 
@@ -186,6 +265,19 @@ class OutputObjective(_Base):
         self.norm = 1.0 / (np.sqrt(np.mean(self.u ** 2)) * np.sqrt(self.u.size))
 
     def residuals_loop(self, loop) -> np.ndarray:
+        """Residuals of a loop: simulated minus measured control (remnant off, means removed).
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+
+        Returns
+        -------
+        ndarray
+            Per sample, scaled so that the sum of squares is the mean squared error
+            over the control's mean square (dimensionless).
+        """
         c, _ = self.sim.spectra(loop.replace(noise=type(loop.noise)()), output=False)
         u = self.sim.waveform(c)
         u = u - u.mean()
@@ -196,7 +288,21 @@ OBJECTIVES = {"df": DFObjective, "output": OutputObjective}
 
 
 def fit_bounds(model, names: Sequence[str], gain: float) -> dict:
-    """Box of each free parameter: the model's, narrowed to :data:`LITERATURE_BOUNDS`."""
+    """Box of each free parameter: the model's, narrowed to :data:`LITERATURE_BOUNDS`.
+
+    Parameters
+    ----------
+    model : PilotModel
+    names : sequence of str
+        The free parameters.
+    gain : float
+        Scale of the loop gains' boxes (:func:`hesspipe.pilot.crossover.gain_scale`).
+
+    Returns
+    -------
+    dict
+        name → (lo, hi), parameter units.
+    """
     box = model.bounds(gain)
     out = {}
     for n in names:
@@ -212,6 +318,22 @@ def fit_bounds(model, names: Sequence[str], gain: float) -> dict:
 def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, start: Mapping,
                    *, starts: int = 4, seed: int = 0, max_nfev: int = 60):
     """Bounded least squares of `objective` from `start` and seeded random starts.
+
+    Parameters
+    ----------
+    objective : DFObjective or OutputObjective
+    names : sequence of str
+        The free parameters.
+    bounds : mapping
+        name → (lo, hi), parameter units.
+    start : mapping
+        The first start, name → value.
+    starts : int
+        Number of starts (the first is `start`).
+    seed : int
+        Seed of the random starts.
+    max_nfev : int
+        Evaluations per start.
 
     Returns
     -------
@@ -279,7 +401,16 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
 
 
 def smart_start(objective: _Base, base: Mapping[str, float], frf) -> dict:
-    """Table 1's values with Ke scaled so the model's |H| matches the measured one on average."""
+    """Table 1's values with Ke scaled so the model's |H| matches the measured one on average.
+
+    Parameters
+    ----------
+    objective : DFObjective or OutputObjective
+    base : mapping
+        Complete parameters (Table 1).
+    frf : hesspipe.identification.frf.Frf
+        The measured describing function.
+    """
     if not isinstance(objective, DFObjective):
         s = 1j * frf.feedback.freq_rad_s
         H = frf.feedback.H
@@ -302,6 +433,44 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
     Frees :data:`PHASE_AWARE_FREE` by default (and the effects' parameters),
     tau0, wn, zn within :data:`LITERATURE_BOUNDS`; multi-start bounded least
     squares (:func:`multistart_fit`).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+    plants : hesspipe.core.formats.Plants
+    model : PilotModel
+    criterion : {"df", "output"}
+        The criterion.
+    free : sequence of str or None
+        Free parameters (None: the default set above).
+    fixed : mapping or None
+        Parameters held at given values.
+    seed : int
+        Seed of the starts and the remnant noise.
+    k : {1, 2}
+        Table 1 column.
+    k_rule : str
+        Why this k (recorded).
+    limits : CrossoverLimits
+        Plausible crossover range.
+    with_benchmark : bool
+        Also fit the McRuer precision model.
+    frf : hesspipe.identification.frf.Frf, optional
+        The describing function (estimated if not given).
+    starts : int
+        Number of least-squares starts.
+    initial : mapping, optional
+        Start values.
+    fields : mapping, optional
+        APID bit fields (checked only).
+    band : (float, float)
+        Band of the reported Eq. 10 fitness, Hz.
+    psd_method : {"paper", "scipy"}
+        PSD estimate of that fitness.
+
+    Returns
+    -------
+    Identification
     """
     from ..pilot.crossover import loop_crossover
     from ..pilot.hess import PilotModel

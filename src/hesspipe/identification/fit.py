@@ -29,6 +29,8 @@ from scipy.optimize import differential_evolution
 
 from ..core.choices import OPTIMIZERS  # one list, in a light module: the command line reads it too
 from ..core.errors import HesspipeError
+from ..core.formats import siso_coefficients
+from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover
 from ..pilot.hess import PilotModel, model_from_name
@@ -40,7 +42,6 @@ from .problem import (
     SpectralObjective,
     _resolve,
 )
-from .spectra import PaperWelch
 
 # Relative singular values below NULL_TOL: not identifiable (a structural
 # null direction, e.g. K1*K2, sits at 1e-10 or below); below WEAK_TOL: only
@@ -58,13 +59,29 @@ def _benchmark_key(run, plants, band, psd_method) -> str:
     for arr in (run.control, run.disturbance, run.reference, run.time[:2]):
         h.update(np.ascontiguousarray(arr, dtype=float).tobytes())
     for sys in (plants.control_to_output, plants.disturbance_to_output):
-        h.update(repr((np.asarray(sys.num[0][0]).tolist(), np.asarray(sys.den[0][0]).tolist())).encode())
+        h.update(repr(tuple(c.tolist() for c in siso_coefficients(sys))).encode())
     h.update(repr((band, psd_method)).encode())
     return h.hexdigest()
 
 
 def benchmark(run, plants, *, band=(0.0, 5.0), psd_method: str = "paper"):
-    """McRuer precision-model fit to `run` (cached per run, plants, band, method)."""
+    """McRuer precision-model fit to `run` (cached per run, plants, band, method).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run.
+    plants : hesspipe.core.formats.Plants
+    band : (float, float)
+        Fitness band, Hz.
+    psd_method : {"paper", "scipy"}
+        PSD estimate.
+
+    Returns
+    -------
+    PrecisionFit
+        Parameters and Eq. 10 fitness (control^2/Hz) of the benchmark.
+    """
     from ..pilot.mcruer import fit_precision
 
     key = _benchmark_key(run, plants, band, psd_method)
@@ -99,6 +116,11 @@ def _scipy_search(objective, fields, x0, *, optimizer, seed, passes):
 
 def check_control(run) -> None:
     """Refuse a run whose control never moves: it holds no control power to match.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run.
 
     Raises
     ------
@@ -193,7 +215,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     if optimizer not in OPTIMIZERS:
         raise HesspipeError(f"optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
     where = run.source or run.id
-    nper = PaperWelch().nperseg
+    nper = WELCH_SEGMENT
     if len(run) < nper:
         raise HesspipeError(f"{where}: {len(run)} samples is shorter than one spectral segment "
                             f"({nper} samples); expected a longer record")
@@ -266,6 +288,19 @@ def identifiability(objective: SpectralObjective, values: Mapping[str, float],
     times the largest is a direction the data cannot see; it is confirmed by
     a profile scan (fitness at +-10 % along it) and described, e.g. "K1*K2
     only" for a (+1, -1) direction in log coordinates.
+
+    Parameters
+    ----------
+    objective : SpectralObjective
+        The fit's objective.
+    values : mapping
+        The fitted free parameters, name → value.
+    fields : sequence of Field
+        Their bit fields (spans scale parameters at zero).
+    rel_step : float
+        Relative finite-difference step.
+    tol : float
+        Relative singular value below which a direction is unidentifiable.
 
     Returns
     -------

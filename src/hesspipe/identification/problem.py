@@ -17,14 +17,19 @@ from ..pilot.crossover import Crossover, gain_scale
 from ..pilot.hess import LOOP_GAINS, STRUCTURAL, PilotModel, model_from_name
 from ..pilot.simulation import UNSTABLE_FITNESS, Simulator, unstable_fitness
 from .apid import ClimbResult, Field
-from .spectra import band_mask, psd
+from .spectra import band_mask, psd, rms_difference
 
 STABLE_CAP = UNSTABLE_FITNESS / 10
 CORE_FREE = ("Ke", "K1", "K2")
 
 
 def default_free(model: PilotModel) -> tuple[str, ...]:
-    """The paper's free set: Ke, K1, K2, plus every parameter of the model's effects."""
+    """The paper's free set: Ke, K1, K2, plus every parameter of the model's effects.
+
+    Parameters
+    ----------
+    model : PilotModel
+    """
     extra = [n for n in model.parameter_names() if n not in CORE_FREE and n not in
              ("1/T1", "1/T2", "k", "tau0", "zn", "wn")]
     return CORE_FREE + tuple(extra)
@@ -65,12 +70,32 @@ class SpectralObjective:
         self.calls = 0
 
     def params(self, values: Mapping[str, float]) -> dict:
+        """Complete parameters: :attr:`base` with `values` over it.
+
+        Parameters
+        ----------
+        values : mapping
+            Free parameter values, name → value.
+        """
         p = dict(self.base)
         p.update(values)
         return p
 
     def loop_psd(self, loop, check_stability: bool = True) -> np.ndarray | None:
-        """Simulated control PSD of a loop, or None if it is unstable."""
+        """Simulated control PSD of a loop, or None if it is unstable.
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+        check_stability : bool
+            Check stability on the record first (False: the caller has).
+
+        Returns
+        -------
+        ndarray or None
+            On :attr:`freq_hz`, control units^2/Hz.
+        """
         if check_stability and not self.sim.stable(loop):
             return None
         control, _ = self.sim.spectra(loop, output=False)
@@ -79,9 +104,32 @@ class SpectralObjective:
             return None
         return psd(delta, self.fs, method=self.psd_method)[1]
 
+    def psd_fitness(self, simulated_psd) -> float:
+        """Eq. 10 fitness of a simulated control PSD against the measured one.
+
+        Parameters
+        ----------
+        simulated_psd : array
+            Control PSD on :attr:`freq_hz` (all bins), control units^2/Hz, as
+            :meth:`loop_psd` returns it.
+
+        Returns
+        -------
+        float
+            RMS difference over the band's bins, control^2/Hz
+            (:func:`hesspipe.identification.spectra.rms_difference`).
+        """
+        return rms_difference(np.asarray(simulated_psd)[self.mask], self.measured[self.mask])
+
     def unstable_fitness(self, loop) -> float:
         """Graded worst fitness: >= UNSTABLE_FITNESS, growing with the loop's growth rate
-        beyond the record's limit (:func:`hesspipe.pilot.simulation.growth_limit`)."""
+        beyond the record's limit (:func:`hesspipe.pilot.simulation.growth_limit`).
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+        """
         return unstable_fitness(self.sim.growth_rate(loop), self.sim.growth_limit)
 
     def score_loop(self, loop, threshold: float | None = None) -> float:
@@ -91,6 +139,19 @@ class SpectralObjective:
         fitness is below it: a caller that rejects anything at or above the
         threshold (the bit climber) gets the same decisions for less work, and
         sees the unverified value for candidates it rejects anyway.
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+        threshold : float, optional
+            Fitness the caller rejects at or above, control^2/Hz.
+
+        Returns
+        -------
+        float
+            Eq. 10 fitness, control^2/Hz, capped at ``UNSTABLE_FITNESS / 10`` for a
+            stable loop.
         """
         self.calls += 1
         if threshold is None:
@@ -100,8 +161,7 @@ class SpectralObjective:
         sim = self.loop_psd(loop, check_stability=False)
         if sim is None:
             return self.unstable_fitness(loop)
-        d = sim[self.mask] - self.measured[self.mask]
-        value = float(np.sqrt(np.mean(d * d)))   # spectra.fitness with the mask kept
+        value = self.psd_fitness(sim)
         if not np.isfinite(value):
             return self.unstable_fitness(loop)
         if threshold is not None and value < threshold and not self.sim.stable(loop):
@@ -111,6 +171,13 @@ class SpectralObjective:
         return min(value, STABLE_CAP)
 
     def simulated_psd(self, values: Mapping[str, float]) -> np.ndarray | None:
+        """Simulated control PSD (control units^2/Hz) for free parameter `values`; None if unstable.
+
+        Parameters
+        ----------
+        values : mapping
+            Free parameter values, name → value.
+        """
         return self.loop_psd(self.model.loop(self.params(values)))
 
     accepts_threshold = True
@@ -180,6 +247,13 @@ class Identification:
     primary_crossover: Crossover | None = None
 
     def to_dict(self, spectra: bool = True) -> dict:
+        """The identification as JSON-ready values.
+
+        Parameters
+        ----------
+        spectra : bool
+            Include the measured and simulated PSDs (control units^2/Hz).
+        """
         out = {
             "model": self.model, "run_id": self.run_id, "synthetic": self.synthetic,
             "parameters": dict(self.parameters), "free": list(self.free), "fixed": dict(self.fixed),
@@ -230,6 +304,13 @@ def default_fields(model, plants, k: int = 1) -> dict[str, tuple[int, float, flo
     Table 1's fields with the loop gains' (Ke, Km, Ko) spans scaled by
     :func:`hesspipe.pilot.crossover.gain_scale` of the plants, so that the search box
     holds the gain a pilot adapted to these plants would use.
+
+    Parameters
+    ----------
+    model : PilotModel or str
+    plants : hesspipe.core.formats.Plants
+    k : {1, 2}
+        Table 1 column.
     """
     return model_from_name(model).fields(gain_scale(plants, k))
 

@@ -24,6 +24,7 @@ import scipy.fft
 import scipy.signal
 
 from ..core.errors import HesspipeError
+from ..core.paper import WELCH_CORRECTION, WELCH_OVERLAP, WELCH_SEGMENT
 
 
 @functools.lru_cache(maxsize=8)
@@ -52,9 +53,9 @@ class PaperWelch:
         Energy-loss factor U of Eq. 8 (0.612).
     """
 
-    nperseg: int = 1024
-    noverlap: int = 32
-    correction: float = 0.612
+    nperseg: int = WELCH_SEGMENT
+    noverlap: int = WELCH_OVERLAP
+    correction: float = WELCH_CORRECTION
 
     def __post_init__(self):
         if not (1 <= self.nperseg and 0 <= self.noverlap < self.nperseg):
@@ -62,7 +63,13 @@ class PaperWelch:
                                 f"{self.nperseg}, noverlap={self.noverlap}")
 
     def segments(self, n: int) -> int:
-        """Number of segments covering `n` samples after padding (Eq. 9)."""
+        """Number of segments covering `n` samples after padding (Eq. 9).
+
+        Parameters
+        ----------
+        n : int
+            Samples of the record.
+        """
         if n < self.nperseg:
             raise HesspipeError(f"record of {n} samples is shorter than one spectral segment "
                                 f"({self.nperseg} samples); expected at least {self.nperseg}")
@@ -70,10 +77,18 @@ class PaperWelch:
         return 1 + -(-(n - self.nperseg) // step)
 
     def frequencies(self, fs: float) -> np.ndarray:
+        """Frequencies of the estimate's bins, Hz (0 to fs/2, ``nperseg // 2 + 1`` of them).
+
+        Parameters
+        ----------
+        fs : float
+            Sample rate, Hz.
+        """
         return _rfftfreq(self.nperseg, float(fs)).copy()
 
     @property
     def window(self) -> np.ndarray:
+        """The Hamming window of one segment (read-only)."""
         return _hamming(self.nperseg)
 
     def __call__(self, x, fs: float, trim: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -93,7 +108,7 @@ class PaperWelch:
 
 
 def psd(x, fs: float, *, method: str = "paper", trim: float | None = None,
-        nperseg: int = 1024, noverlap: int = 32) -> tuple[np.ndarray, np.ndarray]:
+        nperseg: int = WELCH_SEGMENT, noverlap: int = WELCH_OVERLAP) -> tuple[np.ndarray, np.ndarray]:
     """Power spectral density of a control signal.
 
     Parameters
@@ -124,7 +139,15 @@ def psd(x, fs: float, *, method: str = "paper", trim: float | None = None,
 
 
 def band_mask(freq_hz, band=(0.0, 5.0)) -> np.ndarray:
-    """Boolean mask of the bins with ``band[0] <= f <= band[1]``."""
+    """Boolean mask of the bins with ``band[0] <= f <= band[1]``.
+
+    Parameters
+    ----------
+    freq_hz : array
+        Bin frequencies, Hz, ascending up to the Nyquist frequency.
+    band : (float, float)
+        Lowest and highest frequency, Hz (0 <= low < high <= Nyquist).
+    """
     lo, hi = float(band[0]), float(band[1])
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
         raise HesspipeError(f"band: expected 0 <= low < high in Hz, got {band!r}")
@@ -144,7 +167,45 @@ def band_mask(freq_hz, band=(0.0, 5.0)) -> np.ndarray:
 
 
 def fitness(measured_psd, simulated_psd, freq_hz, band=(0.0, 5.0)) -> float:
-    """RMS difference of two PSDs over the bins of `band` (Hz) (paper Eq. 10); lower is better."""
+    """RMS difference of two PSDs over the bins of `band` (paper Eq. 10); lower is better.
+
+    Parameters
+    ----------
+    measured_psd, simulated_psd : array
+        Control PSDs on the bins `freq_hz`, control units^2/Hz (e.g. rad^2/Hz
+        for a control in rad), from :func:`psd` with the same method.
+    freq_hz : array
+        Frequency of each bin, Hz (ascending, from 0).
+    band : (float, float)
+        Lowest and highest frequency of the bins that count, Hz.
+
+    Returns
+    -------
+    float
+        ``sqrt(mean((measured - simulated)^2))`` over the band's bins, in the
+        PSDs' units, control^2/Hz; >= 0, 0 for identical spectra.
+    """
     mask = band_mask(freq_hz, band)
-    d = np.asarray(measured_psd)[mask] - np.asarray(simulated_psd)[mask]
+    return rms_difference(np.asarray(measured_psd)[mask], np.asarray(simulated_psd)[mask])
+
+
+def rms_difference(measured_psd, simulated_psd) -> float:
+    """Eq. 10 on bins already chosen: the RMS difference of two PSDs, control^2/Hz.
+
+    The one implementation of the paper's fitness; :func:`fitness` selects a
+    band's bins first.
+
+    Parameters
+    ----------
+    measured_psd, simulated_psd : array
+        PSD values on the same bins, control units^2/Hz (order does not matter:
+        the difference is squared).
+
+    Returns
+    -------
+    float
+        ``sqrt(mean((measured - simulated)^2))``, control^2/Hz (NaN/inf if an
+        input is not finite).
+    """
+    d = np.asarray(measured_psd) - np.asarray(simulated_psd)
     return float(np.sqrt(np.mean(d * d)))

@@ -27,6 +27,7 @@ from typing import Iterable
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.formats import siso_coefficients
 
 
 def _poly(coeffs) -> tuple[float, ...]:
@@ -57,6 +58,15 @@ class Term:
 
     The gain is kept apart from the polynomials so that a block whose gains
     change between evaluations (an identification) reuses its cached shape.
+
+    Attributes
+    ----------
+    num, den : tuple of float
+        Polynomials in s, descending powers (``den`` not all zero).
+    delay : float
+        Transport delay, s (>= 0).
+    gain : float
+        Multiplier (any sign).
     """
 
     num: tuple[float, ...]
@@ -71,12 +81,18 @@ class Block:
 
     Build with :func:`tf`, :func:`gain`, :func:`delay`, then ``*`` (series)
     and ``+`` (parallel). ``Block()`` is the zero block.
+
+    Attributes
+    ----------
+    terms : tuple of Term
+        The parallel terms (their responses add).
     """
 
     terms: tuple[Term, ...] = ()
 
     @property
     def is_zero(self) -> bool:
+        """True if every term has zero gain or a zero numerator (the block passes nothing)."""
         return all(t.gain == 0 or not any(t.num) for t in self.terms)
 
     def __mul__(self, other: "Block | float") -> "Block":
@@ -103,6 +119,18 @@ class Block:
         `cache` (a dict owned by the caller, tied to this `s`) memoises each
         term's shape (polynomials and delay, without the gain), so blocks
         whose gains alone change between calls cost one multiplication.
+
+        Parameters
+        ----------
+        s : array of complex
+            Laplace variable, 1/s.
+        cache : dict, optional
+            The caller's shape cache, valid for this `s` only.
+
+        Returns
+        -------
+        ndarray of complex
+            Same shape as `s`; output units per input unit.
         """
         if len(self.terms) == 1:
             t = self.terms[0]
@@ -119,6 +147,11 @@ class Block:
         Terms are put over the product of their denominators without
         cancellation, so every pole of every term stays visible (what a
         stability test wants).
+
+        Parameters
+        ----------
+        pade_order : int
+            Order n of the [n/n] Padé approximant of each delay.
         """
         if not self.terms:
             return np.zeros(1), np.ones(1)
@@ -160,7 +193,15 @@ def _shape(t: Term, s, cache) -> np.ndarray:
 
 
 def tf(num, den, delay: float = 0.0) -> Block:
-    """Block ``num(s)/den(s) * exp(-delay s)`` (coefficients in descending powers of s)."""
+    """Block ``num(s)/den(s) * exp(-delay s)`` (coefficients in descending powers of s).
+
+    Parameters
+    ----------
+    num, den : sequence of float
+        Polynomials in s, descending powers.
+    delay : float
+        Transport delay, s (>= 0).
+    """
     den_p = _poly(den)
     if not any(den_p):
         raise HesspipeError("transfer function with a zero denominator")
@@ -168,12 +209,24 @@ def tf(num, den, delay: float = 0.0) -> Block:
 
 
 def gain(k: float) -> Block:
-    """Constant block."""
+    """Constant block.
+
+    Parameters
+    ----------
+    k : float
+        The gain (any sign), output units per input unit.
+    """
     return Block((Term((1.0,), (1.0,), 0.0, float(k)),))
 
 
 def delay(tau: float) -> Block:
-    """Pure transport delay ``exp(-tau s)``."""
+    """Pure transport delay ``exp(-tau s)``.
+
+    Parameters
+    ----------
+    tau : float
+        Delay, s (>= 0).
+    """
     return Block((Term((1.0,), (1.0,), float(tau)),))
 
 
@@ -183,7 +236,15 @@ ONE = gain(1.0)
 
 @functools.lru_cache(maxsize=256)
 def pade(tau: float, order: int) -> tuple[np.ndarray, np.ndarray]:
-    """Diagonal Padé approximant of ``exp(-tau s)`` as ``(num, den)`` polynomials."""
+    """Diagonal Padé approximant of ``exp(-tau s)`` as ``(num, den)`` polynomials."
+
+    Parameters
+    ----------
+    tau : float
+        Delay, s (0 gives ``(1, 1)``).
+    order : int
+        n of the [n/n] approximant.
+    """
     if tau == 0:
         return np.ones(1), np.ones(1)
     n = int(order)
@@ -196,9 +257,14 @@ def pade(tau: float, order: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def from_tf(sys) -> Block:
-    """Block from a SISO python-control TransferFunction (continuous time)."""
-    num = np.atleast_1d(np.squeeze(sys.num[0][0])).astype(float)
-    den = np.atleast_1d(np.squeeze(sys.den[0][0])).astype(float)
+    """Block from a SISO python-control TransferFunction (continuous time).
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        SISO, continuous.
+    """
+    num, den = siso_coefficients(sys)
     return tf(num, den)
 
 
@@ -238,19 +304,104 @@ class Loop:
     sensation: Block = field(default=ZERO)
 
     def replace(self, **changes) -> "Loop":
+        """The same loop with some blocks replaced.
+
+        Parameters
+        ----------
+        **changes : Block
+            New blocks by attribute name (``noise=ZERO`` ...).
+        """
         return replace(self, **changes)
 
     def pilot_open_loop(self, s, yc, cache=None) -> np.ndarray:
         """Open loop broken at the displayed error, ``L = Y_pilot Yc``, at `s`.
 
-        `yc` is the control plant's response at `s` (without :attr:`plant`).
+        ``L = NM visual Yc' / (1 + NM PF + NM vestibular Yc')`` with
+        ``Yc' = Yc plant`` (the inner loops closed, see :meth:`return_difference`).
+
+        Parameters
+        ----------
+        s : array of complex
+            Laplace variable, 1/s (``1j * omega`` with omega in rad/s).
+        yc : array of complex
+            The control plant's response at `s` (without :attr:`plant`),
+            output units per control unit.
+        cache : dict, optional
+            Shape cache tied to `s` (see :meth:`Block.response`).
+
+        Returns
+        -------
+        ndarray of complex
+            L at `s`, dimensionless; the loop is negative feedback (``1 + L``).
         """
         nm = self.neuromuscular.response(s, cache)
-        pf = self.proprioceptive.response(s, cache)
         v = self.visual.response(s, cache)
-        m = self.vestibular.response(s, cache)
         ycp = yc * self.plant.response(s, cache)
-        return nm * v * ycp / (1.0 + nm * pf + nm * m * ycp)
+        return nm * v * ycp / self._return_difference(s, ycp, cache, nm, visual=False)
+
+    def return_difference(self, s, yc, cache=None, *, visual: bool = True) -> np.ndarray:
+        """The loop's denominator ``1 + NM PF + NM (visual + vestibular) Yc plant`` at `s`.
+
+        The one frequency-response form of the closed loop's denominator: the
+        control is ``delta = (NM visual R - NM (visual + vestibular) Yd W + N n) / D``.
+        :meth:`characteristic` is its numerator polynomial and
+        :meth:`return_difference_products` its products (for cached evaluation).
+
+        Parameters
+        ----------
+        s : array of complex
+            Laplace variable, 1/s (``1j * omega`` with omega in rad/s).
+        yc : array of complex or None
+            The control plant's response at `s` (without :attr:`plant`),
+            output units per control unit. None: the loop opened at the plant,
+            the pilot's own ``1 + NM PF`` (``NM / (1 + NM PF)`` is the pilot's
+            command-to-control response).
+        cache : dict, optional
+            Shape cache tied to `s` (see :meth:`Block.response`).
+        visual : bool
+            False: leave the visual path out, ``1 + NM PF + NM vestibular Yc plant``
+            (the denominator of :meth:`pilot_open_loop`, the loop broken at the
+            displayed error).
+
+        Returns
+        -------
+        ndarray of complex
+            D at `s`, dimensionless; its zeros are the closed loop's modes.
+        """
+        nm = self.neuromuscular.response(s, cache)
+        if yc is None:
+            return 1.0 + nm * self.proprioceptive.response(s, cache)
+        ycp = yc * self.plant.response(s, cache)
+        return self._return_difference(s, ycp, cache, nm, visual)
+
+    def _return_difference(self, s, ycp, cache, nm, visual: bool) -> np.ndarray:
+        pf = self.proprioceptive.response(s, cache)
+        m = self.vestibular.response(s, cache)
+        if visual:
+            m = self.visual.response(s, cache) + m
+        return 1.0 + nm * pf + nm * m * ycp
+
+    def return_difference_products(self, yc: "Block") -> list[tuple["Block", ...]]:
+        """The products that :meth:`return_difference` sums to 1, as blocks.
+
+        ``NM visual Yc'``, ``NM vestibular Yc'`` (left out when the vestibular
+        block is zero) and ``NM PF`` (left out when PF is zero), in that order;
+        :class:`hesspipe.pilot.simulation.Simulator` evaluates them with shapes
+        cached across gain changes.
+
+        Parameters
+        ----------
+        yc : Block
+            The control plant including :attr:`plant` (``Yc' = Yc plant``).
+
+        Returns
+        -------
+        list of tuple of Block
+            Each tuple's blocks multiply; the denominator is ``1 + sum``.
+        """
+        nm, pf = self.neuromuscular, self.proprioceptive
+        paths = [self.visual] if self.vestibular.is_zero else [self.visual, self.vestibular]
+        return [(nm, p, yc) for p in paths] + ([] if pf.is_zero else [(nm, pf)])
 
     def characteristic(self, yc: Block, pade_order: int = 8) -> np.ndarray:
         """Characteristic polynomial of the closed loop (delays as Padé approximants).
@@ -258,6 +409,19 @@ class Loop:
         With NM = a/b, PF = c/d, visual + vestibular = p/q and Yc plant = g/h,
         the loop's modes are the roots of ``b d q h + a c q h + a p d g``
         (the numerator of ``1 + NM PF + NM (visual + vestibular) Yc``).
+
+        Parameters
+        ----------
+        yc : Block
+            The control plant Yc (without :attr:`plant`, which is applied here).
+        pade_order : int
+            Order of the Padé approximants of the delays.
+
+        Returns
+        -------
+        ndarray
+            Polynomial coefficients, descending powers of s; all roots in the left
+            half plane for a stable loop.
         """
         yc = yc if self.plant.terms == ONE.terms else yc * self.plant
         path = self.visual if self.vestibular.is_zero else self.visual + self.vestibular
@@ -316,7 +480,18 @@ def _char_shapes(nm, pf, path, yc, order):
 
 
 def max_real_root(poly: np.ndarray) -> float:
-    """Largest real part of the roots of `poly` (-inf for a constant, +inf if invalid)."""
+    """Largest real part of the roots of `poly` (-inf for a constant, +inf if invalid).
+
+    Parameters
+    ----------
+    poly : array
+        Coefficients, descending powers of s (leading zeros allowed).
+
+    Returns
+    -------
+    float
+        Growth rate of the fastest-growing mode, 1/s (> 0: unstable).
+    """
     poly = np.asarray(poly, dtype=float)
     nz = np.flatnonzero(poly)
     if nz.size == 0 or not np.isfinite(poly).all():
@@ -333,7 +508,15 @@ def max_real_root(poly: np.ndarray) -> float:
 
 
 def stable_poly(poly: np.ndarray, margin: float = 0.0) -> bool:
-    """True if every root of `poly` has real part < -margin."""
+    """True if every root of `poly` has real part < -margin.
+
+    Parameters
+    ----------
+    poly : array
+        Coefficients, descending powers of s.
+    margin : float
+        Required decay rate, 1/s (0: plain stability).
+    """
     return max_real_root(poly) < -margin
 
 
@@ -343,9 +526,25 @@ def pade_order_for(total_delay: float) -> int:
     The [n/n] approximant's phase is good to ``w tau`` of about ``n``; loops
     cross over below about 20 rad/s and roll off past the neuromuscular
     mode, so ``w tau < 30 tau`` must be covered.
+
+    Parameters
+    ----------
+    total_delay : float
+        The loop's largest delay, s.
+
+    Returns
+    -------
+    int
+        Between 4 and 16.
     """
     return int(min(16, max(4, math.ceil(30.0 * total_delay) + 2)))
 
 
 def max_delay(blocks: Iterable[Block]) -> float:
+    """Largest transport delay of the blocks' terms, s (0 if there is none).
+
+    Parameters
+    ----------
+    blocks : iterable of Block
+    """
     return max((t.delay for b in blocks for t in b.terms), default=0.0)

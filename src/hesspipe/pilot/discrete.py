@@ -47,6 +47,13 @@ def tustin_sections(num, den, dt: float) -> list[list[float]]:
     Each section is ``[b0, b1, b2, a1, a2, z1, z2]`` (transposed direct form II,
     states last, initially zero).
 
+    Parameters
+    ----------
+    num, den : array
+        Continuous transfer function, descending powers of s.
+    dt : float
+        Sample interval, s.
+
     Raises
     ------
     HesspipeError
@@ -76,7 +83,17 @@ def _run_sections(secs: list[list[float]], x: float) -> float:
 
 
 def sections_response(secs: list[list[float]], omega, dt: float) -> np.ndarray:
-    """Frequency response of a section cascade at ``z = exp(j omega dt)`` (omega in rad/s)."""
+    """Frequency response of a section cascade at ``z = exp(j omega dt)`` (omega in rad/s).
+
+    Parameters
+    ----------
+    secs : list of list of float
+        Sections from :func:`tustin_sections`.
+    omega : array
+        Angular frequencies, rad/s.
+    dt : float
+        Sample interval, s.
+    """
     z = np.exp(1j * np.asarray(omega, dtype=float) * dt)
     out = np.ones(z.shape, dtype=complex)
     for b0, b1, b2, a1, a2, _, _ in secs:
@@ -160,7 +177,22 @@ class DiscretePilot:
         return (1.0 - frac) * x0 + frac * x1
 
     def step(self, e: float, y: float = 0.0, w: float = 0.0) -> float:
-        """Control deviation for this sample (see the class docstring)."""
+        """Control deviation for this sample (see the class docstring).
+
+        Parameters
+        ----------
+        e : float
+            Displayed error this sample (reference minus output), output units.
+        y : float
+            Plant output this sample (for the vestibular path), output units.
+        w : float
+            Unit-variance white remnant sample (for the noise path).
+
+        Returns
+        -------
+        float
+            Control deviation from trim, control units.
+        """
         self._history.append(e)
         out = 0.0
         for m, frac, secs in self._visual:
@@ -174,7 +206,19 @@ class DiscretePilot:
         return out
 
     def simulate(self, e, y=None, w=None) -> np.ndarray:
-        """Run :meth:`step` over whole sequences (open loop; for tests and checks)."""
+        """Run :meth:`step` over whole sequences (open loop; for tests and checks).
+
+        Parameters
+        ----------
+        e, y, w : array
+            Error, output and remnant sequences as in :meth:`step` (`y`, `w`
+            default to zeros).
+
+        Returns
+        -------
+        ndarray
+            Control deviations, control units.
+        """
         e = np.asarray(e, dtype=float)
         y = np.zeros_like(e) if y is None else np.asarray(y, dtype=float)
         w = np.zeros_like(e) if w is None else np.asarray(w, dtype=float)
@@ -186,6 +230,19 @@ class DiscretePilot:
         `path`: "visual" (e → delta), "vestibular" (y → delta) or "noise" (w → delta).
         With a `sample_lag`, the response from the output as the loop records it
         (the lag samples included), i.e. what should match the continuous path.
+
+        Parameters
+        ----------
+        omega : array
+            Angular frequencies, rad/s.
+        path : {"visual", "vestibular", "noise"}
+            Which input's path.
+
+        Returns
+        -------
+        ndarray of complex
+            Control units per input unit; the vestibular path carries its negative
+            feedback sign.
         """
         omega = np.asarray(omega, dtype=float)
         z1 = np.exp(-1j * omega * self.dt)
@@ -207,10 +264,24 @@ class DiscretePilot:
 
 
 def continuous_paths(loop: Loop, omega) -> dict[str, np.ndarray]:
-    """The continuous-time responses :class:`DiscretePilot` discretises, at rad/s `omega`."""
+    """The continuous-time responses :class:`DiscretePilot` discretises, at rad/s `omega`.
+
+    Parameters
+    ----------
+    loop : Loop
+        The pilot's blocks.
+    omega : array
+        Angular frequencies, rad/s.
+
+    Returns
+    -------
+    dict
+        ``"visual"`` (e to delta), ``"vestibular"`` (y to delta, sign included:
+        negative feedback), ``"noise"`` (w to delta), complex arrays.
+    """
     s = 1j * np.asarray(omega, dtype=float)
-    nm, pf = loop.neuromuscular.response(s), loop.proprioceptive.response(s)
-    h1 = nm / (1.0 + nm * pf)
+    nm, inner = loop.neuromuscular.response(s), loop.return_difference(s, None)
+    h1 = nm / inner
     return {"visual": h1 * loop.visual.response(s),
             "vestibular": -h1 * loop.vestibular.response(s),
-            "noise": loop.noise.response(s) / (1.0 + nm * pf)}
+            "noise": loop.noise.response(s) / inner}

@@ -97,20 +97,58 @@ def _remnant(loop: Loop, p) -> Loop:
 
 def dutch_roll_factor(w_dr: float, z_dr: float, r_dr: float):
     """Factor of the control plant for a Dutch-roll pair: poles (w_dr rad/s, z_dr), zeros at
-    r_dr * w_dr with the same damping, unit DC gain so the rolling approximation's gain is kept."""
+    r_dr * w_dr with the same damping, unit DC gain so the rolling approximation's gain is kept.
+
+    Parameters
+    ----------
+    w_dr : float
+        Dutch-roll natural frequency, rad/s (> 0).
+    z_dr : float
+        Its damping ratio (dimensionless).
+    r_dr : float
+        Ratio of the zeros' frequency to w_dr (> 0).
+
+    Returns
+    -------
+    Block
+    """
     wphi = r_dr * w_dr
     return tf([1.0, 2 * z_dr * wphi, wphi ** 2], [1.0, 2 * z_dr * w_dr, w_dr ** 2]) * gain(1.0 / r_dr ** 2)
 
 
 def roll_mode_factor(K_rm: float, a_rm: float, p_rm: float):
     """Factor moving the plant's roll-mode pole from -p_rm to -a_rm * p_rm (rad/s) and scaling
-    its high-frequency gain by K_rm: ``K_rm (s + p_rm) / (s + a_rm p_rm)``."""
+    its high-frequency gain by K_rm: ``K_rm (s + p_rm) / (s + a_rm p_rm)``.
+
+    Parameters
+    ----------
+    K_rm : float
+        High-frequency gain factor (dimensionless).
+    a_rm : float
+        Ratio of the new roll-mode pole to the old (dimensionless, > 0).
+    p_rm : float
+        The plant's roll-mode pole magnitude, rad/s (> 0).
+
+    Returns
+    -------
+    Block
+    """
     return gain(K_rm) * tf([1.0, p_rm], [1.0, a_rm * p_rm])
 
 
 def actuator_lag_factor(tau_a: float):
     """First-order actuator ``1 / (tau_a s + 1)`` between the pilot's control and the
-    aircraft (tau_a in s; 0 = none)."""
+    aircraft (tau_a in s; 0 = none).
+
+    Parameters
+    ----------
+    tau_a : float
+        Actuator time constant, s (<= 0: no lag).
+
+    Returns
+    -------
+    Block
+    """
     return tf([1.0], [tau_a, 1.0]) if tau_a > 0 else gain(1.0)
 
 
@@ -173,6 +211,11 @@ NONLINEAR_AIRCRAFT = {
 
 def get_effect(effect_id: str) -> Effect:
     """The effect registered as `effect_id`.
+
+    Parameters
+    ----------
+    effect_id : str
+        An id of :data:`EFFECTS`, e.g. ``"dutch_roll"``.
 
     Raises
     ------

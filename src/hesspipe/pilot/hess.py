@@ -61,6 +61,16 @@ def table1(k: int = 1) -> dict[str, float]:
     """Table 1 defaults of the paper for a rate-like (k=1) or acceleration-like (k=2) plant.
 
     Includes Km = 0.1 of the motion path.
+
+    Parameters
+    ----------
+    k : {1, 2}
+        1 for a plant like K/s near crossover, 2 for K/s^2.
+
+    Returns
+    -------
+    dict
+        Ke, K1, K2 (gains), 1/T1, 1/T2 (rad/s), tau0 (s), zn, wn (rad/s), k, Km.
     """
     if k not in (1, 2):
         raise HesspipeError(f"k: expected 1 (plant ~ K/s) or 2 (plant ~ K/s^2), got {k!r}")
@@ -110,6 +120,13 @@ class PilotModel:
         """Table 1 values (for `k`) and each effect's default.
 
         `gain` (:func:`gain_scale` of the plants) multiplies the :data:`LOOP_GAINS`.
+
+        Parameters
+        ----------
+        k : {1, 2}
+            Table 1 column (plant ~ K/s or K/s^2).
+        gain : float
+            Scale of the loop gains (> 0; 1: Table 1 as printed).
         """
         out = {n: v for n, v in table1(k).items() if n in PARAMETERS}
         for e in self.effects:
@@ -117,7 +134,13 @@ class PilotModel:
         return _scaled(out, gain, lambda v, g: v * g)
 
     def bounds(self, gain: float = 1.0) -> dict[str, tuple[float, float]]:
-        """Search box of every parameter, name → (lo, hi); :data:`LOOP_GAINS` times `gain`."""
+        """Search box of every parameter, name → (lo, hi); :data:`LOOP_GAINS` times `gain`.""
+
+        Parameters
+        ----------
+        gain : float
+            Scale of the loop gains' boxes (> 0).
+        """
         out = {n: (spec[1], spec[2]) for n, spec in _CORE.items()}
         for e in self.effects:
             out.update({n: (spec[1], spec[2]) for n, spec in EFFECTS[e].parameters.items()})
@@ -128,6 +151,11 @@ class PilotModel:
 
         The fields of :data:`LOOP_GAINS` span their box times `gain` (scale / gain,
         offset x gain), with the same number of bits.
+
+        Parameters
+        ----------
+        gain : float
+            Scale of the loop gains (> 0).
         """
         out = {n: (spec[3], spec[4], spec[5]) for n, spec in _CORE.items()}
         for e in self.effects:
@@ -135,13 +163,20 @@ class PilotModel:
         return _scaled(out, gain, lambda f, g: (f[0], f[1] / g, f[2] * g))
 
     def units(self) -> dict[str, str]:
+        """Units of every parameter of this model, name → unit string (e.g. ``"s"``)."""
         out = {n: spec[6] for n, spec in _CORE.items()}
         for e in self.effects:
             out.update(EFFECTS[e].units)
         return out
 
     def with_effect(self, effect_id: str) -> "PilotModel":
-        """This model with `effect_id` appended."""
+        """This model with `effect_id` appended.
+
+        Parameters
+        ----------
+        effect_id : str
+            An id of :data:`hesspipe.pilot.effects.EFFECTS`.
+        """
         return PilotModel(self.effects + (effect_id,))
 
     def complete(self, params: Mapping[str, float] | None = None, k: int | None = None, *,
@@ -153,6 +188,22 @@ class PilotModel:
         Names no model knows are an error; parameters of effects this model
         does not have (Km of :func:`table1` for the original model) are
         dropped, or are an error if `strict`.
+
+        Parameters
+        ----------
+        params : mapping, optional
+            Parameter values by name (units as :meth:`units`).
+        k : {1, 2}, optional
+            Table 1 column.
+        strict : bool
+            Refuse parameters of effects this model does not have.
+        gain : float
+            Scale of the default loop gains (> 0).
+
+        Returns
+        -------
+        dict
+            Every parameter of the model, floats.
         """
         params = dict(params or {})
         names = self.parameter_names()
@@ -174,7 +225,13 @@ class PilotModel:
         return out
 
     def loop(self, params: Mapping[str, float]) -> Loop:
-        """The loop's blocks for complete parameters (see :meth:`complete`)."""
+        """The loop's blocks for complete parameters (see :meth:`complete`).
+
+        Parameters
+        ----------
+        params : mapping
+            Complete parameters (:meth:`complete`).
+        """
         loop = core_loop(params)
         for e in self.effects:
             loop = EFFECTS[e].apply(loop, params)
@@ -190,7 +247,19 @@ def _scaled(table: dict, gain: float, how) -> dict:
 
 
 def core_loop(p: Mapping[str, float]) -> Loop:
-    """Blocks of the original Hess structural model for parameters `p`."""
+    """Blocks of the original Hess structural model for parameters `p`.
+
+    Parameters
+    ----------
+    p : mapping
+        Ke, K1, K2, 1/T1 and 1/T2 (rad/s), tau0 (s), zn, wn (rad/s), k.
+
+    Returns
+    -------
+    Loop
+        Visual ``Ke exp(-tau0 s)``, neuromuscular second order, proprioceptive
+        ``K1 K2 s/(s + 1/T1)`` (times ``1/(s + 1/T2)`` for k = 2), no vestibular path.
+    """
     wn, zn = float(p["wn"]), float(p["zn"])
     w2 = wn * wn
     nm = Block((Term((1.0,), (1.0, 2.0 * zn * wn, w2), 0.0, w2),))
@@ -207,6 +276,11 @@ def core_loop(p: Mapping[str, float]) -> Loop:
 
 def model_from_name(name: str | PilotModel) -> PilotModel:
     """"original", "expanded", or "+"-joined effect ids ("expanded+remnant").
+
+    Parameters
+    ----------
+    name : str or PilotModel
+        A model name (a PilotModel is returned as it is).
 
     Raises
     ------

@@ -27,7 +27,14 @@ BOUNDS = {"Kp": (0.01, 100.0), "TL": (0.0, 5.0), "TI": (0.0, 20.0), "tau": (0.05
 
 
 def precision_loop(p) -> Loop:
-    """Loop blocks of the precision model with parameters `p` (Kp, TL, TI, tau)."""
+    """Loop blocks of the precision model with parameters `p` (Kp, TL, TI, tau).
+
+    Parameters
+    ----------
+    p : mapping
+        Kp (gain, control per output unit), TL and TI (lead and lag time
+        constants, s), tau (delay, s).
+    """
     t1 = table1()
     wn, zn = t1["wn"], t1["zn"]
     visual = gain(p["Kp"]) * tf([p["TL"], 1.0], [p["TI"], 1.0]) * delay(p["tau"])
@@ -37,6 +44,17 @@ def precision_loop(p) -> Loop:
 
 @dataclass(frozen=True)
 class PrecisionFit:
+    """A fitted McRuer precision model (the benchmark of Eq. 10's fitness).
+
+    Attributes
+    ----------
+    parameters : dict
+        Kp, TL (s), TI (s), tau (s).
+    fitness : float
+        Eq. 10 fitness of the fit, control^2/Hz.
+    evaluations : int
+        Objective evaluations spent.
+    """
     parameters: dict
     fitness: float
     evaluations: int
@@ -92,6 +110,23 @@ def bounded_powell(f, x0, bounds, **options) -> tuple[np.ndarray, float]:
     Its bounded line search can step onto a plateau (unstable parameter
     sets) without comparing with the point it left, so the final point is
     not always the best one seen.
+
+    Parameters
+    ----------
+    f : callable
+        Objective of a float array.
+    x0 : array
+        Start.
+    bounds : sequence of (float, float)
+        Box, per coordinate.
+    **options
+        Passed to :func:`scipy.optimize.minimize` as ``options``.
+
+    Returns
+    -------
+    x : ndarray
+    value : float
+        ``f(x)``.
     """
     seen = [np.inf, None]
 

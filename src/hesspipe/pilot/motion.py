@@ -44,7 +44,14 @@ def paper_motion_path() -> ct.TransferFunction:
 
 
 def motion_block(plants) -> Block | None:
-    """The plants' ``motion_path`` as a :class:`~hesspipe.pilot.blocks.Block`, or None if absent."""
+    """The plants' ``motion_path`` as a :class:`~hesspipe.pilot.blocks.Block`, or None if absent.
+
+    Parameters
+    ----------
+    plants : hesspipe.core.formats.Plants
+        Plants, with or without ``motion_path`` (cab angular velocity, rad/s,
+        per unit plant output).
+    """
     mp = getattr(plants, "motion_path", None)
     return None if mp is None else from_tf(mp)
 

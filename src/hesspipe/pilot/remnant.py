@@ -34,7 +34,17 @@ def remnant_gain(model, params, sim, share: float) -> float:
 
 
 def remnant_gain_of_loops(loop0, loop1, sim, share: float) -> float:
-    """:func:`remnant_gain` for given loops without (`loop0`) and with unit remnant (`loop1`)."""
+    """:func:`remnant_gain` for given loops without (`loop0`) and with unit remnant (`loop1`).
+
+    Parameters
+    ----------
+    loop0, loop1 : Loop
+        The pilot's loop with Kn = 0 and with Kn = 1.
+    sim : hesspipe.pilot.simulation.Simulator
+        Prepared with the disturbance and the remnant noise seed.
+    share : float
+        In (0, 1): ``var(remnant part) / var(control)``.
+    """
     u0, u1 = sim.control(loop0), sim.control(loop1)
     if u0 is None or u1 is None:
         raise HesspipeError("remnant gain: the closed loop is unstable")

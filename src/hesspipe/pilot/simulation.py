@@ -52,6 +52,18 @@ def unstable_fitness(rate: float, limit: float = 0.0) -> float:
     ``UNSTABLE_FITNESS * (1 + min(rate - limit, 1000))`` with `limit` the record's
     growth limit (:func:`growth_limit`); an undecidable (NaN) rate scores the worst.
     Never NaN, always >= UNSTABLE_FITNESS.
+
+    Parameters
+    ----------
+    rate : float
+        Growth rate of the loop's fastest mode, 1/s (> limit: unstable; NaN allowed).
+    limit : float
+        The record's growth limit, 1/s.
+
+    Returns
+    -------
+    float
+        In the units of the fitness (control^2/Hz for Eq. 10).
     """
     excess = float(rate) - float(limit) if np.isfinite(rate) else 1000.0
     return UNSTABLE_FITNESS * (1.0 + min(max(excess, 0.0), 1000.0))
@@ -96,6 +108,16 @@ def growth_limit(duration_s: float) -> float:
     one, and a plant fitted to that record cannot place its own roots more
     finely (:mod:`hesspipe.plants.fit` resolves slower roots), so the cohort does
     not redraw such pilots and identification does not punish them.
+
+    Parameters
+    ----------
+    duration_s : float
+        Record length, s (> 0).
+
+    Returns
+    -------
+    float
+        1/s.
     """
     if not (duration_s > 0 and math.isfinite(duration_s)):
         raise HesspipeError(f"duration: expected a positive finite record length (s), got {duration_s!r}")
@@ -138,7 +160,19 @@ class Contour:
 
     @classmethod
     def for_record(cls, n: int, dt: float, *, pad_factor: int = 4, decays: float = 10.0) -> "Contour":
-        """The contour of `n` samples at `dt` s, zero-padded to `pad_factor` records."""
+        """The contour of `n` samples at `dt` s, zero-padded to `pad_factor` records.
+
+        Parameters
+        ----------
+        n : int
+            Samples of the record.
+        dt : float
+            Sample interval, s.
+        pad_factor : int
+            FFT length in records (at least 2): room for the loop's response to decay.
+        decays : float
+            How many e-folds the weight ``exp(-sigma0 t)`` falls over the padded FFT.
+        """
         limit = growth_limit(n * dt)
         nfft = sfft.next_fast_len(max(int(pad_factor), 2) * n, real=True)
         sigma0 = limit + float(decays) / (nfft * dt)
@@ -148,11 +182,33 @@ class Contour:
         return cls(n, float(dt), nfft, limit, sigma0, s, np.exp(-sigma0 * t), np.exp(sigma0 * t))
 
     def spectrum(self, x: np.ndarray) -> np.ndarray:
-        """Transform of the weighted samples `x` (length n)."""
+        """Transform of the weighted samples `x` (length n).
+
+        Parameters
+        ----------
+        x : array
+            n samples of a signal, its own units.
+
+        Returns
+        -------
+        ndarray of complex
+            On :attr:`s` (length ``nfft // 2 + 1``).
+        """
         return sfft.rfft(np.asarray(x, dtype=float) * self.weight, self.nfft)
 
     def waveform(self, spectrum: np.ndarray) -> np.ndarray:
-        """Samples on the record of a spectrum on this contour (un-weighted)."""
+        """Samples on the record of a spectrum on this contour (un-weighted).
+
+        Parameters
+        ----------
+        spectrum : array of complex
+            A spectrum on :attr:`s` (what :meth:`spectrum` gives, times responses).
+
+        Returns
+        -------
+        ndarray
+            n samples.
+        """
         return sfft.irfft(spectrum, self.nfft)[: self.n] * self.unweight
 
 
@@ -224,7 +280,13 @@ class Simulator:
         self.cab = motion_block(plants)   # None: the paper's platform x washout
 
     def prepare(self, loop: Loop) -> Loop:
-        """`loop` with its vestibular feedback through the plants' ``motion_path``."""
+        """`loop` with its vestibular feedback through the plants' ``motion_path``.
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop (its vestibular block is the default motion path's).
+        """
         return with_motion_path(loop, self.cab)
 
     def _trim_cache(self):
@@ -245,6 +307,11 @@ class Simulator:
         """Largest real part (1/s) of the closed loop's modes; below :attr:`growth_limit`: stable.
 
         The remnant shaping filter's poles count too (it feeds the loop).
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
         """
         loop = self.prepare(loop)
         order = pade_order_for(max_delay((loop.visual, loop.vestibular, loop.neuromuscular,
@@ -256,11 +323,28 @@ class Simulator:
         return rate
 
     def stable(self, loop: Loop) -> bool:
-        """True if the closed loop is stable on the record: growth rate below :attr:`growth_limit`."""
+        """True if the closed loop is stable on the record: growth rate below :attr:`growth_limit`.
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+        """
         return self.growth_rate(loop) < self.growth_limit
 
     def waveform(self, spectrum: np.ndarray) -> np.ndarray:
-        """Time history on the record's samples of a spectrum from :meth:`spectra`."""
+        """Time history on the record's samples of a spectrum from :meth:`spectra`.
+
+        Parameters
+        ----------
+        spectrum : array of complex
+            A spectrum on the simulator's contour.
+
+        Returns
+        -------
+        ndarray
+            Samples on the record (its length), the spectrum's units.
+        """
         return self.contour.waveform(spectrum)
 
     def spectra(self, loop: Loop, output: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
@@ -271,14 +355,28 @@ class Simulator:
         growing slower than :attr:`sigma0` (every loop :meth:`stable` accepts).
 
         ``delta = (NM vis R - NM (vis + ves) Yd W + N n) / (1 + NM PF + NM (vis + ves) Yc')``
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+        output : bool
+            Also return the output's spectrum.
+
+        Returns
+        -------
+        control : ndarray of complex
+            Spectrum of the control deviation delta (control units).
+        output : ndarray of complex or None
+            Spectrum of the plant output y (output units); None if not asked for.
         """
         self._trim_cache()
         loop = self.prepare(loop)
         yc = self.yc_block if loop.plant.terms == ONE.terms else self.yc_block * loop.plant
-        nm, pf, vis, ves = loop.neuromuscular, loop.proprioceptive, loop.visual, loop.vestibular
+        nm, vis, ves = loop.neuromuscular, loop.visual, loop.vestibular
         paths = [vis] if ves.is_zero else [vis, ves]
         local: dict = {}
-        den = self._sum([(nm, p, yc) for p in paths] + ([] if pf.is_zero else [(nm, pf)]), local)
+        den = self._sum(loop.return_difference_products(yc), local)
         den += 1.0
         num = self._sum([(nm, p, "ydw") for p in paths], local)
         np.negative(num, out=num)
@@ -337,13 +435,36 @@ class Simulator:
         return total
 
     def control(self, loop: Loop) -> np.ndarray | None:
-        """Simulated control delta, or None if the loop is not stable on the record."""
+        """Simulated control delta, or None if the loop is not stable on the record.
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+
+        Returns
+        -------
+        ndarray or None
+            Control deviation from trim on the record's samples, control units.
+        """
         if not self.stable(loop):
             return None
         control, _ = self.spectra(loop, output=False)
         return self.waveform(control)
 
     def run(self, loop: Loop) -> Simulation:
+        """The closed loop's time histories (NaN if it is not stable on the record).
+
+        Parameters
+        ----------
+        loop : Loop
+            The pilot's loop.
+
+        Returns
+        -------
+        Simulation
+            Time (s), control, output and error ``e = r - y`` (output units).
+        """
         t = self.dt * np.arange(self.n)
         if not self.stable(loop):
             nan = np.full(self.n, np.nan)
@@ -392,6 +513,26 @@ def simulate(model, params: Mapping[str, float] | None, plants, disturbance, dt:
 def synthetic_run(model, params: Mapping[str, float] | None, plants, disturbance, dt: float, *,
                   seed: int = 0, run_id: str = "synthetic", reference=None, k: int | None = None):
     """A :class:`hesspipe.core.formats.Run` generated by `model`, labelled synthetic.
+
+    Parameters
+    ----------
+    model : PilotModel or str
+        The generating model.
+    params : mapping, optional
+        Parameter values (missing ones: Table 1 defaults).
+    plants : hesspipe.core.formats.Plants
+    disturbance : array
+        Disturbance w sampled at `dt`, the plants' disturbance units.
+    dt : float
+        Sample interval, s.
+    seed : int
+        Remnant noise seed.
+    run_id : str
+        Id of the run.
+    reference : array, optional
+        Reference r (default 0), output units.
+    k : {1, 2}, optional
+        Table 1 column.
 
     Raises
     ------

@@ -103,7 +103,16 @@ class Stage:
 
 @dataclass(frozen=True)
 class StageStatus:
-    """Freshness of one stage: ``state`` is "fresh" or "stale", ``reason`` says why."""
+    """Freshness of one stage: ``state`` is "fresh" or "stale", ``reason`` says why.
+
+    Attributes
+    ----------
+    name : str
+        The stage.
+    state : {"fresh", "stale"}
+    reason : str
+        Why, for the user.
+    """
 
     name: str
     state: str
@@ -112,7 +121,18 @@ class StageStatus:
 
 @dataclass(frozen=True)
 class StageOutcome:
-    """What :func:`run_pipeline` did with one stage ("ran" or "skipped")."""
+    """What :func:`run_pipeline` did with one stage ("ran" or "skipped").
+
+    Attributes
+    ----------
+    name : str
+        The stage.
+    action : {"ran", "skipped"}
+    reason : str
+        Why.
+    wall_time_s : float
+        Time it took, s (0 if skipped).
+    """
 
     name: str
     action: str
@@ -222,6 +242,7 @@ class Pipeline:
         self._code = code_hash()
 
     def names(self) -> list[str]:
+        """The stages' names in run order."""
         return [s.name for s in self.stages]
 
     def _stage(self, name: str) -> Stage:
@@ -231,15 +252,33 @@ class Pipeline:
         raise HesspipeError(f"unknown stage '{name}'; expected one of {', '.join(self.names())}")
 
     def folder(self, name: str) -> Path:
-        """Folder of stage `name`'s manifest (and, by default, its outputs)."""
+        """Folder of stage `name`'s manifest (and, by default, its outputs).
+
+        Parameters
+        ----------
+        name : str
+            A stage's name.
+        """
         return self.out_root / name
 
     def output_folder(self, name: str) -> Path:
-        """Folder stage `name` publishes its outputs into."""
+        """Folder stage `name` publishes its outputs into.
+
+        Parameters
+        ----------
+        name : str
+            A stage's name.
+        """
         return (self.out_root / (self._stage(name).folder or name)).resolve()
 
     def downstream(self, name: str) -> list[str]:
-        """`name` and every stage that depends on it, in run order."""
+        """`name` and every stage that depends on it, in run order.
+
+        Parameters
+        ----------
+        name : str
+            A stage's name.
+        """
         self._stage(name)
         hit = {name}
         for s in self.stages:
@@ -425,6 +464,11 @@ def load_stages(path) -> list[Stage]:
     ``run`` (``"module:function"`` taking a :class:`StageContext`),
     optionally ``inputs`` (``"module:function"`` returning external input
     paths) and ``description``; ``outputs`` documents the files it writes.
+
+    Parameters
+    ----------
+    path : str or Path
+        The stages file.
     """
     from ..core.config import Fields, load_toml
 

@@ -35,6 +35,7 @@ import numpy as np
 
 from ..core.config import Fields, aircraft_file, data_dir, load_toml
 from ..core.errors import HesspipeError
+from ..core.formats import siso_coefficients
 
 _DERIVATIVES = ("Cy_beta", "Cy_p", "Cy_r", "Cy_da", "Cl_beta", "Cl_p", "Cl_r", "Cl_da",
                 "Cn_beta", "Cn_p", "Cn_r", "Cn_Tbeta", "Cn_da")
@@ -45,6 +46,30 @@ class AnalyticAircraft:
     """Table 4: geometry, mass, flight condition and dimensionless derivatives.
 
     Units: ft, ft/s, slug/ft^3, lb (weight), slug ft^2, deg; derivatives per rad.
+
+    Attributes
+    ----------
+    name : str
+    U_fps : float
+        True airspeed, ft/s.
+    rho_slug_ft3 : float
+        Air density, slug/ft^3.
+    theta_deg : float
+        Pitch attitude (flight-path angle) of the trim, deg.
+    g_fps2 : float
+        Gravity, ft/s^2.
+    S_ft2, b_ft : float
+        Wing area (ft^2) and span (ft).
+    weight_lb : float
+        Weight, lb (:attr:`mass_slug` is the mass).
+    Ixx, Iyy, Izz, Ixz : float
+        Inertias, slug ft^2.
+    derivatives : dict
+        Dimensionless stability and control derivatives (``Cl_p`` ...), per rad.
+    paper_eq15 : ((float, ...), (float, ...)) or None
+        The paper's printed Eq. 15 transfer function, if any.
+    path : str
+        The file it was read from.
     """
 
     name: str
@@ -65,6 +90,7 @@ class AnalyticAircraft:
 
     @property
     def mass_slug(self) -> float:
+        """Mass, slug (``weight_lb / g_fps2``)."""
         return self.weight_lb / self.g_fps2
 
     @property
@@ -74,7 +100,13 @@ class AnalyticAircraft:
 
 
 def load_analytic(name_or_path: str | Path) -> AnalyticAircraft:
-    """Read an analytic aircraft file (``kind = "analytic"``, e.g. ``roskam``)."""
+    """Read an analytic aircraft file (``kind = "analytic"``, e.g. ``roskam``).
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A bare name in ``aircraft/`` or a path to the TOML file.
+    """
     path = aircraft_file(name_or_path)
     if not path.exists():
         known = sorted(p.stem for p in data_dir("aircraft").glob("*.toml")
@@ -107,6 +139,10 @@ def dimensional_derivatives(ac: AnalyticAircraft) -> dict[str, float]:
 
     Y* in ft/s^2 (Yb, Yda) or ft/s (Yp, Yr); L*, N* in 1/s^2 (beta, da) or
     1/s (p, r). Keys: Yb Yp Yr Yda Lb Lp Lr Lda Nb NTb Np Nr Nda q.
+
+    Parameters
+    ----------
+    ac : AnalyticAircraft
     """
     q, S, b, U, m = ac.dynamic_pressure, ac.S_ft2, ac.b_ft, ac.U_fps, ac.mass_slug
     c = ac.derivatives
@@ -128,6 +164,10 @@ def lateral_model(ac: AnalyticAircraft) -> ct.StateSpace:
     States ``beta`` (rad), ``p`` (rad/s), ``r`` (rad/s), ``phi`` (rad); inputs
     ``aileron_rad``, ``wind_lateral_fps``; outputs ``roll_rate_rps``, ``bank_rad``,
     ``sideslip_rad`` (aerodynamic, beta_a), ``yaw_rate_rps``.
+
+    Parameters
+    ----------
+    ac : AnalyticAircraft
     """
     d = dimensional_derivatives(ac)
     U, g = ac.U_fps, ac.g_fps2 * math.cos(math.radians(ac.theta_deg))
@@ -158,6 +198,15 @@ def characteristic_polynomial(ac: AnalyticAircraft) -> np.ndarray:
 
     Written from the closed-form coefficients A..E, independently of
     :func:`lateral_model`, so the two can check each other.
+
+    Parameters
+    ----------
+    ac : AnalyticAircraft
+
+    Returns
+    -------
+    ndarray
+        Coefficients, descending powers of s (roots in 1/s).
     """
     d = dimensional_derivatives(ac)
     U, gc = ac.U_fps, ac.g_fps2 * math.cos(math.radians(ac.theta_deg))
@@ -178,7 +227,12 @@ def characteristic_polynomial(ac: AnalyticAircraft) -> np.ndarray:
 
 
 def modes(ac: AnalyticAircraft) -> dict[str, complex]:
-    """Roll, Dutch roll (upper-half-plane pole) and spiral eigenvalues, 1/s."""
+    """Roll, Dutch roll (upper-half-plane pole) and spiral eigenvalues, 1/s.
+
+    Parameters
+    ----------
+    ac : AnalyticAircraft
+    """
     poles = np.linalg.eigvals(lateral_model(ac).A)
     cplx = poles[np.abs(poles.imag) > 1e-9]
     real = np.sort(poles[np.abs(poles.imag) <= 1e-9].real)
@@ -191,8 +245,7 @@ def modes(ac: AnalyticAircraft) -> dict[str, complex]:
 
 def _siso(sys: ct.StateSpace, inp: int, out: int) -> ct.TransferFunction:
     tf = ct.ss2tf(sys[out, inp])
-    num = np.atleast_1d(np.squeeze(tf.num[0][0]))
-    den = np.atleast_1d(np.squeeze(tf.den[0][0]))
+    num, den = siso_coefficients(tf)
     # ss2tf leaves round-off (~1e-16) where the structure has exact zeros, e.g. the zero at
     # s = 0 of p/da (p = s phi) and the double zero of the wind path (a steady wind only
     # drifts the aircraft): make them exact so the file shows the structure.
@@ -220,7 +273,12 @@ class AnalyticPlants:
 
 
 def analytic_transfer_functions(ac: AnalyticAircraft) -> AnalyticPlants:
-    """Build all four transfer functions of :class:`AnalyticPlants`."""
+    """Build all four transfer functions of :class:`AnalyticPlants`.
+
+    Parameters
+    ----------
+    ac : AnalyticAircraft
+    """
     sys = lateral_model(ac)
     d = dimensional_derivatives(ac)
     return AnalyticPlants(

@@ -65,14 +65,17 @@ class ArxModel:
 
     @property
     def na(self) -> int:
+        """Order of A(q): number of past outputs."""
         return len(self.a) - 1
 
     @property
     def nb(self) -> int:
+        """Number of B(q) coefficients (input taps)."""
         return len(self.b)
 
     @property
     def n_params(self) -> int:
+        """Number of estimated coefficients, ``na + nb``."""
         return self.na + self.nb
 
     @property
@@ -97,6 +100,12 @@ class ArxModel:
         """All poles grow slower than `max_growth` (1/s): ``ln|z| / dt < max_growth``.
 
         With the default 0 that is: all poles strictly inside the unit circle.
+
+        Parameters
+        ----------
+        max_growth : float
+            Largest accepted growth rate, 1/s (0: strictly stable; > 0: slowly
+            growing poles accepted).
         """
         return self.growth_rate() < max_growth
 
@@ -114,12 +123,34 @@ class ArxModel:
         return ct.tf(num, den, self.dt)
 
     def simulate(self, u: np.ndarray) -> np.ndarray:
-        """Simulated output from input `u` alone, zero initial state."""
+        """Simulated output from input `u` alone, zero initial state.
+
+        Parameters
+        ----------
+        u : array
+            Input deviations from trim, input units, sampled at :attr:`dt`.
+
+        Returns
+        -------
+        ndarray
+            Output deviations, output units.
+        """
         num, den = self.polynomials()
         return signal.lfilter(num, den, np.asarray(u, dtype=float))
 
     def predict(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """One-step-ahead prediction of `y` (uses measured past outputs)."""
+        """One-step-ahead prediction of `y` (uses measured past outputs).
+
+        Parameters
+        ----------
+        u, y : array
+            Measured input and output deviations (same length), their units.
+
+        Returns
+        -------
+        ndarray
+            Predicted output, output units.
+        """
         num, den = self.polynomials()
         u = np.asarray(u, dtype=float)
         y = np.asarray(y, dtype=float)
@@ -127,6 +158,7 @@ class ArxModel:
         return signal.lfilter(num, [1.0], u) - signal.lfilter(np.r_[0.0, den[1:]], [1.0], y)
 
     def to_dict(self) -> dict:
+        """The model as JSON-ready values (orders, coefficients, dt in s, residual variance)."""
         return {"na": self.na, "nb": self.nb, "nk": self.nk, "dt_s": self.dt,
                 "a": self.a.tolist(), "b": self.b.tolist(),
                 "noise_variance": self.noise_variance, "n_samples": self.n_samples}
@@ -160,7 +192,15 @@ def _check_signals(u, y, label):
 
 def min_samples(na: int, nb: int, nk: int, *, per_parameter: int = 10) -> int:
     """Fewest samples accepted for ARX(na, nb, nk): the lags plus
-    `per_parameter` equations per estimated parameter."""
+    `per_parameter` equations per estimated parameter.
+
+    Parameters
+    ----------
+    na, nb, nk : int
+        ARX orders and input delay (samples).
+    per_parameter : int
+        Equations required per estimated coefficient.
+    """
     return _first_sample(na, nb, nk) + per_parameter * (na + nb)
 
 
@@ -331,6 +371,17 @@ def information_criterion(kind: str, variance: float, n: int, d: int) -> float:
 
     ``aic = n ln V + 2 d``, ``bic = n ln V + d ln n``,
     ``fpe = V (1 + d/n) / (1 - d/n)``. Lower is better for all three.
+
+    Parameters
+    ----------
+    kind : {"aic", "bic", "fpe"}
+        The criterion.
+    variance : float
+        Mean squared one-step residual V, output units^2.
+    n : int
+        Number of equations (samples).
+    d : int
+        Number of estimated parameters.
     """
     if kind not in CRITERIA:
         raise HesspipeError(f"criterion: expected one of {', '.join(CRITERIA)}, got {kind!r}")
@@ -351,6 +402,15 @@ def excitation_order(u, n_max: int, *, rcond: float = 1e-4) -> int:
     mean is itself one exciting component). Zero input has order 0, one
     sinusoid order 2, white noise order `n_max`. An input of order n can
     identify at most n coefficients of B(q).
+
+    Parameters
+    ----------
+    u : array
+        Input deviations from trim.
+    n_max : int
+        Largest order looked for (number of lagged copies).
+    rcond : float
+        Relative singular-value threshold.
     """
     u = np.asarray(u, dtype=float)
     if n_max < 1 or len(u) <= n_max or not np.any(u):
@@ -364,7 +424,19 @@ def excitation_order(u, n_max: int, *, rcond: float = 1e-4) -> int:
 
 @dataclass(frozen=True)
 class Candidate:
-    """One grid point of an order selection."""
+    """One grid point of an order selection.
+
+    Attributes
+    ----------
+    na, nb, nk : int
+        Orders and input delay (samples).
+    criterion : float
+        Value of the information criterion (lower is better).
+    noise_variance : float
+        Mean squared one-step residual, output units^2.
+    stable : bool
+        Whether the fit may be chosen (stable, or stable on the record).
+    """
 
     na: int
     nb: int
@@ -374,13 +446,28 @@ class Candidate:
     stable: bool = True
 
     def to_dict(self) -> dict:
+        """The candidate as JSON-ready values."""
         return {"na": self.na, "nb": self.nb, "nk": self.nk, "criterion": self.criterion,
                 "noise_variance": self.noise_variance, "stable": self.stable}
 
 
 @dataclass(frozen=True)
 class OrderSelection:
-    """Result of :func:`select_order`: the best model and the whole grid."""
+    """Result of :func:`select_order`: the best model and the whole grid.
+
+    Attributes
+    ----------
+    model : ArxModel
+        The chosen model, fitted.
+    criterion : str
+        ``"aic"``, ``"bic"`` or ``"fpe"``.
+    candidates : tuple of Candidate
+        Every grid point.
+    excitation_order : int
+        Order of persistent excitation of the input.
+    n_samples : int
+        Equations every candidate was fitted on.
+    """
 
     model: ArxModel
     criterion: str
@@ -395,13 +482,32 @@ class OrderSelection:
         return next(c for c in self.candidates if (c.na, c.nb, c.nk) == m.orders)
 
     def ranked(self, n: int = 10) -> list[Candidate]:
-        """The `n` best candidates, best first."""
+        """The `n` best candidates, best first.
+
+        Parameters
+        ----------
+        n : int
+            How many.
+        """
         return sorted(self.candidates, key=lambda c: c.criterion)[:n]
 
 
 def check_data(u, y, *, na_max: int = 6, nb_max: int = 6, nk_max: int = 3, min_excitation: int = 4,
                rcond: float = 1e-4, label: str = "data") -> int:
     """Check that `u`, `y` can support an order selection; return the excitation order.
+
+    Parameters
+    ----------
+    u, y : array
+        Input and output deviations from trim (same length).
+    na_max, nb_max, nk_max : int
+        Largest orders and input delay (samples) of the grid.
+    min_excitation : int
+        Least excitation order accepted.
+    rcond : float
+        Relative singular-value threshold of :func:`excitation_order`.
+    label : str
+        What the data is called in messages (e.g. the file).
 
     Raises
     ------
@@ -442,6 +548,33 @@ def select_order(u, y, *, na_max: int = 6, nb_max: int = 6, nk_min: int = 1, nk_
     cannot tell a pole at ``ln|z|/dt = +1e-4`` from one at ``-1e-4``; see
     :func:`hesspipe.pilot.simulation.growth_limit`). Refusing them can leave only
     candidates that fit badly (the MD11's slightly divergent spiral mode).
+
+    Parameters
+    ----------
+    u, y : array
+        Input and output deviations from trim, same length, sampled at `dt`.
+    na_max, nb_max : int
+        Largest orders of A(q) and B(q).
+    nk_min, nk_max : int
+        Range of the input delay, samples.
+    criterion : {"aic", "bic", "fpe"}
+        Information criterion (lower is better).
+    dt : float
+        Sample interval, s.
+    min_excitation : int
+        Least excitation order of `u` accepted.
+    rcond : float
+        Relative singular-value threshold of :func:`excitation_order`.
+    stable_only : bool
+        Only stable candidates (see above) may be chosen.
+    focus : {"prediction", "simulation"}
+        Fit criterion of each candidate (see :func:`fit_arx`).
+    iterations : int
+        Most prefiltering iterations for ``focus="simulation"``.
+    max_growth : float
+        Largest pole growth rate counted as stable, 1/s.
+    label : str
+        What the data is called in messages.
 
     Raises
     ------
@@ -485,7 +618,15 @@ def select_order(u, y, *, na_max: int = 6, nb_max: int = 6, nk_min: int = 1, nk_
 
 
 def fit_percent(y, y_sim) -> float:
-    """``100 (1 - ||y - y_sim|| / ||y - mean(y)||)``; 100 is perfect, may be negative."""
+    """``100 (1 - ||y - y_sim|| / ||y - mean(y)||)``; 100 is perfect, may be negative.
+
+    Parameters
+    ----------
+    y : array
+        Measured output.
+    y_sim : array
+        Simulated output, same units and length.
+    """
     y = np.asarray(y, dtype=float)
     y_sim = np.asarray(y_sim, dtype=float)
     denom = np.linalg.norm(y - y.mean())
@@ -516,6 +657,29 @@ class ResidualTests:
     portmanteau tests at significance ``1 - confidence``: Ljung-Box on the
     autocorrelation (lags 1..M, chi² with M dof) and ``N sum r_eu² / (sum r_e r_u)``
     on the cross-correlation (lags 0..M, chi² with M+1 dof).
+
+    Attributes
+    ----------
+    lags : ndarray
+        Autocorrelation lags 0..M, samples.
+    autocorrelation : ndarray
+        Normalised autocorrelation of the residuals at `lags` (1 at lag 0).
+    autocorrelation_bound : float
+        Its confidence bound (dimensionless).
+    cross_lags : ndarray
+        Cross-correlation lags, samples (k >= 0: residual at t + k, input at t).
+    cross_correlation : ndarray
+        Normalised residual/input cross-correlation at `cross_lags`.
+    cross_correlation_bound : float
+        Its confidence bound.
+    whiteness_statistic, whiteness_p : float
+        Ljung-Box statistic and p-value.
+    independence_statistic, independence_p : float
+        Cross-correlation statistic and p-value.
+    confidence : float
+        Confidence level of the bounds, e.g. 0.99.
+    n_samples : int
+        Residual samples used.
     """
 
     lags: np.ndarray
@@ -533,13 +697,16 @@ class ResidualTests:
 
     @property
     def white(self) -> bool:
+        """True if the whiteness test passes at significance ``1 - confidence``."""
         return self.whiteness_p >= 1 - self.confidence
 
     @property
     def independent(self) -> bool:
+        """True if the independence test passes at significance ``1 - confidence``."""
         return self.independence_p >= 1 - self.confidence
 
     def to_dict(self) -> dict:
+        """The tests as JSON-ready values (pass flags, statistics, p-values, bounds)."""
         auto_out = int(np.sum(np.abs(self.autocorrelation[1:]) > self.autocorrelation_bound))
         cross_out = int(np.sum(np.abs(self.cross_correlation) > self.cross_correlation_bound))
         return {
@@ -571,6 +738,17 @@ def independence_test(e: np.ndarray, u: np.ndarray, max_lag: int = 25, *,
     lags of a smooth input such as a pilot's control are strongly correlated and the
     same sum rejects far too often.)
 
+    Parameters
+    ----------
+    e : array
+        Residuals.
+    u : array
+        Input, same length.
+    max_lag : int
+        Largest lag M, samples.
+    ar_order : int
+        Order of the prewhitening AR filter.
+
     Returns
     -------
     statistic, p_value : float
@@ -599,6 +777,17 @@ def residual_tests(e, u, *, max_lag: int = 25, confidence: float = 0.99) -> Resi
 
     Cross-correlation lags k >= 0 mean the residual at t + k against the
     input at t (a model that misses input dynamics shows up there).
+
+    Parameters
+    ----------
+    e : array
+        Residuals (output units).
+    u : array
+        Input, same length.
+    max_lag : int
+        Largest lag M, samples.
+    confidence : float
+        Confidence level of bounds and tests, in (0, 1).
     """
     e = np.asarray(e, dtype=float)
     u = np.asarray(u, dtype=float)

@@ -37,6 +37,7 @@ import control as ct
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.formats import siso_coefficients
 
 
 def _poly_power(p: np.ndarray, k: int) -> np.ndarray:
@@ -70,8 +71,7 @@ def tustin_d2c(sysd: ct.TransferFunction, *, nyquist_tol: float = 1e-6,
     dt = sysd.dt
     if dt is None or dt is True or not dt or dt <= 0:
         raise HesspipeError(f"{label}: expected a discrete transfer function with a sample time, got dt={dt!r}")
-    num = np.atleast_1d(np.squeeze(sysd.num[0][0])).astype(float)
-    den = np.atleast_1d(np.squeeze(sysd.den[0][0])).astype(float)
+    num, den = siso_coefficients(sysd)
     n = max(len(num), len(den)) - 1
     num = np.r_[np.zeros(n + 1 - len(num)), num]
     den = np.r_[np.zeros(n + 1 - len(den)), den]
@@ -120,7 +120,23 @@ def tustin_d2c(sysd: ct.TransferFunction, *, nyquist_tol: float = 1e-6,
 
 @dataclass(frozen=True)
 class FrequencyCheck:
-    """Continuous vs discrete frequency response on a band."""
+    """Continuous vs discrete frequency response on a band.
+
+    Attributes
+    ----------
+    freq_hz : ndarray
+        Frequencies of the check, Hz.
+    discrete, continuous : ndarray of complex
+        The two models' responses there.
+    max_gain_error_db : float
+        Largest ``|20 log10 |Hc / Hd||``, dB.
+    max_phase_error_deg : float
+        Largest ``|angle(Hc / Hd)|``, deg.
+    gain_limit_db, phase_limit_deg : float
+        What passes, dB and deg.
+    band_hz : (float, float)
+        The band, Hz.
+    """
 
     freq_hz: np.ndarray
     discrete: np.ndarray
@@ -133,10 +149,12 @@ class FrequencyCheck:
 
     @property
     def passed(self) -> bool:
+        """True if both errors are within their limits."""
         return (self.max_gain_error_db <= self.gain_limit_db
                 and self.max_phase_error_deg <= self.phase_limit_deg)
 
     def to_dict(self) -> dict:
+        """The check as JSON-ready values (band, errors, limits, pass)."""
         return {"band_hz": list(self.band_hz), "max_gain_error_db": self.max_gain_error_db,
                 "max_phase_error_deg": self.max_phase_error_deg,
                 "gain_limit_db": self.gain_limit_db, "phase_limit_deg": self.phase_limit_deg,
@@ -144,7 +162,20 @@ class FrequencyCheck:
 
 
 def frequency_response(sys: ct.TransferFunction, freq_hz: np.ndarray) -> np.ndarray:
-    """Complex response of `sys` at `freq_hz` (z = e^(j w dt) if discrete)."""
+    """Complex response of `sys` at `freq_hz` (z = e^(j w dt) if discrete).
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        SISO, continuous or discrete.
+    freq_hz : array
+        Frequencies, Hz.
+
+    Returns
+    -------
+    ndarray of complex
+        Output units per input unit.
+    """
     w = 2 * np.pi * np.asarray(freq_hz, dtype=float)
     if sys.isdtime(strict=True):
         x = np.exp(1j * w * sys.dt)
@@ -160,6 +191,19 @@ def compare_frequency_response(sysd: ct.TransferFunction, sysc: ct.TransferFunct
     """Largest gain (dB) and phase (deg) difference between `sysc` and `sysd` on a band.
 
     The band must lie below the discrete model's Nyquist frequency.
+
+    Parameters
+    ----------
+    sysd : control.TransferFunction
+        Discrete model (with its sample time, s).
+    sysc : control.TransferFunction
+        Continuous model.
+    band_hz : (float, float)
+        The band, Hz (0 < low < high < Nyquist).
+    n : int
+        Log-spaced frequencies on the band.
+    gain_limit_db, phase_limit_deg : float
+        Largest differences that pass, dB and deg.
     """
     lo, hi = band_hz
     nyq = 0.5 / sysd.dt

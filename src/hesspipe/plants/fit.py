@@ -106,7 +106,19 @@ from .slow_roots import SlowRoots, phase_change, reflect_slow_roots
 
 @dataclass(frozen=True)
 class Channel:
-    """Where one plant's data live in a flight folder."""
+    """Where one plant's data live in a flight folder.
+
+    Attributes
+    ----------
+    key : str
+        ``"control_to_output"`` or ``"disturbance_to_output"``.
+    file : str
+        CSV file name inside the flight folder.
+    input, output : str
+        Column names of the plant's input and output.
+    title : str
+        Human-readable name (reports, figures).
+    """
 
     key: str
     file: str
@@ -216,10 +228,21 @@ class PlantsConfig(Settings):
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<plants defaults>",
                    prefix: str = "plants") -> "PlantsConfig":
-        """Build from the ``[plants]`` TOML table; unknown keys are rejected."""
+        """Build from the ``[plants]`` TOML table; unknown keys are rejected.
+
+        Parameters
+        ----------
+        table : mapping or None
+            The ``[plants]`` table (None: all defaults).
+        source : str or Path
+            The file it came from, named in error messages.
+        prefix : str
+            The table's name in error messages.
+        """
         return cls._from_fields(Fields(table, source, prefix))
 
     def to_dict(self) -> dict:
+        """The settings as JSON-ready values."""
         out = asdict(self)
         out["check_band_hz"] = list(self.check_band_hz)
         return out
@@ -227,7 +250,19 @@ class PlantsConfig(Settings):
 
 @dataclass(frozen=True)
 class Record:
-    """One channel's data as read from a flight file (full rate, raw values)."""
+    """One channel's data as read from a flight file (full rate, raw values).
+
+    Attributes
+    ----------
+    time : ndarray
+        Sample times, s.
+    input, output : ndarray
+        The plant's input and output, the file's units.
+    path : str
+        The CSV file.
+    comments : tuple of str
+        Its ``#`` comment lines.
+    """
 
     time: np.ndarray
     input: np.ndarray
@@ -237,12 +272,22 @@ class Record:
 
     @property
     def synthetic(self) -> bool:
+        """True if a comment labels the record synthetic."""
         return any("synthetic" in c.lower() for c in self.comments)
 
 
 def read_record(path: str | Path, input_column: str, output_column: str, *,
                 rtol: float = 1e-4) -> Record:
     """Read `time`, `input_column` and `output_column` from a flight-record CSV.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    input_column, output_column : str
+        Column names.
+    rtol : float
+        Relative tolerance of uniform sampling.
 
     Raises
     ------
@@ -270,6 +315,37 @@ class ChannelFit:
     """Everything identified and checked for one plant.
 
     The arrays are on the decimated grid, as deviations from trim.
+
+    Attributes
+    ----------
+    channel : Channel
+    source : str
+        The CSV file.
+    raw_dt : float
+        Sample interval of the file, s.
+    time, input, output : ndarray
+        Decimated grid (s) and trim-removed input and output.
+    n_estimation : int
+        Samples used for estimation (the rest validate).
+    selection : OrderSelection
+        The ARX order selection.
+    continuous : control.TransferFunction
+        The plant in continuous time (what ``plants.json`` holds).
+    conversion_notes : tuple of str
+        How the discrete-to-continuous conversion handled awkward poles.
+    check : FrequencyCheck
+        Continuous vs discrete frequency response.
+    simulated, simulated_continuous : ndarray
+        Simulated output of the discrete and continuous models.
+    fit_estimation, fit_validation, fit_validation_continuous : float
+        Fit percent (100 perfect, may be negative).
+    residuals : ResidualTests
+    trim_input, trim_output : float
+        Removed trim values, the file's units.
+    synthetic : bool
+        The record is labelled synthetic.
+    slow_roots : SlowRoots, optional
+        Right-half-plane roots the record cannot place.
     """
 
     channel: Channel
@@ -296,14 +372,17 @@ class ChannelFit:
 
     @property
     def model(self) -> _arx.ArxModel:
+        """The chosen ARX model."""
         return self.selection.model
 
     @property
     def discrete(self) -> ct.TransferFunction:
+        """The ARX model as a discrete transfer function (sample time in s)."""
         return self.model.tf()
 
     @property
     def validation_start_s(self) -> float:
+        """Time of the first validation sample, s."""
         return float(self.time[self.n_estimation])
 
 
@@ -315,7 +394,21 @@ def _decimate(x: np.ndarray, q: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Prepared:
-    """A record after steps 1–3: trim removed, decimated, split (checked, not yet fitted)."""
+    """A record after steps 1–3: trim removed, decimated, split (checked, not yet fitted).""
+
+    Attributes
+    ----------
+    time, input, output : ndarray
+        Decimated grid (s), trim-removed input and output.
+    raw_dt, dt : float
+        Sample interval before and after decimation, s.
+    n_estimation : int
+        Estimation samples (the rest validate).
+    trim_input, trim_output : float
+        Removed trim values.
+    label : str
+        How messages name the data.
+    """
 
     time: np.ndarray
     input: np.ndarray
@@ -329,7 +422,14 @@ class Prepared:
 
 
 def prepare(record: Record, channel: Channel, config: PlantsConfig) -> Prepared:
-    """Steps 1–3 and the data checks, so a bad record fails before any fitting."""
+    """Steps 1–3 and the data checks, so a bad record fails before any fitting.""
+
+    Parameters
+    ----------
+    record : Record
+    channel : Channel
+    config : PlantsConfig
+    """
     label = f"{record.path}: column '{channel.input}'"
     # The span over the count is exact to the CSV's precision; a single step is not.
     raw_dt = float(record.time[-1] - record.time[0]) / (len(record.time) - 1)
@@ -359,7 +459,16 @@ def prepare(record: Record, channel: Channel, config: PlantsConfig) -> Prepared:
 
 def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
                      prepared: Prepared | None = None) -> ChannelFit:
-    """Identify, convert and validate one plant from one record (steps 1–6 of the module doc)."""
+    """Identify, convert and validate one plant from one record (steps 1–6 of the module doc).""
+
+    Parameters
+    ----------
+    record : Record
+    channel : Channel
+    config : PlantsConfig
+    prepared : Prepared, optional
+        The result of :func:`prepare` if already computed.
+    """
     p = prepared or prepare(record, channel, config)
     u, y, t, dt, n_est, label = p.input, p.output, p.time, p.dt, p.n_estimation, p.label
     limit = growth_limit(dt * len(u))
@@ -412,7 +521,18 @@ def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
 
 @dataclass(frozen=True)
 class PlantsResult:
-    """What :func:`fit_plants` produced."""
+    """What :func:`fit_plants` produced.
+
+    Attributes
+    ----------
+    plants : Plants
+    fits : dict
+        :class:`ChannelFit` by channel key.
+    report : dict
+        What ``plants_report.json`` holds.
+    files : dict
+        Written files by role.
+    """
 
     plants: Plants
     fits: dict
@@ -537,7 +657,17 @@ class AnalyticConfig(Settings):
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<analytic defaults>",
                    prefix: str = "analytic") -> "AnalyticConfig":
-        """Build from the ``[analytic]`` TOML table; unknown keys are rejected."""
+        """Build from the ``[analytic]`` TOML table; unknown keys are rejected.
+
+        Parameters
+        ----------
+        table : mapping or None
+            The ``[analytic]`` table (None: all defaults).
+        source : str or Path
+            The file it came from, named in error messages.
+        prefix : str
+            The table's name in error messages.
+        """
         return cls._from_fields(Fields(table, source, prefix))
 
 
@@ -546,7 +676,24 @@ def analytic_plants(name_or_path: str | Path, out_dir: str | Path,
     """Write the analytic aircraft's plants: ``plants.json``, ``plants_report.md``,
     ``plants_report.json``, the figures of ``draw(folder, analytic_plants) -> names``
     (:func:`hesspipe.viz.plants.draw_analytic`: ``analytic_bode.png``) and
-    ``manifest.json`` (all or none)."""
+    ``manifest.json`` (all or none).
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        An aircraft in ``aircraft/`` with the paper's Table 3-4 data (``roskam``) or its file.
+    out_dir : str or Path
+        Output folder (new, empty, or one hesspipe wrote).
+    config : AnalyticConfig, optional
+        Which analytic models are the plants (default: the paper's choice).
+    draw : callable, optional
+        ``draw(folder, analytic_plants) -> file names``; no figures when None.
+
+    Returns
+    -------
+    Plants
+        Yc (aileron, rad -> roll rate, rad/s) and Yd (side wind, ft/s -> roll rate, rad/s).
+    """
     config = config or AnalyticConfig()
     ac = load_analytic(name_or_path)
     ap = analytic_transfer_functions(ac)

@@ -9,10 +9,8 @@ import control as ct
 import numpy as np
 
 from ..core.formats import tf_coefficients
+from ..core.paper import EQ16 as PAPER_EQ16
 from .analytic import AnalyticPlants, dimensional_derivatives, modes
-
-#: The paper's Eq. 16: lateral wind → roll rate of its Boeing 757 (ARX, units as printed).
-PAPER_EQ16 = ((-0.2554, 14.4, -272.6, 25.72), (1.0, 84.37, 452.2, 1510.0, 628.8))
 
 UNITS = {"control_to_output": "aileron_cmd (normalised -1..1, positive -> positive roll rate) "
                               "-> roll rate (rad/s)",

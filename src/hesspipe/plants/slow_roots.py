@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from ..core.formats import siso_coefficients
+
 
 @dataclass(frozen=True)
 class SlowRoots:
@@ -43,6 +45,7 @@ class SlowRoots:
     max_phase_change_deg: float
 
     def to_dict(self) -> dict:
+        """The reflection as JSON-ready values (rule, limit in 1/s, roots, fits, phase change)."""
         return {"rule": "right-half-plane poles and zeros with |s| below the record's resolution "
                         "ln 2 / duration cannot be placed by the record; listed with the continuous "
                         "validation fit as fitted and reflected into the left half plane "
@@ -81,9 +84,15 @@ def reflect_slow_roots(sys: ct.TransferFunction, limit: float) -> tuple[ct.Trans
     so the gain response is unchanged and only the phase moves, by
     ``2 atan(Re r / w)`` per real root. Returns the new continuous transfer
     function and one entry per reflected root (see :class:`SlowRoots`).
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        SISO, continuous.
+    limit : float
+        Record resolution, 1/s (> 0).
     """
-    num = np.squeeze(sys.num[0][0]).astype(float)
-    den = np.squeeze(sys.den[0][0]).astype(float)
+    num, den = siso_coefficients(sys)
     num, zeros = _reflect(num, limit, "zero")
     den, poles = _reflect(den, limit, "pole")
     if not zeros and not poles:
@@ -92,7 +101,15 @@ def reflect_slow_roots(sys: ct.TransferFunction, limit: float) -> tuple[ct.Trans
 
 
 def phase_change(before, after, band_hz) -> float:
-    """Largest phase difference (deg) between two continuous models on a band (Hz)."""
+    """Largest phase difference (deg) between two continuous models on a band (Hz).
+
+    Parameters
+    ----------
+    before, after : control.TransferFunction
+        Continuous SISO models.
+    band_hz : (float, float)
+        The band, Hz (> 0).
+    """
     w = 2 * np.pi * np.logspace(np.log10(band_hz[0]), np.log10(band_hz[1]), 400)
     ratio = np.asarray(after(1j * w)).reshape(-1) / np.asarray(before(1j * w)).reshape(-1)
     return float(np.max(np.abs(np.degrees(np.angle(ratio)))))

@@ -18,14 +18,28 @@ SYNTHETIC_LABEL = "SYNTHETIC DATA"
 
 
 def subplots(*args, figsize=None, **kwargs):
-    """``(figure, axes)`` like ``pyplot.subplots``, outside pyplot's global state."""
+    """``(figure, axes)`` like ``pyplot.subplots``, outside pyplot's global state.
+
+    Parameters
+    ----------
+    *args, **kwargs
+        As :meth:`matplotlib.figure.Figure.subplots` (rows, columns, sharex ...).
+    figsize : (float, float), optional
+        Figure size, inches.
+    """
     fig = Figure(figsize=figsize)
     return fig, fig.subplots(*args, **kwargs)
 
 
 def check_figure_path(path: str | Path) -> Path:
     """Raise unless `path` names an image format matplotlib writes and can be written
-    (checked before computing); no suffix means PNG."""
+    (checked before computing); no suffix means PNG.
+
+    Parameters
+    ----------
+    path : str or Path
+        The image file.
+    """
     from ..core.errors import HesspipeError
     from ..core.io import check_output_file
 
@@ -45,6 +59,16 @@ def save_figure(fig, path: str | Path, *, synthetic: bool = False, dpi: int = 11
 
     If `synthetic`, the figure is stamped "SYNTHETIC DATA" so it can never be
     mistaken for measured data.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : str or Path
+        The image file (format by suffix; none: PNG).
+    synthetic : bool
+        Stamp "SYNTHETIC DATA".
+    dpi : int
+        Resolution, dots per inch.
     """
     if synthetic:
         fig.text(0.995, 0.005, SYNTHETIC_LABEL, ha="right", va="bottom", color="crimson",

@@ -36,7 +36,15 @@ def plot_pilot(pilot, path: str | Path) -> Path:
 
 
 def plot_df(pilot, path: str | Path) -> Path:
-    """The identified models' describing functions over the pilot's measured one (``pilot.frf``)."""
+    """The identified models' describing functions over the pilot's measured one (``pilot.frf``).
+
+    Parameters
+    ----------
+    pilot : hesspipe.pilots.compare.PilotComparison
+        With ``frf`` (the nonparametric describing function) and both identified models.
+    path : str or Path
+        PNG to write.
+    """
     from ..identification.criteria import model_df
     from ..pilot.hess import model_from_name
     from .frf import frf_figure
@@ -51,7 +59,15 @@ def plot_df(pilot, path: str | Path) -> Path:
 
 def draw_pilots(folder: str | Path, pilots) -> list[str]:
     """``<pilot>.png`` (and ``<pilot>_df.png`` when the pilot has a describing function)
-    for each pilot in `folder`; returns their names."""
+    for each pilot in `folder`; returns their names.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Folder to draw into.
+    pilots : sequence of hesspipe.pilots.compare.PilotComparison
+        The compared pilots.
+    """
     folder = Path(folder)
     names = []
     for p in pilots:
@@ -63,5 +79,13 @@ def draw_pilots(folder: str | Path, pilots) -> list[str]:
 
 def draw_comparison(folder: str | Path, comparison) -> list[str]:
     """The figures of :func:`hesspipe.pilots.compare.write_comparison` (its ``draw``):
-    :func:`draw_pilots` into ``folder/figures``; returns names relative to `folder`."""
+    :func:`draw_pilots` into ``folder/figures``; returns names relative to `folder`.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The comparison's (staging) folder.
+    comparison : hesspipe.pilots.compare.Comparison
+        The compared pilots.
+    """
     return [f"figures/{name}" for name in draw_pilots(Path(folder) / "figures", comparison.pilots)]

@@ -16,6 +16,13 @@ def plot_diagnosis(diagnosis, path: str | Path) -> Path:
     bands where the baseline disagreed beyond chance shaded (green if the final model
     closed them, red if they still disagree). Bottom: model/measured ratio in dB per
     bin for both models, with the final model's residual scatter as a grey band.
+
+    Parameters
+    ----------
+    diagnosis : hesspipe.diagnose.workflow.Diagnosis
+        The diagnosis (PSDs in control units^2/Hz).
+    path : str or Path
+        The image file.
     """
     d = diagnosis
     f = np.asarray(d.freq_hz)

@@ -16,6 +16,17 @@ def plot_record(record, path: str | Path, *, kind: str, title: str = "") -> Path
     Panels: the record's input (`kind` ``"wind"``: lateral wind, ft/s;
     ``"aileron"``: aileron command), roll and yaw rate (rad/s), bank and
     sideslip (deg), calibrated airspeed (kt) and height AGL (ft).
+
+    Parameters
+    ----------
+    record : mapping
+        Columns by name (time in s).
+    path : str or Path
+        The image file.
+    kind : {"wind", "aileron"}
+        Which input the record was flown with.
+    title : str
+        Figure title.
     """
     column, label = _INPUTS[kind]
     t = record["time"]
@@ -45,7 +56,21 @@ def plot_record(record, path: str | Path, *, kind: str, title: str = "") -> Path
 
 def draw_flight(folder: str | Path, wind, aileron, *, aircraft: str, seed: int, config) -> list[str]:
     """The figures of :func:`hesspipe.flight.approach.fly` (its ``draw``): ``flight_wind.png``
-    and ``flight_aileron.png`` in `folder`; returns their names."""
+    and ``flight_aileron.png`` in `folder`; returns their names.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Folder to draw into (the stage's staging folder).
+    wind, aileron : pandas.DataFrame
+        The two records (columns as in the CSV files).
+    aircraft : str
+        Aircraft name for the titles.
+    seed : int
+        The records' seed, for the titles.
+    config : hesspipe.flight.approach.FlightConfig
+        The flight's settings (excitation kinds in the titles).
+    """
     folder = Path(folder)
     plot_record(wind, folder / "flight_wind.png", kind="wind", title=f"{aircraft}: side-wind "
                 f"record ({config.wind_excitation.kind} excitation, seed {seed})")

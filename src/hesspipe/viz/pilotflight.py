@@ -14,6 +14,12 @@ def plot_pilot_flight(flight, path: str | Path) -> Path:
     aileron command and the command JSBSim got after any hidden actuator
     (normalised), bank (deg), airspeed (kt) and height above the record
     terrain (ft).
+
+    Parameters
+    ----------
+    flight : hesspipe.flight.closed_loop.PilotFlight
+    path : str or Path
+        The image file.
     """
     rec, tr = flight.record, flight.truth
     t = rec["time"]
@@ -43,7 +49,15 @@ def plot_pilot_flight(flight, path: str | Path) -> Path:
 
 def draw_pilot_flight(folder: str | Path, flight) -> list[str]:
     """The figure of :func:`hesspipe.flight.closed_loop.fly_pilot` (its ``draw``):
-    ``<run id>.png`` in `folder`; returns its name."""
+    ``<run id>.png`` in `folder`; returns its name.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Folder to draw into.
+    flight : hesspipe.flight.closed_loop.PilotFlight
+        The closed-loop flight (record and truth).
+    """
     name = f"{flight.run.id}.png"
     plot_pilot_flight(flight, Path(folder) / name)
     return [name]

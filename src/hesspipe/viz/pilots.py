@@ -66,6 +66,17 @@ def identification_figure(path: str | Path, identifications: Sequence, *, title:
 
     `identifications` are :class:`hesspipe.identification.fit.Identification` results
     sharing the measured spectrum; the figure is stamped synthetic if the run is.
+
+    Parameters
+    ----------
+    path : str or Path
+        The image file.
+    identifications : sequence of Identification
+        Results for the same run.
+    title : str, optional
+        Figure title.
+    labels : sequence of str, optional
+        Legend labels (default: the model names).
     """
     first = identifications[0]
     labels = list(labels) if labels else [i.model for i in identifications]

@@ -11,7 +11,17 @@ from . import save_figure, subplots
 
 
 def plot_validation(fits: dict, path: str | Path, *, synthetic: bool = False) -> Path:
-    """Measured vs simulated roll rate for each channel; validation tail shaded."""
+    """Measured vs simulated roll rate for each channel; validation tail shaded.
+
+    Parameters
+    ----------
+    fits : dict
+        :class:`hesspipe.plants.fit.ChannelFit` by channel key.
+    path : str or Path
+        The image file.
+    synthetic : bool
+        Stamp "SYNTHETIC DATA".
+    """
     fig, axes = subplots(len(fits), 1, figsize=(9, 3.2 * len(fits)), squeeze=False)
     for ax, fit in zip(axes[:, 0], fits.values()):
         t = fit.time
@@ -34,6 +44,17 @@ def plot_bode(fits: dict, path: str | Path, *, synthetic: bool = False, referenc
 
     `reference` (a continuous tf, e.g. the paper's Eq. 16) is drawn on the
     wind channel for comparison.
+
+    Parameters
+    ----------
+    fits : dict
+        :class:`hesspipe.plants.fit.ChannelFit` by channel key.
+    path : str or Path
+        The image file.
+    synthetic : bool
+        Stamp "SYNTHETIC DATA".
+    reference : control.TransferFunction, optional
+        A continuous tf to draw on the wind channel.
     """
     fig, axes = subplots(2, len(fits), figsize=(5.5 * len(fits), 6), squeeze=False, sharex="col")
     for j, (key, fit) in enumerate(fits.items()):
@@ -65,7 +86,17 @@ def plot_bode(fits: dict, path: str | Path, *, synthetic: bool = False, referenc
 
 
 def plot_residuals(fits: dict, path: str | Path, *, synthetic: bool = False) -> Path:
-    """Residual autocorrelation and residual/input cross-correlation with bounds."""
+    """Residual autocorrelation and residual/input cross-correlation with bounds.
+
+    Parameters
+    ----------
+    fits : dict
+        :class:`hesspipe.plants.fit.ChannelFit` by channel key.
+    path : str or Path
+        The image file.
+    synthetic : bool
+        Stamp "SYNTHETIC DATA".
+    """
     fig, axes = subplots(len(fits), 2, figsize=(10, 3 * len(fits)), squeeze=False)
     for i, fit in enumerate(fits.values()):
         r = fit.residuals
@@ -85,7 +116,14 @@ def plot_residuals(fits: dict, path: str | Path, *, synthetic: bool = False) -> 
 
 
 def plot_analytic(ap, path: str | Path) -> Path:
-    """Bode of the analytic aircraft: full model and rolling approximation, both inputs."""
+    """Bode of the analytic aircraft: full model and rolling approximation, both inputs.
+
+    Parameters
+    ----------
+    ap : hesspipe.plants.analytic.AnalyticPlants
+    path : str or Path
+        The image file.
+    """
     f = np.logspace(-3, 1, 500)
     fig, axes = subplots(2, 2, figsize=(11, 6), sharex=True)
     pairs = (("aileron (rad) -> roll rate", ap.full_control, ap.rolling_control),
@@ -108,7 +146,17 @@ def plot_analytic(ap, path: str | Path) -> Path:
 
 def draw_plants(folder: str | Path, fits: dict, *, synthetic: bool = False) -> list[str]:
     """The figures of :func:`hesspipe.plants.fit.fit_plants` (its ``draw``) in `folder`:
-    validation, Bode (with the paper's Eq. 16) and residuals; returns their names."""
+    validation, Bode (with the paper's Eq. 16) and residuals; returns their names.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Folder to draw into.
+    fits : dict
+        Channel name -> :class:`hesspipe.plants.fit.ChannelFit`.
+    synthetic : bool
+        Label the figures SYNTHETIC.
+    """
     import control as ct
 
     from ..plants.report import PAPER_EQ16
@@ -121,6 +169,14 @@ def draw_plants(folder: str | Path, fits: dict, *, synthetic: bool = False) -> l
 
 
 def draw_analytic(folder: str | Path, ap) -> list[str]:
-    """The figure of :func:`hesspipe.plants.fit.analytic_plants` (its ``draw``): ``analytic_bode.png``."""
+    """The figure of :func:`hesspipe.plants.fit.analytic_plants` (its ``draw``): ``analytic_bode.png``.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Folder to draw into.
+    ap : hesspipe.plants.analytic.AnalyticPlants
+        The analytic aircraft's transfer functions.
+    """
     plot_analytic(ap, Path(folder) / "analytic_bode.png")
     return ["analytic_bode.png"]
