@@ -24,7 +24,9 @@ PACKAGE = Path(hesspipe.__file__).parent
 #: Folders (all their modules) and single modules (path relative to the package).
 COVERED = ("core", "pilot", "plants/arx.py", "plants/d2c.py", "plants/slow_roots.py",
            "plants/analytic.py", "plants/fit.py", "identification", "flight/aircraft.py",
-           "flight/wind.py", "pipeline/engine.py", "viz", "humanlike")
+           "flight/wind.py", "flight/approach.py", "pilots/batch.py", "pilots/report.py",
+           "pilots/settings.py", "plants/report.py", "pipeline/engine.py", "pipeline/stages.py",
+           "viz", "humanlike")
 #: Left out for now (being rewritten elsewhere); the lead extends COVERED to them later.
 EXCLUDED = ("pilot/crossover.py", "identification/frf.py")
 

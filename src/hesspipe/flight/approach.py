@@ -151,7 +151,18 @@ class FlightConfig(Settings):
     @classmethod
     def from_table(cls, table: Mapping | None, source: str | Path = "<flight defaults>",
                    prefix: str = "flight") -> "FlightConfig":
-        """Build from the ``[flight]`` table of a TOML file; unknown keys are errors."""
+        """Build from the ``[flight]`` table of a TOML file; unknown keys are errors.
+
+        Parameters
+        ----------
+        table : mapping or None
+            The ``[flight]`` table, with its sub-tables ``side_wind``,
+            ``wind_excitation`` and ``aileron_excitation`` (None: all defaults).
+        source : str or Path
+            The file it came from, named in error messages.
+        prefix : str
+            The table's name in error messages.
+        """
         f = Fields(table, source, prefix)
         d = cls()
         return cls._from_fields(
@@ -407,7 +418,18 @@ def _check_seed(seed) -> int:
 
 
 def record_seeds(seed: int) -> tuple[np.random.SeedSequence, np.random.SeedSequence]:
-    """Independent seeds of the wind and aileron excitations derived from `seed`."""
+    """Independent seeds of the wind and aileron excitations derived from `seed`.
+
+    Parameters
+    ----------
+    seed : int
+        The flight seed (as given to :func:`fly`).
+
+    Returns
+    -------
+    wind, aileron : numpy.random.SeedSequence
+        The two children spawned from ``SeedSequence(seed)``, in that order.
+    """
     wind, aileron = np.random.SeedSequence(seed).spawn(2)
     return wind, aileron
 
@@ -415,8 +437,33 @@ def record_seeds(seed: int) -> tuple[np.random.SeedSequence, np.random.SeedSeque
 def fly_records(aircraft: str | AircraftConfig, config: FlightConfig, seed: int, workdir: Path):
     """Load, trim and fly both records in memory; JSBSim's files live in `workdir`.
 
-    Returns ``(trim, wind_record, aileron_record)``. Use :func:`fly` to also
-    write the outputs.
+    Use :func:`fly` to also write the outputs.
+
+    Parameters
+    ----------
+    aircraft : str or AircraftConfig
+        Name of a file in ``aircraft/`` (e.g. ``"737"``) or a loaded aircraft.
+    config : FlightConfig
+        Record length and step (s), envelope limits, side wind and excitations.
+    seed : int
+        Seed of the excitation signals (split by :func:`record_seeds`).
+    workdir : Path
+        Folder for the sanitised copy of the JSBSim aircraft files.
+
+    Returns
+    -------
+    trim : dict
+        The ``trim.json`` content, plus ``record_terrain_ft`` and
+        ``record_h_agl_ft`` (ft) of the records.
+    wind_record, aileron_record : pandas.DataFrame
+        The two records, columns :data:`COLUMNS` (units and signs in the
+        module docstring).
+
+    Raises
+    ------
+    HesspipeError
+        Bad seed, trim failure, ground contact, speed excursion or a diverged
+        simulation.
     """
     ac = aircraft if isinstance(aircraft, AircraftConfig) else load_aircraft(aircraft)
     seed = _check_seed(seed)

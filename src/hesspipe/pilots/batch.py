@@ -49,7 +49,18 @@ def _mp_context():
 
 
 def check_workers(workers) -> int:
-    """Return `workers` if it is an integer >= 1 (the one rule; callers check early with it)."""
+    """Return `workers` if it is an integer >= 1 (the one rule; callers check early with it).
+
+    Parameters
+    ----------
+    workers : int
+        Number of worker processes; a bool is refused.
+
+    Raises
+    ------
+    HesspipeError
+        Naming ``workers``, if it is not an integer >= 1.
+    """
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise HesspipeError(f"workers: expected an integer >= 1, got {workers!r}")
     return workers
@@ -142,7 +153,25 @@ _ADDRESS = re.compile(r"^(?:(?:tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za
 def check_scheduler_address(address: str, name: str = "scheduler") -> str:
     """Return `address` if it reads like ``tcp://HOST:PORT``; raise at once otherwise.
 
-    `name` is how the caller calls the setting, for the message.
+    Parameters
+    ----------
+    address : str
+        Dask scheduler address: optional protocol (``tcp``, ``tls``, ``ws``,
+        ``wss``, ``ucx``), host (name, IPv4 or ``[IPv6]``) and port 1-65535;
+        or an in-process ``inproc://...`` address. Surrounding spaces are
+        stripped.
+    name : str
+        How the caller calls the setting, for the message.
+
+    Returns
+    -------
+    str
+        The stripped address (nothing is contacted).
+
+    Raises
+    ------
+    HesspipeError
+        Naming `name`, if the address does not have that form.
     """
     text = address.strip() if isinstance(address, str) else ""
     if text.startswith("inproc://") and len(text) > len("inproc://"):

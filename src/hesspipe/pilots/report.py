@@ -24,7 +24,28 @@ def _fmt(x, spec=".3g") -> str:
 
 
 def format_table(comparison) -> str:
-    """Plain-text comparison: one row per pilot and configuration, then mean and spread."""
+    """Plain-text comparison: one row per pilot and configuration, then mean and spread.
+
+    Columns: the gains of :data:`TABLE_PARAMETERS` (``x`` = not in that
+    configuration's model, ``-`` = missing or not finite), the fitness, the
+    improvement ``1 - expanded/original fitness`` in percent (on the
+    ``expanded`` row), the crossover frequency (rad/s) and the phase margin
+    (deg). Synthetic runs are marked ``*`` and the table headed
+    ``SYNTHETIC DATA``; the verdict lines come first, identifiability notes
+    and failures last.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        A :class:`hesspipe.pilots.compare.Comparison` (duck-typed: ``pilots``,
+        ``failures``, ``synthetic``, ``verdict()``, ``improvement_stats()``,
+        ``km_fixed_value()``).
+
+    Returns
+    -------
+    str
+        The table, lines joined by newlines (no trailing newline).
+    """
     head = ("pilot", "configuration", *TABLE_PARAMETERS, "fitness", "improvement", "wc rad/s", "PM deg")
     rows = []
     for p in comparison.pilots:
@@ -70,11 +91,28 @@ def write_comparison(comparison, out_dir: str | Path, *, draw: Callable | None =
                      json_name: str = "comparison.json", table_name: str = "comparison.md") -> list[Path]:
     """Write ``comparison.json``, ``comparison.md`` and the figures of `draw` into `out_dir`.
 
-    ``draw(folder, comparison)`` writes figures into `folder` and returns their
-    names relative to it (:func:`hesspipe.viz.compare.draw_comparison`:
-    ``figures/<pilot>.png`` and ``figures/<pilot>_df.png``); None: no figures.
     Each file is written atomically; callers that need all-or-nothing wrap
-    this in :func:`hesspipe.core.io.staged_output`.
+    this in :func:`hesspipe.core.io.staged_output`. Run sources inside
+    `out_dir` are recorded relative to it.
+
+    Parameters
+    ----------
+    comparison : Comparison
+        A :class:`hesspipe.pilots.compare.Comparison` (duck-typed: ``to_dict()``
+        and ``table()``).
+    out_dir : str or Path
+        Existing folder the files are written into.
+    draw : callable, optional
+        ``draw(folder, comparison)`` writes figures into `folder` and returns
+        their names relative to it (:func:`hesspipe.viz.compare.draw_comparison`:
+        ``figures/<pilot>.png`` and ``figures/<pilot>_df.png``); None: no figures.
+    json_name, table_name : str
+        File names of the JSON record and of the Markdown table.
+
+    Returns
+    -------
+    list of Path
+        The files written, JSON first, then the table, then the figures.
     """
     out_dir = Path(out_dir)
     record = comparison.to_dict()

@@ -211,10 +211,33 @@ class PilotsConfig(Settings):
 
     @classmethod
     def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
-        """Build from the ``[pilots]`` TOML table; unknown keys are rejected."""
+        """Build from the ``[pilots]`` TOML table; unknown keys are rejected.
+
+        Parameters
+        ----------
+        table : mapping or None
+            The ``[pilots]`` table (None: all defaults).
+        source : str
+            The file it came from, named in error messages.
+        prefix : str
+            The table's name in error messages.
+        """
         return cls._from_fields(Fields(table, source, prefix))
 
     def settings(self, seed: int = 0) -> CompareSettings:
-        """The identification settings of this table; its ``seed``, else `seed` (the pipeline's)."""
+        """The identification settings of this table; its ``seed``, else `seed` (the pipeline's).
+
+        Parameters
+        ----------
+        seed : int
+            Base seed used when the table sets none (``seed`` is None).
+
+        Returns
+        -------
+        CompareSettings
+            With ``band`` = :attr:`band_hz` (Hz) and the shared settings
+            (optimizer, passes, km_fixed, start, restarts, benchmark,
+            criterion) copied by name.
+        """
         return CompareSettings(seed=self.seed if self.seed is not None else seed, band=self.band_hz,
                                **{name: getattr(self, name) for name in _SHARED})

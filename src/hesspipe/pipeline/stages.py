@@ -22,8 +22,32 @@ SECTIONS = ("flight", "plants", "analytic", "pilots", "diagnose", "report")
 def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
     """Load ``pipeline/default.toml`` merged with the user's file and overrides.
 
-    Returns the configuration and a name for it (for messages/manifests).
-    Relative paths in the user's file are resolved against its folder.
+    Relative paths in the user's file (``[pilots] data``, ``[diagnose] run``)
+    are resolved against its folder.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        The user's TOML file (None: the defaults only). Its top level may hold
+        ``seed`` and the tables of :data:`SECTIONS`.
+    aircraft : str, optional
+        Overrides ``[flight] aircraft``.
+    seed : int, optional
+        Overrides the top-level ``seed`` (0 <= seed <= ``MAX_SEED``).
+
+    Returns
+    -------
+    config : dict
+        The merged configuration.
+    source : str
+        A name for it (the user's file, else the default file), for messages
+        and manifests.
+
+    Raises
+    ------
+    HesspipeError
+        Unknown section, bad seed, a section that is not a table, or a
+        pipeline-level name or path (:data:`PATH_FIELDS`) that is not a string.
     """
     default_path = data_dir("pipeline") / "default.toml"
     config = load_toml(default_path)
@@ -74,7 +98,20 @@ def _in_field(source: str, field: str, check, value) -> None:
 
 def validate(config: dict, source: str) -> None:
     """Check every stage's table before anything runs, so a typo in the last stage's
-    table fails in a second, not after the first stages have run."""
+    table fails in a second, not after the first stages have run.
+
+    Parameters
+    ----------
+    config : dict
+        The configuration from :func:`load_config`.
+    source : str
+        Its name, used in error messages.
+
+    Raises
+    ------
+    HesspipeError
+        Naming `source` and the first bad field.
+    """
     from ..diagnose.workflow import DiagnoseConfig, _resolve_candidates
     from ..flight.aircraft import load_aircraft
     from ..flight.approach import FlightConfig
@@ -105,7 +142,23 @@ def validate(config: dict, source: str) -> None:
 
 
 def build_pipeline(config_path=None, out="hesspipe-out", *, aircraft=None, seed=None) -> Pipeline:
-    """The pipeline of ``pipeline/stages.toml`` on the given configuration."""
+    """The pipeline of ``pipeline/stages.toml`` on the given configuration.
+
+    Parameters
+    ----------
+    config_path : str or Path, optional
+        The user's TOML file (None: the defaults only); see :func:`load_config`.
+    out : str or Path
+        Output root folder.
+    aircraft : str, optional
+        Overrides ``[flight] aircraft``.
+    seed : int, optional
+        Overrides the configuration's ``seed``.
+
+    Returns
+    -------
+    Pipeline
+    """
     config, source = load_config(config_path, aircraft=aircraft, seed=seed)
     return Pipeline(load_stages(data_dir("pipeline") / "stages.toml"), config, out, source)
 
@@ -119,11 +172,37 @@ def _split(section: dict, *keys: str) -> tuple[dict, list]:
 # -- flight -------------------------------------------------------------------------------
 
 def flight_inputs(section: dict, config: dict) -> list:
+    """External input of the flight stage: its aircraft file, if it exists.
+
+    Parameters
+    ----------
+    section : dict
+        The stage's configuration table.
+    config : dict
+        The whole configuration (unused).
+
+    Returns
+    -------
+    list of Path
+        ``[aircraft_file(name)]`` of ``section["aircraft"]`` (default ``"737"``),
+        or empty when no such file exists (the stage's check reports it).
+    """
     path = aircraft_file(section.get("aircraft", "737"))
     return [path] if path.exists() else []
 
 
 def flight(ctx) -> None:
+    """Stage one: :func:`hesspipe.flight.approach.fly` with the ``[flight]`` table.
+
+    Writes ``trim.json``, ``wind.csv``, ``aileron.csv`` and their figures into
+    ``ctx.out_dir``; the aircraft defaults to ``"737"``.
+
+    Parameters
+    ----------
+    ctx : StageContext
+        The stage's table (``ctx.section``), seed, staging folder
+        (``ctx.out_dir``) and upstream folders.
+    """
     from ..flight.approach import FlightConfig, fly
     from ..viz.flight import draw_flight
 
@@ -134,6 +213,14 @@ def flight(ctx) -> None:
 # -- plants -------------------------------------------------------------------------------
 
 def plants(ctx) -> None:
+    """Stage two: :func:`hesspipe.plants.fit.fit_plants` on the flight stage's records.
+
+    Parameters
+    ----------
+    ctx : StageContext
+        The stage's table (``ctx.section``), seed, staging folder
+        (``ctx.out_dir``) and upstream folders.
+    """
     from ..plants.fit import PlantsConfig, fit_plants
     from ..viz.plants import draw_plants
 
@@ -142,11 +229,34 @@ def plants(ctx) -> None:
 
 
 def analytic_inputs(section: dict, config: dict) -> list:
+    """External input of the analytic stage: its aircraft file, if it exists.
+
+    Parameters
+    ----------
+    section : dict
+        The stage's configuration table.
+    config : dict
+        The whole configuration (unused).
+
+    Returns
+    -------
+    list of Path
+        ``[aircraft_file(name)]`` of ``section["model"]`` (default ``"roskam"``),
+        or empty when no such file exists.
+    """
     path = aircraft_file(section.get("model", "roskam"))
     return [path] if path.exists() else []
 
 
 def analytic(ctx) -> None:
+    """The paper's analytic aircraft as plants: :func:`hesspipe.plants.fit.analytic_plants`.
+
+    Parameters
+    ----------
+    ctx : StageContext
+        The stage's table (``ctx.section``), seed, staging folder
+        (``ctx.out_dir``) and upstream folders.
+    """
     from ..plants.fit import AnalyticConfig, analytic_plants
     from ..viz.plants import draw_analytic
 
@@ -157,11 +267,42 @@ def analytic(ctx) -> None:
 # -- pilots -------------------------------------------------------------------------------
 
 def pilots_inputs(section: dict, config: dict) -> list:
+    """External input of the pilots stage: the ``[pilots] data`` folder, if set.
+
+    Parameters
+    ----------
+    section : dict
+        The stage's configuration table.
+    config : dict
+        The whole configuration (unused).
+
+    Returns
+    -------
+    list of Path
+        ``[Path(data)]``, or empty for the synthetic cohort (``data`` unset).
+    """
     data = section.get("data")
     return [Path(data)] if isinstance(data, str) and data else []
 
 
 def pilots(ctx) -> None:
+    """Stage three: identify every pilot run with each model configuration.
+
+    Without ``[pilots] data`` a SYNTHETIC cohort is made (flown in JSBSim with
+    ``simulator = "jsbsim"``, else the frequency-domain model), then
+    :func:`hesspipe.pilots.compare.run_study` writes the comparison.
+
+    Parameters
+    ----------
+    ctx : StageContext
+        The stage's table (``ctx.section``), seed, staging folder
+        (``ctx.out_dir``) and upstream folders.
+
+    Raises
+    ------
+    HesspipeError
+        If any run failed, naming each.
+    """
     from ..core.formats import read_plants
     from ..pilots.compare import PilotsConfig, run_study
     from ..viz.compare import draw_comparison
@@ -212,6 +353,17 @@ def _diagnose_run(ctx) -> Path:
 
 
 def diagnose(ctx) -> None:
+    """Diagnose one run: ``diagnosis.json``, ``diagnosis.md`` and ``diagnosis.png``.
+
+    The run is ``[diagnose] run``, else the first run of the pilots stage's
+    ``comparison.json``; it is read with ``[pilots] columns``/``resample``.
+
+    Parameters
+    ----------
+    ctx : StageContext
+        The stage's table (``ctx.section``), seed, staging folder
+        (``ctx.out_dir``) and upstream folders.
+    """
     from ..core.formats import read_plants, read_run
     from ..core.io import write_json, write_text
     from ..diagnose.workflow import SEGMENT, DiagnoseConfig, format_report
@@ -234,6 +386,20 @@ def diagnose(ctx) -> None:
 
 
 def diagnose_inputs(section: dict, config: dict) -> list:
+    """External input of the diagnose stage: the ``[diagnose] run`` file, if set.
+
+    Parameters
+    ----------
+    section : dict
+        The stage's configuration table.
+    config : dict
+        The whole configuration (unused).
+
+    Returns
+    -------
+    list of Path
+        ``[Path(run)]``, or empty when the run comes from the pilots stage.
+    """
     run = section.get("run")
     return [Path(run)] if isinstance(run, str) and run else []
 
@@ -241,6 +407,14 @@ def diagnose_inputs(section: dict, config: dict) -> list:
 # -- report -------------------------------------------------------------------------------
 
 def report(ctx) -> None:
+    """The final stage: ``report.md`` from every upstream stage's outputs.
+
+    Parameters
+    ----------
+    ctx : StageContext
+        The stage's table (``ctx.section``), seed, staging folder
+        (``ctx.out_dir``) and upstream folders.
+    """
     from ..core.io import write_text
     from .report import build_report
 

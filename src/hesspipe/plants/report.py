@@ -21,7 +21,21 @@ UNITS = {"control_to_output": "aileron_cmd (normalised -1..1, positive -> positi
 # -- descriptions of transfer functions ---------------------------------------------------
 
 def roots_table(roots) -> list[dict]:
-    """Continuous roots with natural frequency (rad/s) and damping ratio."""
+    """Continuous roots with natural frequency (rad/s) and damping ratio.
+
+    Parameters
+    ----------
+    roots : array_like of complex
+        Roots in the s-plane, rad/s (poles or zeros of a continuous tf).
+
+    Returns
+    -------
+    list of dict
+        One per real root or conjugate pair (the pair listed once, by its
+        root with ``im >= 0``), sorted by ``|root|``: ``re``, ``im`` (rad/s),
+        ``wn_rad_s`` = ``|root|`` and ``zeta`` = ``-re / wn`` (positive =
+        stable; None for a root at the origin).
+    """
     out = []
     for r in sorted(np.atleast_1d(roots), key=lambda z: (abs(z), z.imag)):
         if r.imag < -1e-12:
@@ -33,7 +47,20 @@ def roots_table(roots) -> list[dict]:
 
 
 def describe_tf(sys: ct.TransferFunction) -> dict:
-    """Coefficients, poles, zeros (with wn, zeta) and DC gain of a continuous SISO tf."""
+    """Coefficients, poles, zeros (with wn, zeta) and DC gain of a continuous SISO tf.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        Continuous-time, single-input single-output.
+
+    Returns
+    -------
+    dict
+        ``num``, ``den`` (descending powers of s), ``poles`` and ``zeros``
+        (:func:`roots_table` rows) and ``dc_gain`` (the tf's units; None if
+        infinite, e.g. a pole at s = 0).
+    """
     co = tf_coefficients(sys)
     num, den = np.array(co["num"]), np.array(co["den"])
     zeros = np.roots(np.trim_zeros(num, "f")) if np.any(num) else np.array([])
@@ -43,7 +70,20 @@ def describe_tf(sys: ct.TransferFunction) -> dict:
 
 
 def format_tf(sys_or_coeffs) -> str:
-    """``(num) / (den)`` in descending powers of s, of a tf or a ``{"num", "den"}`` mapping."""
+    """``(num) / (den)`` in descending powers of s, of a tf or a ``{"num", "den"}`` mapping.
+
+    Parameters
+    ----------
+    sys_or_coeffs : control.TransferFunction or dict
+        A continuous SISO tf, or a dict with ``num`` and ``den`` coefficient
+        lists in descending powers of s.
+
+    Returns
+    -------
+    str
+        E.g. ``(1.5 s + 2) / (s^2 + 0.4 s + 1)``; coefficients to 4
+        significant digits, zero terms left out.
+    """
     co = sys_or_coeffs if isinstance(sys_or_coeffs, dict) else tf_coefficients(sys_or_coeffs)
 
     def poly(c):
