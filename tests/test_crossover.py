@@ -92,8 +92,8 @@ def test_tracking_crossover_is_the_first_fall_not_a_neuromuscular_peak():
 
 
 def test_band_floor_is_checked():
-    from hesspipe.pilot.crossover import loop_crossover, record_band_floor
     from hesspipe.core.errors import HesspipeError
+    from hesspipe.pilot.crossover import loop_crossover, record_band_floor
     from hesspipe.pilot.hess import PilotModel
 
     with pytest.raises(HesspipeError, match="duration_s"):
