@@ -191,3 +191,14 @@ def test_table1_draw_is_still_available():
     assert cohort_spec("table1").crossover_rad_s is None
     with pytest.raises(HesspipeError, match="cohort"):
         cohort_spec("bogus")
+
+
+def test_cli_synth_pilots_crossover_model_cohort(tmp_path, capsys):
+    plants = tmp_path / "plants.json"
+    write_plants(plants, paper_plants())
+    out = tmp_path / "c"
+    assert main(["synth-pilots", "--plants", str(plants), "--n", "2", "--duration", "24",
+                 "--cohort", "crossover_model", "--out", str(out)]) == 0
+    for pid in ("pilot01", "pilot02"):
+        truth = json.loads((out / f"{pid}.truth.json").read_text())
+        assert truth["crossover"]["within_limits"] and "target_crossover_rad_s" in truth
