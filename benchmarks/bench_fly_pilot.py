@@ -13,8 +13,10 @@ Prints
    crossover; beside them the same pilots simulated by the linear frequency-domain model
    around the same plants with the same disturbance and remnant ("fft"), which separates
    what JSBSim adds (plant error, nonlinearity) from what the identification itself
-   cannot resolve. Two free sets: the default (Ke, K1, K2, Km) and Ke, Km alone (K1, K2 at
-   the truth);
+   cannot resolve. Criterion `df` (the pipeline's; --criterion); errors of Ke, Km, the
+   tracking crossover and the loop gain (|L| of the identified pilot at the true crossover).
+   Free sets: the criterion's default, Ke and Km alone (the rest at the truth), and Ke, Km,
+   tau0, wn, zn (K1, K2, 1/T1 at the truth);
 4. diagnose (hesspipe.diagnose.workflow, baseline "original") on JSBSim-flown runs of pilots
    with a hidden motion feedback, a hidden extra delay, and none (baseline flights):
    how often the hidden effect is named, and what is named on baseline flights.
@@ -24,7 +26,8 @@ temporary folder first. Everything is seeded; the numbers are reproducible.
 
 Usage::
 
-    nice python benchmarks/bench_fly_pilot.py [--pilots 20] [--diag-seeds 4]   # ~5-8 min on 1 core
+    nice python benchmarks/bench_fly_pilot.py [--pilots 20] [--diag-seeds 4] [--skip speed,envelope,ident,diagnose]
+                                              [--cohort crossover_model|table1] [--diag-cohorts table1,crossover_model]
 """
 
 from __future__ import annotations
