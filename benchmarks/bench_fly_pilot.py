@@ -13,8 +13,10 @@ Prints
    crossover; beside them the same pilots simulated by the linear frequency-domain model
    around the same plants with the same disturbance and remnant ("fft"), which separates
    what JSBSim adds (plant error, nonlinearity) from what the identification itself
-   cannot resolve. Two free sets: the default (Ke, K1, K2, Km) and Ke, Km alone (K1, K2 at
-   the truth);
+   cannot resolve. Criterion `df` (the pipeline's; --criterion); errors of Ke, Km, the
+   tracking crossover and the loop gain (|L| of the identified pilot at the true crossover).
+   Free sets: the criterion's default, Ke and Km alone (the rest at the truth), and Ke, Km,
+   tau0, wn, zn (K1, K2, 1/T1 at the truth);
 4. diagnose (hesspipe.diagnose.workflow, baseline "original") on JSBSim-flown runs of pilots
    with a hidden motion feedback, a hidden extra delay, and none (baseline flights):
    how often the hidden effect is named, and what is named on baseline flights.
@@ -24,7 +26,8 @@ temporary folder first. Everything is seeded; the numbers are reproducible.
 
 Usage::
 
-    nice python benchmarks/bench_fly_pilot.py [--pilots 20] [--diag-seeds 4]   # ~5-8 min on 1 core
+    nice python benchmarks/bench_fly_pilot.py [--pilots 20] [--diag-seeds 4] [--skip speed,envelope,ident,diagnose]
+                                              [--cohort crossover_model|table1] [--diag-cohorts table1,crossover_model]
 """
 
 from __future__ import annotations
@@ -45,14 +48,25 @@ from hesspipe.core.seeds import derive_seed
 from hesspipe.flight.approach import FlightConfig, fly, fly_records
 from hesspipe.flight.closed_loop import fly_pilot_record, pilot_loop
 from hesspipe.identification.fit import identify
+from hesspipe.pilot.blocks import from_tf
 from hesspipe.pilot.crossover import crossover, gain_scale
 from hesspipe.pilot.hess import model_from_name
 from hesspipe.pilot.simulation import Simulator
-from hesspipe.pilots.cohort import CohortSpec, synth_pilot
+from hesspipe.pilots.cohort import cohort_spec, synth_pilot
 from hesspipe.plants.fit import PlantsConfig, fit_plants
 
 EVERY = 3  # 120 Hz -> 40 Hz records, as the pipeline's JSBSim cohort
 RESTARTS, PASSES = 2, 10  # the pipeline's APID budget (--restarts/--passes change it)
+CRITERION = "df"  # the pipeline's identification criterion (--criterion changes it)
+DRAW = "crossover_model"  # the pipeline's cohort draw (--cohort changes it)
+
+
+def loop_gain(model, params, plants, w: float) -> float:
+    """|L(j w)| of `model` with `params` around `plants` (1 at the truth's crossover w)."""
+    m = model_from_name(model)
+    loop = pilot_loop(m, m.complete({k: v for k, v in params.items() if k not in ("Kn", "Tn")}), plants)
+    s = np.array([1j * w])
+    return float(abs(loop.pilot_open_loop(s, from_tf(plants.control_to_output).response(s))[0]))
 
 
 def fitted_plants(root: Path):
@@ -76,8 +90,8 @@ def linear_run(plants, model, params, flown: Run, noise_seed: int) -> Run:
     m = model_from_name(model)
     sim = Simulator(plants, wind, dt, noise_seed=noise_seed, pad_factor=8)
     c, y = sim.spectra(pilot_loop(m, params, plants))
-    u = np.fft.irfft(c, sim.nfft)[:n][::EVERY]
-    yy = np.fft.irfft(y, sim.nfft)[:n][::EVERY]
+    u = sim.waveform(c)[::EVERY]   # spectra are on the shifted contour: un-weight them
+    yy = sim.waveform(y)[::EVERY]
     return Run(time=flown.time, disturbance=flown.disturbance, output=yy, control=u,
                reference=np.zeros(len(u)), id=flown.id, synthetic=True)
 
@@ -133,14 +147,14 @@ def section_speed(plants, work: Path, repeats: int) -> None:
           f"steps): {a:.3f} s; ratio {c / a:.2f}")
 
 
-def draw(plants, pid: str, base_seed: int, effects):
+def draw(plants, pid: str, base_seed: int, effects, how: str | None = None):
     pseed = derive_seed(base_seed, pid)
-    _, truth = synth_pilot(plants, pid, pseed, effects, CohortSpec())
+    _, truth = synth_pilot(plants, pid, pseed, effects, cohort_spec(how or DRAW))
     params = {k: v for k, v in truth["parameters"].items() if k != "Kn"}
     return pseed, truth, params
 
 
-def section_envelope_and_identification(plants, work: Path, n: int) -> None:
+def section_envelope_and_identification(plants, work: Path, n: int, ident: bool = True) -> None:
     print(f"\n== 2. envelope over {n} cohort pilots (expanded + remnant, cohort draws of seed 1)")
     flights, failures = [], []
     for i in range(n):
@@ -159,19 +173,22 @@ def section_envelope_and_identification(plants, work: Path, n: int) -> None:
               f"limit +-10), min height {min(e['min_agl_ft'] for e in env):.0f} ft AGL (limit 50), "
               f"max |bank| {max(e['max_abs_bank_deg'] for e in env):.2f} deg (limit 15)")
     print(f"failures: {len(failures)}" + "".join(f"\n  {x}" for x in failures))
+    if not ident:
+        return
 
     print(f"\n== 3. identification with the fitted plants (expanded model, APID {PASSES} passes x "
           f"{RESTARTS} restarts)")
     print("control differences (rms, relative to the control's): td-fft = discretisation and sampling "
           "of the time-domain loop; jsb-td = JSBSim vs the fitted plants (plant error, nonlinearity)")
-    print("pilot   Ke_true Km_true wc_true | control diffs | jsbsim: dKe  dKm  dwc | fft: dKe  dKm  dwc | td: dKe dKm dwc | "
-          "Ke,Km free (K1,K2 true) jsbsim: dKe dKm | fft: dKe dKm | td: dKe dKm")
-    errs = {f"{t}_{k}": [] for t in ("j", "f", "t") for k in ("ke", "km", "wc")}
+    print(f"criterion {CRITERION}; cohort draw {DRAW}; loop gain error = | |L_identified(j wc_true)| - 1 |")
+    print("pilot   Ke_true Km_true wc_true | control diffs | jsbsim: dKe  dKm  dwc dLG | fft: dKe  dKm  dwc dLG | "
+          "td: dKe dKm dwc dLG | Ke,Km free (the rest at the truth) jsbsim: dKe dKm | fft: dKe dKm | td: dKe dKm")
+    errs = {f"{t}_{k}": [] for t in ("j", "f", "t") for k in ("ke", "km", "wc", "lg")}
     errs.update({f"{t}2_{k}": [] for t in ("j", "f", "t") for k in ("ke", "km")})
     for pid, pseed, f in flights:
         tp = f.truth["parameters"]
         core = {k: v for k, v in tp.items() if k not in ("Kn", "Tn")}
-        wc_true = crossover("expanded", core, plants).frequency_rad_s
+        wc_true = crossover("expanded", core, plants, duration_s=70.0).frequency_rad_s
         lin = linear_run(plants, f.truth["model"], tp, f.run, f.truth["seeds"]["remnant"])
         td = linear_td_run(plants, f.truth["model"], tp, f.run, f.truth["seeds"]["remnant"])
         row = [pid, f"{tp['Ke']:7.2f}", f"{tp['Km']:7.2f}", f"{wc_true:6.2f}", "|"]
@@ -184,25 +201,37 @@ def section_envelope_and_identification(plants, work: Path, n: int) -> None:
         row += [f"u: td-fft {100 * d_td:4.1f}%, jsb-td {100 * d_js:4.1f}% |"]
         for tag, run in (("j", f.run), ("f", lin), ("t", td)):
             idf = identify(run, plants, "expanded", seed=pseed, with_benchmark=False,
-                           with_identifiability=False, restarts=RESTARTS, passes=PASSES)
+                           with_identifiability=False, restarts=RESTARTS, passes=PASSES, criterion=CRITERION)
             at_truth = identify(run, plants, "expanded", free=(), fixed=core, with_benchmark=False,
-                                with_identifiability=False).fitness
+                                with_identifiability=False, criterion=CRITERION).fitness
             # found < truth: the data's optimum is elsewhere (model/data mismatch);
             # found > truth: the search missed a better point (optimiser)
             errs.setdefault(f"{tag}_mismatch", []).append(idf.fitness < at_truth)
+            wc_id = (idf.primary_crossover or idf.crossover).frequency_rad_s
+            # loop gain: |L(j wc_true)| of the identified pilot (the truth's is 1)
             e = (rel(idf.parameters["Ke"], tp["Ke"]), rel(idf.parameters["Km"], tp["Km"]),
-                 rel(idf.crossover.frequency_rad_s, wc_true))
-            for key, v in zip(("ke", "km", "wc"), e):
+                 rel(wc_id, wc_true), abs(loop_gain("expanded", idf.parameters, plants, wc_true) - 1.0))
+            for key, v in zip(("ke", "km", "wc", "lg"), e):
                 errs[f"{tag}_{key}"].append(v)
             row += [f"{100 * x:5.0f}%" for x in e] + ["|"]
         for tag, run in (("j2", f.run), ("f2", lin), ("t2", td)):
             idf = identify(run, plants, "expanded", free=("Ke", "Km"),
-                           fixed={k: core[k] for k in ("K1", "K2")}, seed=pseed, with_benchmark=False,
-                           with_identifiability=False, restarts=RESTARTS, passes=PASSES)
+                           fixed={k: v for k, v in core.items() if k not in ("Ke", "Km")}, seed=pseed,
+                           with_benchmark=False, with_identifiability=False, restarts=RESTARTS,
+                           passes=PASSES, criterion=CRITERION)
             e = (rel(idf.parameters["Ke"], tp["Ke"]), rel(idf.parameters["Km"], tp["Km"]))
             errs[f"{tag}_ke"].append(e[0])
             errs[f"{tag}_km"].append(e[1])
             row += [f"{100 * x:5.0f}%" for x in e] + ["|"]
+        # Proprioception known (K1, K2, 1/T1 at the truth), the rest of the df criterion's set
+        # free: does Km trade with the proprioceptive gain K1 K2 (both inner feedbacks)?
+        idf = identify(f.run, plants, "expanded", free=("Ke", "Km", "tau0", "wn", "zn"),
+                       fixed={k: core[k] for k in ("K1", "K2", "1/T1")}, seed=pseed, with_benchmark=False,
+                       with_identifiability=False, restarts=RESTARTS, passes=PASSES, criterion=CRITERION)
+        e = (rel(idf.parameters["Ke"], tp["Ke"]), rel(idf.parameters["Km"], tp["Km"]))
+        errs.setdefault("j3_ke", []).append(e[0])
+        errs.setdefault("j3_km", []).append(e[1])
+        row += ["K1,K2,1/T1 true: jsbsim " + " ".join(f"{100 * x:5.0f}%" for x in e)]
         print(" ".join(row), flush=True)
     m = {k: 100 * median(v) for k, v in errs.items()}
     for tag, name in (("j", "jsbsim"), ("f", "fft"), ("t", "td")):
@@ -212,11 +241,12 @@ def section_envelope_and_identification(plants, work: Path, n: int) -> None:
     print(f"median control difference: td-fft {100 * median(errs['d_td']):.2f} %, jsb-td "
           f"{100 * median(errs['d_js']):.2f} %")
     print(f"median |relative error| over {len(flights)} pilots (<= 20 % wanted):")
-    print(f"  free Ke,K1,K2,Km  jsbsim: Ke {m['j_ke']:.0f} %, Km {m['j_km']:.0f} %, crossover {m['j_wc']:.0f} %"
-          f"   | fft (same plants, no JSBSim): Ke {m['f_ke']:.0f} %, Km {m['f_km']:.0f} %, crossover {m['f_wc']:.0f} %"
-          f"   | td (plants stepped like JSBSim): Ke {m['t_ke']:.0f} %, Km {m['t_km']:.0f} %, crossover {m['t_wc']:.0f} %")
+    for t, name in (("j", "jsbsim"), ("f", "fft (same plants, no JSBSim)"), ("t", "td (plants stepped like JSBSim)")):
+        print(f"  default free set, {name}: Ke {m[t + '_ke']:.0f} %, Km {m[t + '_km']:.0f} %, crossover "
+              f"{m[t + '_wc']:.0f} %, loop gain {m[t + '_lg']:.0f} %")
     print(f"  free Ke,Km        jsbsim: Ke {m['j2_ke']:.0f} %, Km {m['j2_km']:.0f} %"
           f"   | fft: Ke {m['f2_ke']:.0f} %, Km {m['f2_km']:.0f} %   | td: Ke {m['t2_ke']:.0f} %, Km {m['t2_km']:.0f} %")
+    print(f"  free Ke,Km,tau0,wn,zn (K1, K2, 1/T1 at the truth)  jsbsim: Ke {m['j3_ke']:.0f} %, Km {m['j3_km']:.0f} %")
 
 
 DIAG_CASES = {
@@ -226,17 +256,21 @@ DIAG_CASES = {
 }
 
 
-def section_diagnose(plants, work: Path, seeds: int) -> None:
+def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
     from hesspipe.diagnose.workflow import diagnose
 
-    print(f"\n== 4. diagnose (baseline 'original') on JSBSim-flown runs, {seeds} seeds per case")
+    print(f"\n== 4. diagnose (baseline 'original') on JSBSim-flown runs, {seeds} seeds per case, "
+          f"pilots of the '{how}' draw" + (" (tau0 = 0.1 s and 1/T1 = 0.01 as diagnose's baseline holds them: "
+                                          "the hidden effect is the only pilot-side difference)" if how == "table1" else
+                                          " (the pipeline's cohort: tau0 ~0.2 s, 1/T1 by Hess's rule, which "
+                                          "diagnose's baseline holds at Table 1's 0.1 s and 0.01)"))
     g = gain_scale(plants)
     for case, (effects, ranges) in DIAG_CASES.items():
         named, named_lin, rows = [], [], []
         for s in range(seeds):
             pid = f"diag-{case}-{s}"
             try:
-                pseed, truth, params = draw(plants, pid, 7, ())   # a baseline pilot (original + remnant)
+                pseed, truth, params = draw(plants, pid, 7, (), how)   # a baseline pilot (original + remnant)
             except HesspipeError as exc:
                 rows.append(f"  {pid}: no pilot drawn ({exc})")
                 continue
@@ -280,11 +314,16 @@ def main(argv=None) -> int:
     ap.add_argument("--pilots", type=int, default=20)
     ap.add_argument("--diag-seeds", type=int, default=4)
     ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--skip", default="", help="comma list of sections to skip: speed,ident,diagnose")
+    ap.add_argument("--skip", default="", help="comma list of sections to skip: speed,envelope,ident,diagnose "
+                    "(skipping envelope skips ident too)")
     ap.add_argument("--restarts", type=int, default=2)
     ap.add_argument("--passes", type=int, default=10)
+    ap.add_argument("--criterion", default="df", choices=("df", "paper", "output"))
+    ap.add_argument("--cohort", default="crossover_model", choices=("crossover_model", "table1"))
+    ap.add_argument("--diag-cohorts", default="table1,crossover_model",
+                    help="cohort draws of the diagnose section's pilots (comma list)")
     args = ap.parse_args(argv)
-    globals().update(RESTARTS=args.restarts, PASSES=args.passes)
+    globals().update(RESTARTS=args.restarts, PASSES=args.passes, CRITERION=args.criterion, DRAW=args.cohort)
     skip = set(args.skip.split(","))
     print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737 (hesspipe.flight.closed_loop)")
     with tempfile.TemporaryDirectory() as tmp:
@@ -295,10 +334,11 @@ def main(argv=None) -> int:
               f"gain scale {gain_scale(plants):.3f}")
         if "speed" not in skip:
             section_speed(plants, root, args.repeats)
-        if "ident" not in skip:
-            section_envelope_and_identification(plants, root, args.pilots)
+        if "envelope" not in skip:
+            section_envelope_and_identification(plants, root, args.pilots, ident="ident" not in skip)
         if "diagnose" not in skip:
-            section_diagnose(plants, root, args.diag_seeds)
+            for how in args.diag_cohorts.split(","):
+                section_diagnose(plants, root, args.diag_seeds, how)
     return 0
 
 

@@ -140,3 +140,65 @@ def test_cli_synth_pilots_errors(tmp_path, capsys, extra, words):
     err = capsys.readouterr().err
     assert code == 1 and err.startswith("hesspipe: error: ") and words in err and err.count("\n") == 1
     assert not (tmp_path / "c").exists()
+
+
+def test_hess_corner_follows_the_plant():
+    from hesspipe.pilots.cohort import CORNER_RANGE, hess_corner
+
+    # 1/s: the proprioceptive feedback is a constant (Table 1's corner, the box's floor)
+    assert hess_corner(ct.tf([1], [1, 0])) == pytest.approx(CORNER_RANGE[0])
+    # K/(s + a): the feedback K1 K2 s/(s + a) has the shape of s Yc: the corner is the plant's pole
+    assert hess_corner(ct.tf([2.0], [1, 0.5])) == pytest.approx(0.5, rel=0.05)
+
+
+def test_crossover_model_cohort_meets_the_limits_on_the_paper_and_a_slow_zero_plant(tmp_path):
+    # The pilots' crossover, recomputed here with python-control's margin on a Padé-delay
+    # loop (not hesspipe's loop code), is the drawn target and within 1-5 rad/s, 20-60 deg.
+    from hesspipe.pilots.cohort import cohort_spec, synth_pilot
+
+    slow_zero = Plants(ct.tf([0.5, -0.5 * 0.0064], [1.0, 1.07, 0.07]), paper_plants().disturbance_to_output)
+    spec = cohort_spec("crossover_model", duration_s=24.0)
+    for plants in (paper_plants(), slow_zero):
+        for i in range(3):
+            _, truth = synth_pilot(plants, f"p{i}", 100 + i, ("motion_feedback",), spec)
+            p = truth["parameters"]
+            assert truth["crossover"]["within_limits"]
+            assert truth["crossover"]["frequency_rad_s"] == pytest.approx(truth["target_crossover_rad_s"], rel=1e-3)
+            assert 1.5 <= truth["target_crossover_rad_s"] <= 4.0 and 0.05 <= p["tau0"] <= 0.5
+            # Independent: the expanded loop built with python-control (SPEC.md's blocks, Padé
+            # delay; default motion path = platform x washout), |L| and phase at the target.
+            wn, zn = p["wn"], p["zn"]
+            nm = ct.tf([wn ** 2], [1, 2 * zn * wn, wn ** 2])
+            pf = ct.tf([p["K1"] * p["K2"], 0], [1, p["1/T1"]])
+            delay = ct.tf(*ct.pade(p["tau0"], 8))
+            canals = ct.tf([80 * 5.73, 0, 0], np.polymul([80, 1], [5.73, 1]))
+            platform = ct.tf([31.4 ** 2], [1, 2 * 0.7 * 31.4, 31.4 ** 2])
+            washout = ct.tf([1, 0, 0], [1, 2 * 1.02, 1.02 ** 2])
+            yc = plants.control_to_output
+            inner = ct.feedback(nm, pf + p["Km"] * canals * platform * washout * yc)
+            loop = inner * p["Ke"] * delay * yc
+            w = truth["target_crossover_rad_s"]
+            mag = abs(ct.evalfr(loop, 1j * w))
+            assert mag == pytest.approx(1.0, rel=0.02)
+            pm = 180 + np.degrees(np.angle(ct.evalfr(loop, 1j * w)))
+            assert pm == pytest.approx(truth["crossover"]["phase_margin_deg"], abs=1.5)
+            assert 20 <= pm <= 60
+
+
+def test_table1_draw_is_still_available():
+    from hesspipe.pilots.cohort import cohort_spec
+
+    assert cohort_spec("table1").crossover_rad_s is None
+    with pytest.raises(HesspipeError, match="cohort"):
+        cohort_spec("bogus")
+
+
+def test_cli_synth_pilots_crossover_model_cohort(tmp_path, capsys):
+    plants = tmp_path / "plants.json"
+    write_plants(plants, paper_plants())
+    out = tmp_path / "c"
+    assert main(["synth-pilots", "--plants", str(plants), "--n", "2", "--duration", "24",
+                 "--cohort", "crossover_model", "--out", str(out)]) == 0
+    for pid in ("pilot01", "pilot02"):
+        truth = json.loads((out / f"{pid}.truth.json").read_text())
+        assert truth["crossover"]["within_limits"] and "target_crossover_rad_s" in truth

@@ -48,3 +48,55 @@ def test_motion_path_included_and_limits_configurable():
     assert "assumption" in d["limits_note"]
     none = crossover("original", {"Ke": 0.0}, pl)
     assert np.isnan(none.frequency_rad_s) and not none.within_limits
+
+
+def test_tracking_crossover_ignores_crossings_the_record_cannot_resolve():
+    # A plant like the fitted 737 aileron channel: a slow right-half-plane zero and a slow pole
+    # below the roll mode. Table 1's pilot (Ke 50) then has |L| > 1 at 0.001 rad/s, falls
+    # through 1 near 0.004 rad/s, rises again and crosses over near 3.5 rad/s: the first
+    # crossing is an artefact of the slow roots (a 70 s record resolves nothing below 0.09
+    # rad/s); the tracking crossover is the one near 3 rad/s.
+    from hesspipe.pilot.crossover import loop_crossover, record_band_floor, tracking_crossover
+    from hesspipe.pilot.hess import PilotModel
+
+    yc = ct.tf([0.5, -0.5 * 0.0064], [1.0, 1.07, 0.07])
+    p = dict(table1(1), Ke=50.0)
+    loop = PilotModel().loop(p)
+    from hesspipe.pilot.blocks import from_tf
+
+    block = from_tf(yc)
+    first = loop_crossover(loop, block, first=True)
+    highest = loop_crossover(loop, block)
+    tracking = tracking_crossover(loop, block, 70.0)
+    assert first.frequency_rad_s < 0.01
+    assert 1.0 < tracking.frequency_rad_s < 5.0
+    assert tracking.frequency_rad_s == pytest.approx(highest.frequency_rad_s, rel=1e-6)
+    assert record_band_floor(70.0) == pytest.approx(2 * np.pi / 70.0)
+    # the same through crossover(..., duration_s=)
+    c = crossover("original", p, yc, duration_s=70.0)
+    assert c.frequency_rad_s == pytest.approx(tracking.frequency_rad_s, rel=1e-9)
+
+
+def test_tracking_crossover_is_the_first_fall_not_a_neuromuscular_peak():
+    # A lightly damped neuromuscular mode puts |L| back above 1 near wn, far above the
+    # tracking loop's crossover; SPEC's highest crossing moves there, the tracking one does not.
+    from hesspipe.pilot.blocks import from_tf
+    from hesspipe.pilot.crossover import loop_crossover, tracking_crossover
+    from hesspipe.pilot.hess import PilotModel
+
+    p = dict(table1(1), zn=0.03, wn=20.0)
+    loop = PilotModel().loop(p)
+    block = from_tf(ct.tf([1], [1, 0]))
+    assert loop_crossover(loop, block).frequency_rad_s > 15.0
+    assert 2.0 < tracking_crossover(loop, block, 70.0).frequency_rad_s < 4.0
+
+
+def test_band_floor_is_checked():
+    from hesspipe.core.errors import HesspipeError
+    from hesspipe.pilot.crossover import loop_crossover, record_band_floor
+    from hesspipe.pilot.hess import PilotModel
+
+    with pytest.raises(HesspipeError, match="duration_s"):
+        record_band_floor(0.0)
+    with pytest.raises(HesspipeError, match="w_min"):
+        loop_crossover(PilotModel().loop(table1(1)), None, w_min=float("nan"))

@@ -226,3 +226,25 @@ def test_cohort_is_the_synthetic_cohorts_draw_flown_in_jsbsim(tmp_path):
         assert {k: truth["parameters"][k] for k in same} == same
         run = read_run(path)
         assert run.synthetic and run.dt == pytest.approx(0.025) and len(run) == 800
+
+
+def test_crossover_model_cohort_flies_the_737_within_the_limits(tmp_path):
+    # The pipeline's default cohort on the 737's fitted plants (slow RHP zero, Dutch roll):
+    # every pilot's tracking crossover is the drawn target, within 1-5 rad/s and 20-60 deg,
+    # and the pilot keeps the JSBSim aircraft in the envelope.
+    from hesspipe.pilots.cohort import cohort_spec, hess_corner
+    from hesspipe.pilots.flown import fly_cohort
+
+    spec = cohort_spec("crossover_model", duration_s=SHORT.duration_s)
+    paths = fly_cohort(PLANTS, 3, 5, ["motion_feedback"], tmp_path / "cohort", config=SHORT, spec=spec)
+    corner = hess_corner(PLANTS)
+    assert 0.1 < corner < 1.0  # the roll mode's corner region, not Table 1's 0.01
+    for path in paths:
+        truth = json.loads(path.with_suffix(".truth.json").read_text())
+        c = truth["crossover"]
+        assert c["within_limits"] and 1.5 <= c["frequency_rad_s"] <= 4.0
+        assert 20.0 <= c["phase_margin_deg"] <= 60.0
+        assert truth["parameters"]["1/T1"] == pytest.approx(corner)
+        env = truth["envelope"]
+        assert env["max_abs_bank_deg"] < 15.0 and env["min_agl_ft"] > 50.0
+        assert abs(env["speed_kts"][0] - env["trim_speed_kts"]) < 10.0

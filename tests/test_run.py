@@ -66,6 +66,14 @@ def test_first_run_writes_every_stage_and_report(reference):
     report = files["report.md"].decode()
     assert "SYNTHETIC" in report  # the default cohort is synthetic and must say so
     assert "does not follow" in report  # the paper's Eq. 15 note
+    # the default cohort is drawn within the crossover-model limits and the report shows the
+    # pilots' true crossover beside the identified one
+    import json
+
+    for pid in ("pilot01", "pilot02"):
+        truth = json.loads(files[f"pilots/cohort/{pid}.truth.json"].decode())
+        assert truth["crossover"]["within_limits"] and truth["simulator"] == "jsbsim"
+    assert "truth of the synthetic pilot" in report and "Within the limits (expanded model):" in report
 
 
 def test_second_run_reruns_nothing(reference, capsys):

@@ -21,6 +21,10 @@ def register(sub) -> None:
                    help="record length in s (default: %(default)s)")
     p.add_argument("--dt", type=float, default=0.02, metavar="S",
                    help="sample interval in s (default: %(default)s)")
+    p.add_argument("--cohort", default="table1", choices=("table1", "crossover_model"),
+                   help="how pilots are drawn: table1 (around Table 1) or crossover_model (target "
+                        "crossover 1.5-4 rad/s, kept within the crossover-model limits; the pipeline's "
+                        "default); default: %(default)s")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.set_defaults(func=_run)
 
@@ -28,14 +32,14 @@ def register(sub) -> None:
 def _run(args) -> int:
     from ..core.formats import read_plants, record_samples
     from ..core.io import check_output_dir
-    from ..pilots.cohort import CohortSpec, synth_cohort
+    from ..pilots.cohort import cohort_spec, synth_cohort
 
     record_samples(args.duration, args.dt, names=("--duration", "--dt"))  # before any allocation
     check_output_dir(args.out, "cohort")  # before any work: a bad folder loses nothing
     plants = read_plants(args.plants)
     effects = [e for e in args.effects.split(",") if e.strip()]
     paths = synth_cohort(plants, args.n, args.seed, effects, args.out,
-                         spec=CohortSpec(duration_s=args.duration, dt_s=args.dt))
+                         spec=cohort_spec(args.cohort, duration_s=args.duration, dt_s=args.dt))
     print(f"SYNTHETIC DATA: wrote {len(paths)} synthetic pilot runs "
           f"(effects: {', '.join(effects) or 'none'} + remnant) to {args.out}")
     return 0

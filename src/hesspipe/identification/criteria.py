@@ -472,7 +472,7 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
     -------
     Identification
     """
-    from ..pilot.crossover import loop_crossover
+    from ..pilot.crossover import loop_crossover, tracking_crossover
     from ..pilot.hess import PilotModel
     from ..pilot.mcruer import fit_precision
     from ..pilot.simulation import UNSTABLE_FITNESS, Simulator
@@ -520,4 +520,4 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
         passes=0, run_id=run.id, synthetic=run.synthetic, stable=bool(stable and sim_psd is not None),
         benchmark_parameters=bench_par, fields={}, climb=None, gain_scale=gain,
         criterion=criterion, fitness_units=obj.units, k_rule=k_rule, frf=frf,
-        primary_crossover=loop_crossover(loop, sim.yc_block, limits, first=True))
+        primary_crossover=tracking_crossover(loop, sim.yc_block, len(run.time) * run.dt, limits))

@@ -32,7 +32,7 @@ from ..core.errors import HesspipeError
 from ..core.formats import siso_coefficients
 from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
-from ..pilot.crossover import CrossoverLimits, loop_crossover
+from ..pilot.crossover import CrossoverLimits, loop_crossover, tracking_crossover
 from ..pilot.hess import PilotModel, model_from_name
 from ..pilot.mcruer import bounded_powell
 from ..pilot.simulation import unstable_fitness
@@ -263,7 +263,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         band=obj.band, psd_method=psd_method, run_id=run.id, restarts=int(restarts), coding=coding, synthetic=run.synthetic, stable=stable,
         benchmark_parameters=bench_par, fields={f.name: (f.bits, f.scale, f.offset) for f in flds},
         climb=climb, gain_scale=gain, k_rule=k_rule,
-        primary_crossover=loop_crossover(loop, obj.sim.yc_block, limits, first=True), frf=frf if frf is not None else _try_frf(run, plants, seed))
+        primary_crossover=tracking_crossover(loop, obj.sim.yc_block, len(run.time) * run.dt, limits), frf=frf if frf is not None else _try_frf(run, plants, seed))
 
 
 def _try_frf(run, plants, seed):

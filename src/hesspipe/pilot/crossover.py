@@ -11,11 +11,24 @@ Crossover: the highest frequency where ``|L(j w)|`` falls through 1; phase
 margin ``180 deg + angle L(j wc)``, wrapped to (-180, 180]. The limits are
 this project's assumption (default 1-5 rad/s and 20-60 deg), and the
 output says so.
+
+SPEC.md defines the crossover by ``|L(j wc)| = 1`` and does not say which
+crossing counts when there are several. On fitted plants there are: the
+JSBSim 737's aileron channel has a right-half-plane zero near +0.006 rad/s
+and a slow pole near 0.07 rad/s, so a pilot's |L| crosses 1 around 0.002
+rad/s too, and a neuromuscular peak can touch 1 again far above the band the
+data show. The crossover of the pilot's tracking loop, the one the crossover
+model is about, is the *primary* crossover in the record's band
+(:func:`tracking_crossover`): the first fall through 1 above the lowest
+frequency a record of the given length resolves, ``2 pi / duration``
+(0.09 rad/s for 70 s; a crossing slower than one cycle per record is neither
+seen by the data nor placed by plants fitted to it).
 """
 
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import asdict, dataclass
 from typing import Mapping
 
@@ -74,19 +87,23 @@ def _plant_block(plants) -> Block:
 
 
 def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits(), *,
-                   first: bool = False) -> Crossover:
+                   first: bool = False, w_min: float = 1e-3) -> Crossover:
     """Crossover of an already built :class:`~hesspipe.pilot.blocks.Loop` with control plant `yc`.
 
     `first`: the lowest frequency where |L| falls through 1 (the primary crossover)
     instead of the highest (SPEC's definition, which a neuromuscular or
     proprioceptive peak touching 1 far above the forcing's band moves there).
+    `w_min` (rad/s): crossings below it are ignored (see :func:`tracking_crossover`).
     """
     def gain_db(w):
         s = 1j * np.atleast_1d(np.asarray(w, dtype=float))
         with np.errstate(divide="ignore"):  # a zero gain (Ke = 0) is log 0 = -inf: no crossover
             return np.log(np.abs(loop.pilot_open_loop(s, yc.response(s))))
 
+    if not (math.isfinite(w_min) and 1e-3 <= w_min < 1e3):
+        raise HesspipeError(f"w_min: expected a frequency in [0.001, 1000) rad/s, got {w_min!r}")
     w = np.logspace(-3, 3, 3001)
+    w = np.concatenate(([w_min], w[w > w_min]))
     g = gain_db(w)
     down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
     if down.size == 0:
@@ -102,8 +119,26 @@ def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits(),
     return Crossover(float(wc), float(pm), bool(within), limits)
 
 
+def record_band_floor(duration_s: float) -> float:
+    """Lowest frequency a record of `duration_s` resolves, ``2 pi / duration`` (rad/s)."""
+    if not (math.isfinite(duration_s) and duration_s > 0):
+        raise HesspipeError(f"duration_s: expected a record length > 0 s, got {duration_s!r}")
+    return min(max(2.0 * math.pi / duration_s, 1e-3), 1.0)
+
+
+def tracking_crossover(loop, yc: Block, duration_s: float,
+                       limits: CrossoverLimits = CrossoverLimits()) -> Crossover:
+    """The crossover of the pilot's tracking loop on a record of `duration_s` seconds.
+
+    The first frequency above ``2 pi / duration_s`` (:func:`record_band_floor`)
+    where ``|L|`` falls through 1 (see the module docstring for why this one).
+    """
+    return loop_crossover(loop, yc, limits, first=True, w_min=record_band_floor(duration_s))
+
+
 def crossover(model, params: Mapping[str, float] | None, plants, *,
-              limits: CrossoverLimits = CrossoverLimits(), k: int | None = None) -> Crossover:
+              limits: CrossoverLimits = CrossoverLimits(), k: int | None = None,
+              duration_s: float | None = None) -> Crossover:
     """Crossover frequency and phase margin of `model` with `params` around `plants`.
 
     Parameters
@@ -114,11 +149,16 @@ def crossover(model, params: Mapping[str, float] | None, plants, *,
     plants : Plants or control.TransferFunction
         The control plant Yc (or Plants holding it).
     limits : CrossoverLimits
+    duration_s : float, optional
+        Record length (s): given, the tracking loop's crossover in the record's
+        band (:func:`tracking_crossover`); else SPEC's highest crossing.
     """
     model = model_from_name(model)
     p = model.complete(params, k)
-    return loop_crossover(with_motion_path(model.loop(p), motion_block(plants)),
-                          _plant_block(plants), limits)
+    loop = with_motion_path(model.loop(p), motion_block(plants))
+    if duration_s is not None:
+        return tracking_crossover(loop, _plant_block(plants), duration_s, limits)
+    return loop_crossover(loop, _plant_block(plants), limits)
 
 
 @functools.lru_cache(maxsize=4)

@@ -77,7 +77,10 @@ from ..core.io import staged_output, write_json
 from ..core.provenance import versions
 from ..core.seeds import check_seed, derive_seed
 from ..flight.wind import Excitation, SideWind
+from ..pilot.blocks import from_tf
+from ..pilot.crossover import CrossoverLimits
 from ..pilot.remnant import remnant_gain
+from .settings import COHORT_DRAWS
 
 #: Remnant noise is part of every synthetic pilot: real pilots are never noise free.
 REMNANT = "remnant"
@@ -117,6 +120,17 @@ class CohortSpec:
         Seeded excitation added to the lateral wind (ft/s).
     k : int
         Hess model order (1 for the roll-rate task).
+    crossover_rad_s : (float, float) or None
+        None (default): the Table 1 draw above. A range: the *crossover-model
+        cohort* (:func:`draw_crossover_parameters`): each pilot gets a target
+        crossover log-uniform on this range, the proprioceptive corner 1/T1 by
+        Hess's rule on the plants, and the Ke that puts the tracking loop's
+        crossover at the target; pilots whose crossover or phase margin then
+        falls outside `limits` are redrawn.
+    tau0_s : float
+        Centre of the delay's log-normal (Table 1: 0.1 s).
+    limits : CrossoverLimits
+        What the crossover-model cohort keeps (default 1-5 rad/s, 20-60 deg).
     """
 
     duration_s: float = 70.0
@@ -131,9 +145,46 @@ class CohortSpec:
     gust: Excitation = field(default_factory=lambda: Excitation(kind="noise", rms=3.0, f_max_hz=1.0,
                                                                 taper_s=1.0))
     k: int = 1
+    crossover_rad_s: tuple[float, float] | None = None
+    tau0_s: float = 0.1
+    limits: CrossoverLimits = field(default_factory=CrossoverLimits)
+
+    @classmethod
+    def crossover_model(cls, **kw) -> "CohortSpec":
+        """The pipeline's default cohort: pilots a human-factors researcher accepts.
+
+        Target crossover log-uniform on 1.5-4 rad/s and a delay around 0.2 s
+        (spread 0.2, within 0.05-0.5 s): SPEC.md's typical identified values
+        (crossover 1.5-4 rad/s, visual delay 0.2-0.3 s); kept only within the
+        crossover-model limits (1-5 rad/s, 20-60 deg).
+        """
+        return cls(**{"crossover_rad_s": (1.5, 4.0), "tau0_s": 0.2, "tau0_spread": 0.2, **kw})
 
     def describe(self) -> dict:
         """The distributions in words (written into every truth file)."""
+        if self.crossover_rad_s is not None:
+            lo, hi = self.crossover_rad_s
+            return {
+                "wc": f"target crossover log-uniform on [{lo:g}, {hi:g}] rad/s (tracking loop's "
+                      "primary crossover in the record's band, hesspipe.pilot.crossover.tracking_crossover)",
+                "Ke": "set so that the crossover is at the target (|L(j wc)| = 1)",
+                "K1, K2": f"Table 1 x exp(N(0, {self.gain_spread:g}))",
+                "1/T1": "Hess's rule on the plants: K1 s/(s + 1/T1) shaped like s Yc over 1-5 rad/s "
+                        "(hesspipe.pilots.cohort.hess_corner; 0.01 for 1/s, about 1 for the JSBSim 737)",
+                "tau0": f"{self.tau0_s:g} s x exp(N(0, {self.tau0_spread:g})), within 0.05-0.5 s",
+                "wn": f"Table 1 x exp(N(0, {self.wn_spread:g}))",
+                "zn, 1/T2": "Table 1",
+                "Km": f"g x log-uniform on [{self.km_range[0]:g}, {self.km_range[1]:g}] "
+                      "(motion_feedback only)",
+                "kept": f"crossover in {list(self.limits.frequency_rad_s)} rad/s and phase margin in "
+                        f"{list(self.limits.phase_margin_deg)} deg (others redrawn), closed loop "
+                        "stable on the record",
+                "Kn": f"remnant share of control variance {self.remnant_share:g} x "
+                      f"exp(N(0, {self.remnant_spread:g})), truncated to [{SHARE_RANGE[0]:g}, "
+                      f"{SHARE_RANGE[1]:g}]; Tn default",
+                "g": "hesspipe.hess.gain_scale(plants)",
+                "other effect parameters": "the effect's defaults",
+            }
         return {
             "Ke": f"g x Table 1 x exp(N(0, {self.gain_spread:g})), g = plant gain scale",
             "K1, K2": f"Table 1 x exp(N(0, {self.gain_spread:g}))",
@@ -149,6 +200,17 @@ class CohortSpec:
             "other effect parameters": "the effect's defaults",
             "all": "log-normals truncated (redrawn) to the model's search box",
         }
+
+
+
+
+def cohort_spec(draw: str = "crossover_model", **kw) -> CohortSpec:
+    """:class:`CohortSpec` of the named draw (:data:`COHORT_DRAWS`), other fields from `kw`."""
+    if draw == "crossover_model":
+        return CohortSpec.crossover_model(**kw)
+    if draw == "table1":
+        return CohortSpec(**kw)
+    raise HesspipeError(f"cohort: unknown draw {draw!r}; expected one of {', '.join(COHORT_DRAWS)}")
 
 
 def _lognormal(rng, centre, spread, lo=-math.inf, hi=math.inf):
@@ -201,6 +263,68 @@ def draw_parameters(model, rng: np.random.Generator, spec: CohortSpec = CohortSp
     return params
 
 
+#: Box of the proprioceptive corner 1/T1 that Hess's rule may choose (rad/s): Table 1's 0.01
+#: up to the identification's box.
+CORNER_RANGE = (0.01, 1.0)
+#: Delay box of the crossover-model cohort (s): SPEC.md's literature bounds.
+TAU0_RANGE = (0.05, 0.5)
+
+
+def hess_corner(plants, band=(1.0, 5.0)) -> float:
+    """The proprioceptive corner 1/T1 (rad/s) by Hess's rule for a rate-like plant (k = 1).
+
+    Hess's structural model works when the proprioceptive feedback has the
+    shape of ``s Yc`` in the crossover region: the inner loop then gives the
+    pilot ``~ 1 / (s Yc)`` and the loop ``L ~ wc / s`` (crossover model). For
+    k = 1 that feedback is ``K1 K2 s / (s + 1/T1)``, so 1/T1 is the corner
+    that makes ``|(j w + 1/T1) Yc(j w)|`` flattest (least log variance) over
+    `band`, within :data:`CORNER_RANGE`: Table 1's 0.01 for ``1/s``, the roll
+    mode (about 1 rad/s) for the JSBSim 737's roll plant ``~ K/(s + 1)``.
+    """
+    yc = from_tf(getattr(plants, "control_to_output", plants))
+    w = np.logspace(math.log10(band[0]), math.log10(band[1]), 40)
+    mag = np.log(np.abs(yc.response(1j * w)))
+    corners = np.logspace(math.log10(CORNER_RANGE[0]), math.log10(CORNER_RANGE[1]), 201)
+    spread = [float(np.var(mag + np.log(np.abs(1j * w + c)))) for c in corners]
+    return float(corners[int(np.argmin(spread))])
+
+
+def draw_crossover_parameters(model, rng: np.random.Generator, spec: CohortSpec, gain: float,
+                              plants, corner: float) -> tuple[dict[str, float], float]:
+    """One crossover-model pilot: ``(params, target crossover)`` (see :class:`CohortSpec`).
+
+    Ke is solved, not drawn: the visual gain multiplies L, so
+    ``Ke = 1 / |L(j wc)|`` of the same pilot with Ke = 1 puts |L| = 1 at the
+    target ``wc``. The caller checks the crossover the report will compute
+    (it may find another crossing first) and the phase margin.
+    """
+    from ..pilot.hess import PilotModel
+    from ..pilot.motion import motion_block, with_motion_path
+
+    params = dict(model.defaults(spec.k, gain))
+    bounds = PilotModel(("motion_feedback", REMNANT)).bounds(gain)
+    for name, centre, spread, box in (("K1", params["K1"], spec.gain_spread, bounds["K1"]),
+                                      ("K2", params["K2"], spec.gain_spread, bounds["K2"]),
+                                      ("tau0", spec.tau0_s, spec.tau0_spread, TAU0_RANGE),
+                                      ("wn", params["wn"], spec.wn_spread, bounds["wn"])):
+        params[name] = _lognormal(rng, centre, spread, *box)
+    lo, hi = spec.km_range
+    km = gain * float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+    if "Km" in params:
+        params["Km"] = km
+    wlo, whi = spec.crossover_rad_s
+    wc = float(math.exp(rng.uniform(math.log(wlo), math.log(whi))))
+    if spec.k == 1:
+        params["1/T1"] = corner
+    yc = from_tf(plants.control_to_output)
+    s = np.array([1j * wc])
+    unit = with_motion_path(model.loop(model.complete({**params, "Ke": 1.0, "Kn": 0.0})),
+                            motion_block(plants))
+    mag = float(np.abs(unit.pilot_open_loop(s, yc.response(s))[0]))
+    params["Ke"] = 1.0 / mag if mag > 0 else math.inf
+    return params, wc
+
+
 def disturbance(spec: CohortSpec, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """Time (s) and lateral wind (ft/s): the side-wind profile plus seeded gusts."""
     n = int(round(spec.duration_s / spec.dt_s))
@@ -243,12 +367,21 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
     # A pilot who cannot stabilise the loop is not a pilot: redraw (from the same stream, so the
     # cohort stays reproducible) until the closed loop is stable on the record.
     sim = Simulator(plants, wind, spec.dt_s, noise_seed=remnant_seed)
+    corner = hess_corner(plants) if spec.crossover_rad_s is not None else None
+    target = None
     for draws in range(1, MAX_DRAWS + 1):
-        params = draw_parameters(model, rng, spec, gain)
+        if corner is None:
+            params = draw_parameters(model, rng, spec, gain)
+        else:
+            params, target = draw_crossover_parameters(model, rng, spec, gain, plants, corner)
+            if not _meets_crossover_model(model, params, plants, target, spec, gain):
+                continue
         if sim.stable(model.loop(model.complete(params))):
             break
     else:
-        raise HesspipeError(f"synthetic pilot {pilot_id}: no closed loop stable on the {spec.duration_s:g} s "
+        kept = ("" if corner is None else f" within the crossover limits {spec.limits.frequency_rad_s} rad/s, "
+                f"{spec.limits.phase_margin_deg} deg and")
+        raise HesspipeError(f"synthetic pilot {pilot_id}: no closed loop{kept} stable on the {spec.duration_s:g} s "
                             f"record (growth rate < {sim.growth_limit:.3g} 1/s) in {MAX_DRAWS} draws "
                             "around Table 1 with these plants; expected plants a pilot can fly")
     share = _lognormal(rng, spec.remnant_share, spec.remnant_spread, *SHARE_RANGE)
@@ -262,6 +395,8 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
         "parameters": params,
         "draws": draws,
         "gain_scale": gain,
+        **({} if target is None else {"target_crossover_rad_s": target,
+                                      "crossover": _truth_crossover(model, params, plants, spec)}),
         "remnant_share": share,
         "k": spec.k,
         "seed": seed,
@@ -274,6 +409,27 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
         "distributions": spec.describe(),
     }
     return run, truth
+
+
+def _truth_crossover(model, params, plants, spec: CohortSpec) -> dict:
+    from ..pilot.crossover import crossover
+
+    core = {k: v for k, v in params.items() if k not in ("Kn", "Tn")}
+    return crossover(model.name, core, plants, limits=spec.limits, k=spec.k,
+                     duration_s=spec.duration_s).to_dict()
+
+
+def _meets_crossover_model(model, params, plants, target: float, spec: CohortSpec, gain: float) -> bool:
+    """The drawn pilot's tracking crossover is the target and within the limits."""
+    from ..pilot.hess import PilotModel
+
+    # Ke inside the identification's box (times the plants' gain scale), or no identification
+    # could find this pilot.
+    box = PilotModel().bounds(gain)["Ke"]
+    if not (box[0] < params["Ke"] <= box[1]):
+        return False
+    c = _truth_crossover(model, params, plants, spec)
+    return bool(c["within_limits"] and abs(c["frequency_rad_s"] / target - 1.0) < 1e-3)
 
 
 def _with_remnant(effects: Sequence[str]) -> tuple[str, ...]:

@@ -241,7 +241,7 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
     """
     from ..identification.fit import benchmark as mcruer_benchmark
     from ..identification.problem import SpectralObjective
-    from ..pilot.crossover import loop_crossover
+    from ..pilot.crossover import loop_crossover, tracking_crossover
     from ..pilot.hess import model_from_name
 
     model = model_from_name(model)
@@ -270,6 +270,7 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
             "parameters": complete, "free": [], "fixed": complete, "fitness": fit,
             "benchmark_fitness": bench_fit, "benchmark_parameters": bench_par,
             "crossover": loop_crossover(loop, obj.sim.yc_block).to_dict(), "evaluations": 1,
+            "primary_crossover": tracking_crossover(loop, obj.sim.yc_block, len(run.time) * run.dt).to_dict(),
             "identifiability": {"method": "not computed: nothing identified"},
             "band_hz": list(obj.band), "stable": sim_psd is not None,
             "simulated_psd": sim_psd if sim_psd is not None else np.full_like(obj.measured, np.nan)}
@@ -560,7 +561,7 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
     are listed in the outputs; the caller decides whether ``not result.ok``
     fails the stage. `draw` is :func:`write_comparison`'s, used when ``config.figures``.
     """
-    from .cohort import CohortSpec, synth_cohort
+    from .cohort import cohort_spec, synth_cohort
 
     out_dir = Path(out_dir)
     settings = config.settings(seed)
@@ -570,7 +571,7 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
     else:
         source = out_dir / "cohort"
         synth_cohort(plants, config.n, seed, config.effects, source,
-                     spec=CohortSpec(duration_s=config.duration_s, dt_s=config.dt_s))
+                     spec=cohort_spec(config.cohort, duration_s=config.duration_s, dt_s=config.dt_s))
     result = compare_pilots(source, plants, settings, workers=config.workers or None,
                             scheduler=config.scheduler or None, columns=config.columns or None,
                             resample=config.resample, progress=progress)

@@ -20,7 +20,7 @@ from ..core.provenance import versions
 from ..core.seeds import derive_seed
 from ..flight.approach import FlightConfig
 from ..flight.closed_loop import fly_pilot_record
-from .cohort import CohortSpec, _check_effects, pilot_ids, synth_pilot
+from .cohort import CohortSpec, _check_effects, cohort_spec, pilot_ids, synth_pilot
 
 
 def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_dir: str | os.PathLike, *,
@@ -53,7 +53,8 @@ def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_di
                                           workdir=Path(work), config=config, record_every=every,
                                           remnant_share=drawn["remnant_share"], run_id=pid)
                 truth = dict(flight.truth, base_seed=seed, draws=drawn["draws"],
-                             distributions=drawn["distributions"])
+                             distributions=drawn["distributions"],
+                             **{k: drawn[k] for k in ("target_crossover_rad_s", "crossover") if k in drawn})
                 write_run(stage / f"{pid}.csv", flight.run)
                 write_json(stage / f"{pid}.truth.json", truth)
                 summary.append({"id": pid, "seed": pseed, "parameters": truth["parameters"],
@@ -85,5 +86,5 @@ def fly_pipeline_cohort(config, plants: Plants, ctx):
     seed = config.seed if config.seed is not None else int(ctx.seed)
     folder = Path(ctx.out_dir) / "cohort"
     fly_cohort(plants, config.n, seed, config.effects, folder, aircraft=aircraft, config=flight_config,
-               record_dt_s=config.dt_s)
+               record_dt_s=config.dt_s, spec=cohort_spec(config.cohort, duration_s=config.duration_s))
     return replace(config, data=str(folder))

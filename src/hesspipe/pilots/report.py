@@ -52,7 +52,8 @@ def format_table(comparison) -> str:
         for name in CONFIGURATIONS:
             conf = p.configuration(name)
             params = conf.get("parameters", {})
-            cross = conf.get("crossover") or {}
+            # the tracking loop's crossover (hesspipe.pilot.crossover.tracking_crossover) where known
+            cross = conf.get("primary_crossover") or conf.get("crossover") or {}
             rows.append((p.id + (" *" if p.synthetic else "") if name == "original" else "", name,
                          *(_fmt(params.get(k)) if k in params else "x" for k in TABLE_PARAMETERS),
                          _fmt(conf.get("fitness"), ".4g"),

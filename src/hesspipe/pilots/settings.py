@@ -26,6 +26,10 @@ STARTS = ("warm", "random")
 MIN_SAMPLES = 1024  # = hesspipe.identification.spectra.PaperWelch().nperseg; checked in tests
 #: How the pipeline's synthetic cohort is simulated (``[pilots] simulator``).
 SIMULATORS = ("jsbsim", "fft")
+#: How a cohort's pilots are drawn (``[pilots] cohort``, :func:`hesspipe.pilots.cohort.cohort_spec`):
+#: the crossover-model cohort (the pipeline's default) or the Table 1 draw of earlier versions
+#: (kept so that their studies repeat).
+COHORT_DRAWS = ("crossover_model", "table1")
 #: Identification settings that :class:`PilotsConfig` and :class:`CompareSettings` share by name.
 _SHARED = ("optimizer", "passes", "km_fixed", "start", "restarts", "benchmark", "criterion")
 
@@ -163,6 +167,9 @@ class PilotsConfig(Settings):
     criterion : str
         Fit criterion (see :class:`CompareSettings`); default
         :data:`hesspipe.identification.criteria.DEFAULT_CRITERION`, as the identify command.
+    cohort : str
+        How the synthetic pilots are drawn (:data:`COHORT_DRAWS`): "crossover_model"
+        (default; within the crossover-model limits, :mod:`hesspipe.pilots.cohort`) or "table1".
     """
 
     data: str = ""
@@ -185,6 +192,7 @@ class PilotsConfig(Settings):
     resample: bool = False
     simulator: str = "jsbsim"
     criterion: str = DEFAULT_CRITERION
+    cohort: str = "crossover_model"
 
     def _checked(self, f: Fields) -> dict:
         effects = f.strings("effects")
@@ -198,6 +206,7 @@ class PilotsConfig(Settings):
                    workers=f.integer("workers", min=0), scheduler=f.string("scheduler"),
                    figures=f.boolean("figures"), columns=f.string("columns"),
                    resample=f.boolean("resample"), simulator=f.string("simulator", choices=SIMULATORS),
+                   cohort=f.string("cohort", choices=COHORT_DRAWS),
                    **_identification(f, "band_hz"))
         try:
             _parse_columns(out["columns"])

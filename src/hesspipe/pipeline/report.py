@@ -152,17 +152,30 @@ def _pilots(folder: Path, root: Path) -> list[str]:
                 + "; the paper reports about 50 % on average.", ""]
     rows = []
     limits = None
+    truths = {}
     for p in comp["pilots"]:
+        # a synthetic cohort's pilot knows its true crossover (crossover-model cohort)
+        t = (_load(folder / "cohort" / f"{p['id']}.truth.json") or {}).get("crossover") if synthetic else None
+        truths[p["id"]] = ("—" if not t else f"{t['frequency_rad_s']:.3g} rad/s, {t['phase_margin_deg']:.3g}°")
         for name in ("original", "expanded"):
-            c = p[name].get("crossover") or {}
+            c = p[name].get("primary_crossover") or p[name].get("crossover") or {}
             limits = limits or c.get("limits")
             rows.append([p["id"], name, c.get("frequency_rad_s"), c.get("phase_margin_deg"),
                          c.get("within_limits")])
-    out += ["Crossover of the identified pilots (open loop broken at the displayed error; "
+    n_in = sum(bool(r[4]) for r in rows[1::2])
+    out += ["Crossover of the identified pilots (open loop broken at the displayed error; the tracking "
+            "loop's crossover: the first fall of |L| through 1 above the lowest frequency the record "
+            "resolves, 2π/duration, which leaves out crossings the fitted plants' slow roots make far "
+            "below the data's band and neuromuscular peaks touching 1 far above it; "
             "— : |L| does not cross 1)" + (f"; limits {limits['frequency_rad_s']} rad/s and "
                                            f"{limits['phase_margin_deg']} deg are an assumption of "
                                            "hesspipe, not the paper's" if limits else "") + ":", ""]
-    out += _table(["pilot", "model", "crossover rad/s", "phase margin deg", "within limits"], rows)
+    show_truth = any(v != "—" for v in truths.values())
+    table_rows = [r + [truths[r[0]]] for r in rows] if show_truth else rows
+    out += _table(["pilot", "model", "crossover rad/s", "phase margin deg", "within limits"]
+                  + (["truth of the synthetic pilot (its own model)"] if show_truth else []), table_rows)
+    out += [f"Within the limits (expanded model): {n_in} of {len(rows) // 2} pilots; original model: "
+            f"{sum(bool(r[4]) for r in rows[0::2])} of {len(rows) // 2}.", ""]
     if comp.get("failures"):
         out += ["Failed runs: " + "; ".join(f"{f['id']}: {f['error']}" for f in comp["failures"]), ""]
     for p in comp["pilots"]:
