@@ -401,9 +401,15 @@ def nonparametric_crossover(resp: Response, yc, *, seed: int = 0) -> FrfCrossove
     plant = (grid, np.log(np.abs(yc_grid)), np.unwrap(np.angle(yc_grid)), block.response(1j * w))
     # Precise lines (little remnant) can show curvature the local model cannot follow (a
     # neuromuscular peak within the kernel): narrow the kernel until it fits them.
-    for kernel in KERNELS:
-        wc, pm, misfit = (float(x[0]) for x in _cross(w, H0, rel, plant, kernel))
-        if misfit <= MAX_MISFIT:
+    # A noisy high line can make |L| fall through 1 far above the loop's crossover, where the
+    # smooth fit then finds none: try the raw falls from the highest down.
+    wc = pm = nan
+    for start in _starts(w, H0, rel, plant[3]):
+        for kernel in KERNELS:
+            wc, pm, misfit = (float(x[0]) for x in _cross(w, H0, rel, plant, kernel, start))
+            if misfit <= MAX_MISFIT:
+                break
+        if np.isfinite(wc):
             break
     ok_lines = rel < RELIABLE
     raw = _raw_cross(w[ok_lines], H0[ok_lines], plant[3][ok_lines]) if ok_lines.sum() >= 2 \
@@ -416,7 +422,7 @@ def nonparametric_crossover(resp: Response, yc, *, seed: int = 0) -> FrfCrossove
         return FrfCrossover(nan, nan, nan, nan, note, *raw)
     rng = np.random.default_rng(derive_seed(seed, "frf-crossover"))
     noise = (rng.standard_normal((DRAWS, w.size)) + 1j * rng.standard_normal((DRAWS, w.size))) / np.sqrt(2)
-    arr = np.column_stack(_cross(w, H0 + sig * noise, rel, plant, kernel)[:2])
+    arr = np.column_stack(_cross(w, H0 + sig * noise, rel, plant, kernel, start)[:2])
     ok = np.isfinite(arr[:, 0])
     if ok.sum() < DRAWS // 2:
         return FrfCrossover(wc, pm, float("inf"), float("inf"),
@@ -457,6 +463,19 @@ def _wrap_deg(x):
     return 180.0 if pm == -180.0 else float(pm)
 
 
+def _starts(w, H, rel, yc_w) -> np.ndarray:
+    """Where the local regression may start (rad/s), highest first: every fall of |L| through 1
+    between reliable lines, or the highest reliable line if |L| is still above 1 there."""
+    keep = rel < RELIABLE
+    if keep.sum() < 3:
+        keep = np.isin(np.arange(w.size), np.argsort(rel)[:3])
+    lw, lm = np.log(w[keep]), np.log(np.abs(H[keep] * yc_w[keep]))
+    i = np.nonzero((lm[:-1] > 0) & (lm[1:] <= 0))[0][::-1]
+    if i.size == 0:
+        return np.array([w[keep][-1]]) if lm[-1] > 0 else np.zeros(0)
+    return np.exp(lw[i] + lm[i] / (lm[i] - lm[i + 1]) * (lw[i + 1] - lw[i]))
+
+
 def _raw_cross(w, H, yc_w) -> tuple[float, float]:
     """Highest fall of |L| through 1 between two lines, ln|L| and phase interpolated in ln w."""
     L = H * yc_w
@@ -468,7 +487,8 @@ def _raw_cross(w, H, yc_w) -> tuple[float, float]:
     return float(np.exp(x)), _wrap_deg(np.degrees(ph[0] + t * (ph[1] - ph[0])) + 180.0)
 
 
-def _cross(w, H, rel, plant, kernel: float = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _cross(w, H, rel, plant, kernel: float = None, start: float = None
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Crossover and phase margin of ``L = H Yc`` from measured points H(j w) (w ascending).
 
     H may hold one row of points per draw, shape (D, n); `rel` (n,) is the
@@ -484,7 +504,8 @@ def _cross(w, H, rel, plant, kernel: float = None) -> tuple[np.ndarray, np.ndarr
     points: ln|H| by a quadratic in ln w, the unwrapped phase by
     ``c0 + c1 w + c2 ln w`` (a delay plus a lead or lag), each line weighted by
     its inverse relative variance times a Gaussian kernel in ln(w / wc) of
-    width `kernel` (default KERNEL). The smooth H times the exact plant is crossed with 1 (the
+    width `kernel` (default KERNEL). With `start` (rad/s), every row starts
+    there instead of at its own raw crossing. The smooth H times the exact plant is crossed with 1 (the
     fall nearest the previous estimate, within a factor SPAN), the kernel
     re-centred there, and so on until it settles. The plant's curvature
     (1/(s(s+1)) near 1 rad/s) is thus not interpolated, and the remnant's
@@ -509,6 +530,8 @@ def _cross(w, H, rel, plant, kernel: float = None) -> tuple[np.ndarray, np.ndarr
         t = lm[rows, i] / (lm[rows, i] - lm[rows, i + 1])
         wc0 = np.where(has, np.exp(lw[i] + t * (lw[i + 1] - lw[i])),
                        np.where(lm[:, -1] > 0, w[-1], np.nan))  # above 1 at the last line: look beyond
+    if start is not None:
+        wc0 = np.full(D, float(start))
     ok = np.isfinite(wc0)
     wc0 = np.where(ok, wc0, 1.0)
     wv = 1.0 / np.maximum(rel, 0.02) ** 2
