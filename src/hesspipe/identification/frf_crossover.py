@@ -34,7 +34,25 @@ SPAN = 2.0
 
 @dataclass(frozen=True)
 class FrfCrossover:
-    """Nonparametric crossover of ``L = H Yc`` (NaN if |L| does not fall through 1 between lines)."""
+    """Nonparametric crossover of ``L = H Yc`` (NaN if |L| does not fall through 1 between lines).
+
+    Attributes
+    ----------
+    frequency_rad_s : float
+        Crossover frequency of the local regression (rad/s).
+    phase_margin_deg : float
+        ``180 + angle L(j wc)`` there (deg, wrapped into (-180, 180]).
+    frequency_std : float
+        Standard deviation of `frequency_rad_s` over the draws (rad/s; inf when most
+        draws find no crossing).
+    phase_margin_std_deg : float
+        Standard deviation of the phase margin over the draws (deg).
+    note : str
+        Why the crossover is NaN or very uncertain; empty otherwise.
+    raw_frequency_rad_s, raw_phase_margin_deg : float
+        The raw crossing: |L| and its phase interpolated linearly in ln w between
+        the two reliable lines where |L| last falls through 1 (rad/s, deg).
+    """
 
     frequency_rad_s: float
     phase_margin_deg: float
@@ -45,6 +63,12 @@ class FrfCrossover:
     raw_phase_margin_deg: float = float("nan")
 
     def to_dict(self) -> dict:
+        """JSON-ready fields, with the method of each estimate in words.
+
+        Returns
+        -------
+        dict
+        """
         return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
                 "frequency_std_rad_s": self.frequency_std,
                 "phase_margin_std_deg": self.phase_margin_std_deg, "note": self.note,
@@ -68,6 +92,10 @@ def nonparametric_crossover(resp, yc, *, seed: int = 0) -> FrfCrossover:
         The control plant (input of Yc: the pilot's control).
     seed : int
         Seed of the draws (the estimate itself does not depend on it).
+
+    Returns
+    -------
+    FrfCrossover
     """
     block = yc if hasattr(yc, "response") else from_tf(yc)
     w = resp.freq_rad_s
