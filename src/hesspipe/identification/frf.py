@@ -74,6 +74,7 @@ class Response:
     bins: np.ndarray
 
     def to_dict(self) -> dict:
+        """JSON-ready: frequencies (rad/s), magnitude (linear and dB), phase (deg), H and sigma."""
         mag = np.abs(self.H)
         rel = np.where(mag > 0, self.sigma / np.maximum(mag, 1e-300), np.inf)
         return {"frequency_rad_s": self.freq_rad_s.tolist(),
@@ -117,6 +118,7 @@ class Frf:
     notes: tuple = field(default=())
 
     def to_dict(self) -> dict:
+        """JSON-ready: the method, both responses, the remnant share and the crossover."""
         return {"run_id": self.run_id, "synthetic": self.synthetic, "method": self.method,
                 "definition": "H = U/E, E = reference - output; feedback response at the "
                               "disturbance's lines",

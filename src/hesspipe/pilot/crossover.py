@@ -46,7 +46,15 @@ LIMITS_NOTE = ("crossover-model limits are an assumption of hesspipe (configurab
 
 @dataclass(frozen=True)
 class CrossoverLimits:
-    """Acceptable crossover frequency (rad/s) and phase margin (deg)."""
+    """Acceptable crossover frequency (rad/s) and phase margin (deg).
+
+    Attributes
+    ----------
+    frequency_rad_s : (float, float)
+        Lowest and highest acceptable crossover frequency, rad/s.
+    phase_margin_deg : (float, float)
+        Lowest and highest acceptable phase margin, deg.
+    """
 
     frequency_rad_s: tuple[float, float] = (1.0, 5.0)
     phase_margin_deg: tuple[float, float] = (20.0, 60.0)
@@ -73,6 +81,7 @@ class Crossover:
     limits: CrossoverLimits = CrossoverLimits()
 
     def to_dict(self) -> dict:
+        """JSON-ready: frequency (rad/s), margin (deg), the verdict and the limits it used."""
         return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
                 "within_limits": self.within_limits,
                 "limits": {k: list(v) for k, v in asdict(self.limits).items()},
@@ -94,6 +103,24 @@ def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits(),
     instead of the highest (SPEC's definition, which a neuromuscular or
     proprioceptive peak touching 1 far above the forcing's band moves there).
     `w_min` (rad/s): crossings below it are ignored (see :func:`tracking_crossover`).
+
+    Parameters
+    ----------
+    loop : hesspipe.pilot.blocks.Loop
+        The pilot's loop, motion path included.
+    yc : hesspipe.pilot.blocks.Block
+        Control plant, control -> output.
+    limits : CrossoverLimits
+        Acceptable ranges (the verdict ``within_limits``).
+    first : bool
+        The lowest falling crossing above `w_min` instead of the highest.
+    w_min : float
+        Lowest frequency searched, rad/s.
+
+    Returns
+    -------
+    Crossover
+        NaN frequency and margin when |L| never falls through 1.
     """
     def gain_db(w):
         s = 1j * np.atleast_1d(np.asarray(w, dtype=float))
@@ -120,7 +147,13 @@ def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits(),
 
 
 def record_band_floor(duration_s: float) -> float:
-    """Lowest frequency a record of `duration_s` resolves, ``2 pi / duration`` (rad/s)."""
+    """Lowest frequency a record of `duration_s` resolves, ``2 pi / duration`` (rad/s).
+
+    Parameters
+    ----------
+    duration_s : float
+        Record length, s (> 0). The result is clipped to 1e-3..1 rad/s.
+    """
     if not (math.isfinite(duration_s) and duration_s > 0):
         raise HesspipeError(f"duration_s: expected a record length > 0 s, got {duration_s!r}")
     return min(max(2.0 * math.pi / duration_s, 1e-3), 1.0)
@@ -132,6 +165,17 @@ def tracking_crossover(loop, yc: Block, duration_s: float,
 
     The first frequency above ``2 pi / duration_s`` (:func:`record_band_floor`)
     where ``|L|`` falls through 1 (see the module docstring for why this one).
+
+    Parameters
+    ----------
+    loop : hesspipe.pilot.blocks.Loop
+        The pilot's loop, motion path included.
+    yc : hesspipe.pilot.blocks.Block
+        Control plant, control -> output.
+    duration_s : float
+        Record length, s.
+    limits : CrossoverLimits
+        Acceptable ranges.
     """
     return loop_crossover(loop, yc, limits, first=True, w_min=record_band_floor(duration_s))
 
@@ -166,6 +210,11 @@ def reference_crossover(k: int = 1) -> float:
     """Crossover (rad/s) of Table 1's original model around ``Yc = 1/s^k``.
 
     2.886 rad/s for k = 1, the value Table 1 is calibrated for (SPEC.md).
+
+    Parameters
+    ----------
+    k : int
+        Table 1 column and plant order (1 or 2).
     """
     import control as ct
 
