@@ -150,6 +150,16 @@ def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U
     return rss, p, sol
 
 
+def _standard_errors(sol, free: Sequence[str], rss: float, dof: int) -> dict:
+    """Standard errors of the `free` parameters of a weighted least-squares fit (the
+    residual variance estimated as rss / dof: the lines' common scale is left to the data)."""
+    try:
+        cov = np.linalg.pinv(sol.jac.T @ sol.jac) * (rss / max(dof, 1))
+    except np.linalg.LinAlgError:
+        return {n_: math.nan for n_ in free}
+    return {n_: float(math.sqrt(max(cov[i, i], 0.0))) for i, n_ in enumerate(free)}
+
+
 def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                 band_hz: tuple[float, float] = (0.0, 5.0)) -> dict:
     """Likelihood-ratio test of motion feedback on one pilot's describing-function lines.
@@ -177,7 +187,10 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         residual sums, dimensionless: remnant variance units), ``lr`` (LR
         statistic, the F of the nested test), ``p_value``, ``gain`` (1 − rss_expanded / rss_original),
         ``Km`` and ``Km_se`` (its standard error from the fit's Jacobian, same
-        units as the pilot model's Km), ``significant`` (p < :data:`ALPHA`).
+        units as the pilot model's Km), ``significant`` (p < :data:`ALPHA`),
+        ``parameters_original`` / ``parameters_expanded`` (the two fits' pilot
+        parameters) and ``standard_errors_original`` (of the original's free
+        parameters; diagnose reads the pilot's own delay from them).
     """
     from ..pilot.crossover import gain_scale
     from ..pilot.hess import PilotModel
@@ -237,8 +250,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         var[i] = np.mean(np.abs(res_near[np.isin(near, pick)]) ** 2)
     w = 1.0 / np.sqrt(np.maximum(var, np.max(var) * 1e-12))
 
-    rss_o, p_o, _ = _fit(original, base, free, lo, hi, [[p0[n_] for n_ in free]] + starts, cab,
-                         s_l, E[lines], Y[lines], U[lines], w)
+    rss_o, p_o, sol_o = _fit(original, base, free, lo, hi, [[p0[n_] for n_ in free]] + starts, cab,
+                             s_l, E[lines], Y[lines], U[lines], w)
     gs = gain_scale(plants, k) if plants is not None else 1.0
     km0 = PilotModel(("motion_feedback",)).defaults(k, gs)["Km"]
     free_e = free + ["Km"]
@@ -250,9 +263,10 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     # Exchange of optima: the original searched again from the expanded optimum's core
     # parameters, so that LR measures what Km adds, not a better local optimum the
     # expanded search happened to find for the shared parameters.
-    rss_o2, p_o2, _ = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], cab,
-                           s_l, E[lines], Y[lines], U[lines], w)
-    rss_o = min(rss_o, rss_o2)
+    rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], cab,
+                                s_l, E[lines], Y[lines], U[lines], w)
+    if rss_o2 < rss_o:
+        rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
     rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
     dof = 2 * int(lines.size) - len(free_e)
     if dof < 1:
@@ -266,6 +280,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     except np.linalg.LinAlgError:
         km_se = math.nan
     return {"available": True, "n_lines": int(lines.size), "window_samples": int(length),
+            "parameters_original": {n_: float(v) for n_, v in p_o.items()},
+            "parameters_expanded": {n_: float(v) for n_, v in p_e.items()},
+            "standard_errors_original": _standard_errors(sol_o, free, rss_o, dof + 1),
             "rss_original": rss_o,
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
             "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": float(p_e["Km"]),
