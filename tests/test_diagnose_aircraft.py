@@ -97,7 +97,7 @@ def test_strong_motion_feedback_is_named_first_by_the_one_motion_test(tmp_path_f
     # named first, and by the very test compare-pilots runs (same p-value).
     from hesspipe.identification.criteria import choose_k
     from hesspipe.pilot.hess import PilotModel
-    from hesspipe.pilots.verdict import motion_test
+    from hesspipe.identification.motion_test import motion_test
 
     run, plants = _one_task_trial(tmp_path_factory, "roll", ("motion_feedback",), 911, task="both",
                                   output="rate", km_ratio=1.0)

@@ -1,27 +1,28 @@
-"""Motion verdict of ``diagnose``: the one describing-function motion test of hesspipe.
+"""Describing-function evidence of ``diagnose``: motion, delay, remnant, the pilot's dynamics.
 
-There is one test of motion feedback, :func:`hesspipe.pilots.verdict.motion_test` (compare-pilots'
-per-pilot test): at the multisine forcing lines the Hess loop holds as an equation error
-``U (1 + NM PF) = NM (visual E - vestibular Y) + N`` whose residual at each line is
-scaled by the remnant level of the neighbouring unforced bins (a per-line variance, so
-the fit weighs gain *and* phase of the describing function by how well each line is
-known), and the nested models without and with ``Km`` are compared by an F test with
-the boundary correction for ``Km >= 0``. A vestibular path shows there as a change of
-the describing function's gain and phase around 1-5 rad/s; the pilot's own delay,
+There is one test of motion feedback, :func:`hesspipe.identification.motion_test.motion_test`
+(compare-pilots runs it per pilot): at the multisine forcing lines the Hess loop holds as
+an equation error ``U (1 + NM PF) = NM (visual E - vestibular Y) + N`` whose residual at
+each line is scaled by the remnant level of the neighbouring unforced bins (a per-line
+variance, so the fit weighs gain *and* phase of the describing function by how well each
+line is known), and the nested models without and with ``Km`` are compared by an F test
+with the boundary correction for ``Km >= 0``. A vestibular path shows there as a change
+of the describing function's gain and phase around 1-5 rad/s; the pilot's own delay,
 lead-lag and neuromuscular mode are free in both models, so a slower or differently
 equalised pilot is not taken for a vestibular one.
 
-This module only adapts that test to ``diagnose``: the start is the baseline pilot the
-control-spectrum fit found, the level is ``DiagnoseConfig.motion_alpha``, and the
-verdict is final for motion feedback whenever the record has forcing lines (it is then
-no longer a candidate of the control-spectrum rounds, whose level-only evidence confuses
-a vestibular path with any other mismatch of the baseline). Records without forcing
-lines (random wind, gusts) leave motion feedback to those rounds.
+This module adapts it to ``diagnose`` (start: the model's defaults for Hess's order of
+the plants; level ``DiagnoseConfig.motion_alpha``). Whenever the record has forcing lines
+its verdicts are final: motion feedback, extra delay and remnant are then no longer
+candidates of the control-spectrum rounds, whose level-only evidence confuses them with
+any other mismatch of the baseline. Records without forcing lines (random wind, gusts)
+leave them to those rounds.
 
 The same fit gives the pilot's own visual delay, neuromuscular mode and lag with the
 phase the control spectrum cannot see: the baseline starts from them (a pilot slower than
 the model's defaults is not a discrepancy), and an extra delay is named only when the
-delay is significantly beyond a human's (:func:`delay_test`).
+delay is significantly beyond a human's (:func:`delay_test`). The remnant is the control
+power between the lines (:func:`remnant_share`).
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ class MotionVerdict:
         return {"named": self.named, "statistic": self.statistic, "p_value": self.p_value,
                 "gain": self.gain, "Km": self.Km, "Km_se": self.Km_se, "n_lines": self.n_lines,
                 "alpha": self.alpha, "note": self.note,
-                "criterion": "hesspipe.pilots.verdict.motion_test: F test of Km on the describing-function "
+                "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
                              "lines (equation error, per-line remnant variance from the unforced "
                              "neighbours), p halved for Km >= 0"}
 
@@ -109,7 +110,7 @@ def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float
 
     import numpy as np
 
-    from ..pilots.verdict import analysis_window, forcing_lines
+    from ..identification.motion_test import analysis_window, forcing_lines
 
     start, length = analysis_window(run)
     cut = slice(start, start + length)
@@ -131,8 +132,8 @@ def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float
 
 def df_evidence(run, plants, start, *, k: int, cfg) -> DFEvidence | None:
     """Motion and delay verdicts and the pilot's dynamics from the describing function
-    (:func:`hesspipe.pilots.verdict.motion_test`), or None when the record has no forcing lines."""
-    from ..pilots.verdict import safe_motion_test
+    (:func:`hesspipe.identification.motion_test.motion_test`), or None when the record has no forcing lines."""
+    from ..identification.motion_test import safe_motion_test
 
     t = safe_motion_test(run, plants, start, k=k)
     if not t.get("available"):
