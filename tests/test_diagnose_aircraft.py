@@ -125,3 +125,25 @@ def test_delay_beyond_a_human_is_named_only_when_significant():
     near = delay_test(0.37, 0.02, 0.35, 0.01)   # z = 1: within a human's delay by chance
     assert not near["named"] and near["p_value"] == pytest.approx(0.1587, abs=1e-3)
     assert not delay_test(0.30, 0.01, 0.35, 0.01)["named"]
+
+
+def test_remnant_share_is_the_power_between_the_forcing_lines():
+    import numpy as np
+
+    from hesspipe.core.formats import Run
+    from hesspipe.diagnose.motion import remnant_share
+
+    dt, n = 0.02, 4096
+    t = np.arange(n) * dt
+    bins = np.array([7, 13, 23, 37, 53, 79, 113, 151])  # whole periods in the record
+    d = sum(np.sin(2 * np.pi * b * t / (n * dt) + b) for b in bins)
+    rng = np.random.default_rng(3)
+    noise = rng.standard_normal(n)
+    clean = Run(t, d, np.zeros(n), -0.5 * d, np.zeros(n), synthetic=True)
+    share, lines = remnant_share(clean)
+    assert lines == bins.size and share < 1e-6
+    # White noise of variance v over 0-25 Hz puts v/5 in 0-5 Hz; the lines carry 8 x 0.125.
+    v = 2.0
+    noisy = Run(t, d, np.zeros(n), -0.5 * d + np.sqrt(v) * noise, np.zeros(n), synthetic=True)
+    expect = (v / 5) / (v / 5 + 0.25 * 0.5 * bins.size)
+    assert remnant_share(noisy)[0] == pytest.approx(expect, rel=0.15)
