@@ -174,7 +174,8 @@ def motion_step(ev: DFEvidence, problem, current, cfg):
                 accepted=v.named, statistic=v.statistic, dof=1, p_value=v.p_value,
                 threshold=cfg.motion_alpha, delta_bic=float("nan"), gap=gap, gap_ok=True,
                 log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
-                parameters=fit.parameters if fitted else {"Km": v.Km},
+                # Km as the describing function sees it: the control spectrum barely does.
+                parameters={"Km": v.Km, "Km_se": v.Km_se},
                 evaluations=fit.evaluations if fit is not None else 0)
     return step, (fit if fitted else None)
 

@@ -1343,6 +1343,10 @@ def format_report(d: Diagnosis) -> str:
         if s.status != "ok":
             out.append(f"  round {s.round}: {s.candidate:<16} FAILED ({s.error})")
             continue
+        if s.round == 0:  # judged on the describing function (its lines above)
+            out.append(f"  describing function: {s.candidate:<16} {'NAMED' if s.accepted else 'not named'}"
+                       f" (see above); control-spectrum gap with it {s.gap:.3g}")
+            continue
         out.append(f"  round {s.round}: {s.candidate:<16} LR={s.statistic:8.1f} dof={s.dof} p={s.p_value:9.2e} "
                    f"(needs < {s.threshold:.1e}) dBIC={s.delta_bic:8.1f} gap={s.gap:.3g}"
                    f"{f' [{s.veto}]' if s.veto else ''}{'  <- NAMED' if s.accepted else ''}")
@@ -1352,9 +1356,10 @@ def format_report(d: Diagnosis) -> str:
             step = next((s for s in d.steps if s.accepted and s.candidate == eff), None)
             if step is None:  # aircraft side, named from the plant check above
                 continue
-            out.append(f"  {eff}: {_describe(eff).rstrip('.')}; LR {step.statistic:.1f} on {step.dof} parameter(s), "
-                       f"p = {step.p_value:.1e}; fitted " + ", ".join(
-                           f"{k}={step.parameters[k]:.4g}" for k in _effect(eff).parameters))
+            evidence = "describing function (above)" if step.round == 0 else \
+                f"LR {step.statistic:.1f} on {step.dof} parameter(s), p = {step.p_value:.1e}"
+            out.append(f"  {eff}: {_describe(eff).rstrip('.')}; {evidence}; fitted " + ", ".join(
+                           f"{k}={step.parameters.get(k, float('nan')):.4g}" for k in _effect(eff).parameters))
     elif not d.steps:
         out.append("Named: nothing (no candidates to try)")
     else:
