@@ -58,7 +58,18 @@ NEIGHBOURS = 6
 
 def analysis_window(run) -> tuple[int, int]:
     """(start, length) in samples of the window that puts the forcing's lines on exact bins
-    (:func:`hesspipe.identification.frf._window`: the record, or a whole number of its periods)."""
+    (:func:`hesspipe.identification.frf._window`: the record, or a whole number of its periods).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        Its disturbance and reference are the forcing signals.
+
+    Returns
+    -------
+    (int, int)
+        First sample and number of samples of the window.
+    """
     from .frf import _window
 
     d = np.asarray(run.disturbance, dtype=float)
@@ -282,7 +293,18 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                      band_hz: tuple[float, float] = (0.0, 5.0)) -> dict:
     """:func:`motion_test`, with a failure of the test reported in the result, not raised
-    (a pilot's identification stays valid when its describing function cannot be tested)."""
+    (a pilot's identification stays valid when its describing function cannot be tested).
+
+    Parameters
+    ----------
+    run, plants, start, k, band_hz
+        As :func:`motion_test`.
+
+    Returns
+    -------
+    dict
+        :func:`motion_test`'s result, or ``{"available": False, "reason": ...}``.
+    """
     try:
         return motion_test(run, plants, start, k=k, band_hz=band_hz)
     except (HesspipeError, ValueError, np.linalg.LinAlgError) as exc:
