@@ -81,5 +81,69 @@ def test_motion_feedback_run_is_named_on_the_describing_function(tmp_path_factor
     d = diagnose(run, plants)
     assert d.named_effects[:1] == ("motion_feedback",), d.named_effects
     mv = d.motion_verdict
-    assert mv["named"] and mv["p_value"] < 0.05 and mv["df_fitness_with"] < mv["df_fitness_without"]
+    assert mv["named"] and mv["p_value"] < 0.05 and mv["gain"] > 0
     assert d.gap_after <= d.gap_before
+
+
+def _one_task_trial(tmp_path_factory, plant, effects, seed, **kw):
+    folder = tmp_path_factory.mktemp("trial")
+    spec = draw_trial(plant, seed, pilot="hess", effects=effects, fs=50.0, T_m=70.0, **kw)
+    path = write_trial(folder, simulate_trial(spec))
+    return read_run(path), read_plants(folder / "plants.json")
+
+
+def test_strong_motion_feedback_is_named_first_by_the_one_motion_test(tmp_path_factory):
+    # A strong vestibular path (Km = Ke) on a tracking task with target and disturbance:
+    # named first, and by the very test compare-pilots runs (same p-value).
+    from hesspipe.identification.criteria import choose_k
+    from hesspipe.pilot.hess import PilotModel
+    from hesspipe.identification.motion_test import motion_test
+
+    run, plants = _one_task_trial(tmp_path_factory, "roll", ("motion_feedback",), 911, task="both",
+                                  output="rate", km_ratio=1.0)
+    d = diagnose(run, plants)
+    assert d.named_effects[:1] == ("motion_feedback",), d.named_effects
+    k = choose_k(plants)[0]
+    t = motion_test(run, plants, PilotModel().complete({}, k), k=k)
+    assert d.motion_verdict["p_value"] == pytest.approx(t["p_value"], rel=1e-9)
+
+
+@pytest.mark.parametrize("plant,output,task", [("roll", "angle", "both"), ("paper", "rate", "both")])
+def test_baseline_gets_no_pilot_side_name(tmp_path_factory, plant, output, task):
+    kw = dict(disturbance="wind") if plant == "paper" else {}
+    run, plants = _one_task_trial(tmp_path_factory, plant, (), 912, task=task, output=output, **kw)
+    d = diagnose(run, plants)
+    assert not set(d.named_effects) & {"motion_feedback", "otoliths", "extra_delay"}, d.named_effects
+    assert d.motion_verdict is not None and not d.motion_verdict["named"]
+
+
+def test_delay_beyond_a_human_is_named_only_when_significant():
+    from hesspipe.diagnose.motion import delay_test
+
+    far = delay_test(0.45, 0.02, 0.35, 0.01)
+    assert far["named"] and far["extra_s"] == pytest.approx(0.10) and far["p_value"] < 1e-5
+    near = delay_test(0.37, 0.02, 0.35, 0.01)   # z = 1: within a human's delay by chance
+    assert not near["named"] and near["p_value"] == pytest.approx(0.1587, abs=1e-3)
+    assert not delay_test(0.30, 0.01, 0.35, 0.01)["named"]
+
+
+def test_remnant_share_is_the_power_between_the_forcing_lines():
+    import numpy as np
+
+    from hesspipe.core.formats import Run
+    from hesspipe.diagnose.motion import remnant_share
+
+    dt, n = 0.02, 4096
+    t = np.arange(n) * dt
+    bins = np.array([7, 13, 23, 37, 53, 79, 113, 151])  # whole periods in the record
+    d = sum(np.sin(2 * np.pi * b * t / (n * dt) + b) for b in bins)
+    rng = np.random.default_rng(3)
+    noise = rng.standard_normal(n)
+    clean = Run(t, d, np.zeros(n), -0.5 * d, np.zeros(n), synthetic=True)
+    share, lines = remnant_share(clean)
+    assert lines == bins.size and share < 1e-6
+    # White noise of variance v over 0-25 Hz puts v/5 in 0-5 Hz; the lines carry 8 x 0.125.
+    v = 2.0
+    noisy = Run(t, d, np.zeros(n), -0.5 * d + np.sqrt(v) * noise, np.zeros(n), synthetic=True)
+    expect = (v / 5) / (v / 5 + 0.25 * 0.5 * bins.size)
+    assert remnant_share(noisy)[0] == pytest.approx(expect, rel=0.15)

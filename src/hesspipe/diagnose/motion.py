@@ -1,19 +1,28 @@
-"""Motion verdict of ``diagnose`` from the describing function's shape (phase-aware).
+"""Describing-function evidence of ``diagnose``: motion, delay, remnant, the pilot's dynamics.
 
-A vestibular path changes the pilot's describing function H = U/E in gain *and* phase
-around 1-5 rad/s (the canals lead the visual channel there); a control PSD sees only the
-level. So motion feedback is judged here on the nonparametric describing function of
-:func:`hesspipe.identification.frf.estimate_frf` (at the forcing's lines, with each line's uncertainty):
-the pilot model without and with ``motion_feedback`` is fitted by the ``df`` criterion of
-:mod:`hesspipe.identification.criteria` (its phase-aware free set: gains, lag corner, delay and
-neuromuscular mode free, so a slower or differently equalised pilot is not mistaken for a
-vestibular one), and the two are compared by a likelihood-ratio test with the lines'
-common model-error variance profiled out::
+There is one test of motion feedback, :func:`hesspipe.identification.motion_test.motion_test`
+(compare-pilots runs it per pilot): at the multisine forcing lines the Hess loop holds as
+an equation error ``U (1 + NM PF) = NM (visual E - vestibular Y) + N`` whose residual at
+each line is scaled by the remnant level of the neighbouring unforced bins (a per-line
+variance, so the fit weighs gain *and* phase of the describing function by how well each
+line is known), and the nested models without and with ``Km`` are compared by an F test
+with the boundary correction for ``Km >= 0``. A vestibular path shows there as a change
+of the describing function's gain and phase around 1-5 rad/s; the pilot's own delay,
+lead-lag and neuromuscular mode are free in both models, so a slower or differently
+equalised pilot is not taken for a vestibular one.
 
-    Lambda = 2 n ln(J0^2 / J1^2)      (n lines, J: RMS line error in line standard deviations)
+This module adapts it to ``diagnose`` (start: the model's defaults for Hess's order of
+the plants; level ``DiagnoseConfig.motion_alpha``). Whenever the record has forcing lines
+its verdicts are final: motion feedback, extra delay and remnant are then no longer
+candidates of the control-spectrum rounds, whose level-only evidence confuses them with
+any other mismatch of the baseline. Records without forcing lines (random wind, gusts)
+leave them to those rounds.
 
-chi-square with one degree of freedom under "no motion feedback"; named when
-``p < alpha`` and its BIC (``Lambda - ln(2 n)``) improves.
+The same fit gives the pilot's own visual delay, neuromuscular mode and lag with the
+phase the control spectrum cannot see: the baseline starts from them (a pilot slower than
+the model's defaults is not a discrepancy), and an extra delay is named only when the
+delay is significantly beyond a human's (:func:`delay_test`). The remnant is the control
+power between the lines (:func:`remnant_share`).
 """
 
 from __future__ import annotations
@@ -21,102 +30,190 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import scipy.stats
-
 
 @dataclass(frozen=True)
 class MotionVerdict:
-    """``named``: motion feedback explains the describing function's shape; ``statistic``,
-    ``p_value``, ``delta_bic`` of the test; ``J0``/``J1`` the df criterion without/with it;
-    ``Km`` fitted; ``n_lines`` used; ``note`` why no verdict was possible (then None tests)."""
+    """``named``: motion feedback explains the describing function; ``statistic`` (F),
+    ``p_value``, ``gain`` (share of the describing-function misfit removed) of the test;
+    ``Km`` fitted with its standard error ``Km_se``; ``n_lines`` used; ``note`` why no
+    verdict was possible (then the test fields are NaN)."""
 
     named: bool
     statistic: float = float("nan")
     p_value: float = float("nan")
-    delta_bic: float = float("nan")
-    J0: float = float("nan")
-    J1: float = float("nan")
+    gain: float = float("nan")
     Km: float = float("nan")
+    Km_se: float = float("nan")
     n_lines: int = 0
+    alpha: float = float("nan")
     note: str = ""
 
     def to_dict(self) -> dict:
         return {"named": self.named, "statistic": self.statistic, "p_value": self.p_value,
-                "delta_bic": self.delta_bic, "df_fitness_without": self.J0, "df_fitness_with": self.J1,
-                "Km": self.Km, "n_lines": self.n_lines, "note": self.note,
-                "criterion": "likelihood ratio on the describing function at the forcing lines "
-                             "(df criterion, model-error variance profiled), 1 dof"}
+                "gain": self.gain, "Km": self.Km, "Km_se": self.Km_se, "n_lines": self.n_lines,
+                "alpha": self.alpha, "note": self.note,
+                "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
+                             "lines (equation error, per-line remnant variance from the unforced "
+                             "neighbours), p halved for Km >= 0"}
 
 
-def motion_verdict(run, plants, *, k: int = 1, seed: int = 0, alpha: float = 0.01,
-                   starts: int = 2) -> MotionVerdict:
-    """Test motion feedback on the describing function (see the module docstring).
+#: Pilot parameters the describing function identifies (with the phase the control spectrum
+#: cannot see) and hands to the control-spectrum baseline; gains stay the spectrum's.
+DYNAMICS = ("tau0", "wn", "zn", "1/T1", "1/T2")
 
-    Returns a verdict with ``named = False`` and a ``note`` when the run holds no usable
-    describing function (no forcing lines, too few reliable lines).
+
+@dataclass(frozen=True)
+class DFEvidence:
+    """What the describing function says, for :func:`hesspipe.diagnose.workflow.diagnose`:
+    ``motion`` (:class:`MotionVerdict`), ``delay`` (the extra-delay test as a dict),
+    ``remnant`` (the control power between the lines, :func:`remnant_share`) and
+    ``dynamics`` (the pilot's own delay, neuromuscular mode and lags, to start the
+    baseline from)."""
+
+    motion: MotionVerdict
+    delay: dict
+    dynamics: dict
+    remnant: dict
+
+
+def delay_test(delay_s: float, se_s: float, max_pilot_delay_s: float, alpha: float) -> dict:
+    """One-sided test that the visual delay exceeds a human pilot's.
+
+    A delay added by the simulator (display, computation) and the pilot's own visual delay
+    are one delay in the data: only their sum is identifiable. So an extra delay can be
+    named only when the identified delay (s) is significantly beyond the longest a human
+    pilot has, ``max_pilot_delay_s`` (s): ``z = (delay - max) / se``, named when
+    ``P(N(0,1) > z) < alpha``; the extra delay is then ``delay - max`` (a lower bound).
     """
-    from ..core.errors import HesspipeError
-    from ..identification.criteria import PHASE_AWARE_FREE, DFObjective, fit_bounds, multistart_fit, smart_start
-    from ..identification.frf import estimate_frf
-    from ..identification.problem import _resolve
-    from ..pilot.hess import PilotModel
-    from ..pilot.simulation import Simulator
+    import scipy.stats
 
-    try:
-        frf = estimate_frf(run, plants, seed=seed)
-    except HesspipeError as exc:
-        return MotionVerdict(False, note=f"no describing function: {exc}")
-    sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference, noise_seed=seed)
-    fits = []
-    for model in (PilotModel(), PilotModel().with_effect("motion_feedback")):
-        free = tuple(PHASE_AWARE_FREE[int(k)]) + (("Km",) if model.effects else ())
-        base, free, _, _, gain = _resolve(model, free, None, k, None, plants)
-        obj = DFObjective(run, plants, model, base, frf, sim=sim)
-        start = smart_start(obj, base, frf)
-        if fits:  # the augmented fit starts from the baseline's optimum (nested models)
-            start.update(fits[0][0])
-            start["Km"] = 0.5
-        values, J, stable = multistart_fit(obj, free, fit_bounds(model, free, gain), start,
-                                           starts=starts, seed=seed, max_nfev=30)
-        fits.append((values, J, stable, obj))
-    (v0, J0, s0, obj), (v1, J1, s1, _) = fits
-    n = int(obj.H.size)
-    if n < 4 or not (s0 and s1):
-        return MotionVerdict(False, J0=J0, J1=J1, n_lines=n,
-                             note="too few reliable lines or no stable fit for a verdict")
-    J1 = min(J1, J0)  # nested: the augmented optimum can only be as good
-    stat = 2.0 * n * math.log(max(J0, 1e-12) ** 2 / max(J1, 1e-12) ** 2)
-    p = float(scipy.stats.chi2.sf(stat, 1))
-    dbic = stat - math.log(2 * n)
-    return MotionVerdict(bool(p < alpha and dbic > 0), stat, p, dbic, J0, J1, float(v1.get("Km", 0.0)), n)
+    z = (delay_s - max_pilot_delay_s) / se_s if se_s > 0 and math.isfinite(se_s) else \
+        (math.inf if delay_s > max_pilot_delay_s else -math.inf)
+    p = float(scipy.stats.norm.sf(z))
+    return {"named": bool(p < alpha), "delay_s": float(delay_s), "se_s": float(se_s),
+            "max_pilot_delay_s": float(max_pilot_delay_s), "z": float(z), "p_value": p,
+            "alpha": float(alpha), "extra_s": float(max(delay_s - max_pilot_delay_s, 0.0)),
+            "criterion": "one-sided z test of the describing function's visual delay against the "
+                         "longest human visual delay (only the sum of pilot and simulator delay "
+                         "is identifiable)"}
 
 
-def motion_round(run, plants, problem, current, cands, cfg, seed):
-    """For :func:`hesspipe.diagnose.workflow.diagnose`: motion feedback judged on the describing
-    function's shape (:func:`motion_verdict`): (verdict, step, fit) or None when motion feedback
-    is not a candidate or the run has no describing function. A named motion path is
-    fitted into the model (Km from the verdict's start, on the PSD criterion) so the later
-    rounds extend it; one not named there stays a candidate of the control-PSD rounds."""
-    from ..identification.criteria import choose_k
+def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float, int]:
+    """Share of the control's power (in `band_hz`, Hz) between the multisine forcing lines,
+    and the number of lines (0: no line structure, share NaN).
+
+    Every pilot model without a remnant answers a multisine with power at the forcing
+    lines only, so the power between them is the remnant (the standard multisine estimate,
+    SPEC "Describing functions"), measured over the window that puts the lines on bins.
+    """
+    import dataclasses
+
+    import numpy as np
+
+    from ..identification.motion_test import analysis_window, forcing_lines
+
+    start, length = analysis_window(run)
+    cut = slice(start, start + length)
+    run = dataclasses.replace(run, time=run.time[cut], disturbance=run.disturbance[cut],
+                              output=run.output[cut], control=run.control[cut],
+                              reference=run.reference[cut])
+    lines = forcing_lines(run, band_hz)
+    if lines.size == 0:
+        return float("nan"), 0
+    u = np.asarray(run.control, dtype=float)
+    power = np.abs(np.fft.rfft(u - u.mean())) ** 2
+    f = np.fft.rfftfreq(u.size, run.dt)
+    inband = (f > band_hz[0]) & (f <= band_hz[1])
+    forced = np.zeros(f.size, dtype=bool)
+    forced[lines] = True
+    total = float(power[inband].sum())
+    return (float(power[inband & ~forced].sum()) / total if total > 0 else float("nan")), int(lines.size)
+
+
+def df_evidence(run, plants, start, *, k: int, cfg) -> DFEvidence | None:
+    """Motion and delay verdicts and the pilot's dynamics from the describing function
+    (:func:`hesspipe.identification.motion_test.motion_test`), or None when the record has no forcing lines."""
+    from ..identification.motion_test import safe_motion_test
+
+    t = safe_motion_test(run, plants, start, k=k)
+    if not t.get("available"):
+        return None
+    mv = MotionVerdict(bool(t["p_value"] < cfg.motion_alpha), float(t["lr"]), float(t["p_value"]),
+                       float(t["gain"]), float(t["Km"]), float(t["Km_se"]), int(t["n_lines"]),
+                       cfg.motion_alpha)
+    # The delay of the model that the motion verdict keeps: a vestibular lead shifts it.
+    pars = t["parameters_expanded"] if mv.named else t["parameters_original"]
+    se = t["standard_errors_original"].get("tau0", math.nan)
+    delay = delay_test(pars["tau0"], se, cfg.max_pilot_delay, cfg.alpha)
+    dyn = {n: float(pars[n]) for n in DYNAMICS if n in pars}
+    dyn["tau0"] = min(dyn["tau0"], cfg.max_pilot_delay)
+    share, _ = remnant_share(run, cfg.band_hz)
+    remnant = {"named": bool(share >= cfg.remnant_share), "share": share,
+               "threshold": cfg.remnant_share,
+               "criterion": "share of the control power between the multisine lines"}
+    return DFEvidence(mv, delay, dyn, remnant)
+
+
+def motion_step(ev: DFEvidence, problem, current, cfg):
+    """For :func:`hesspipe.diagnose.workflow.diagnose`: (step, fit) of the describing function's
+    motion verdict. A named motion path is fitted into the model on the control spectrum
+    (Km started from the test's) so the later rounds extend it."""
     from .workflow import Step
 
-    if "motion_feedback" not in cands:
-        return None
-    v = motion_verdict(run, plants, k=choose_k(plants)[0], seed=seed, alpha=cfg.motion_alpha)
-    if v.note:
-        return None
+    v = ev.motion
     aug = current.model.with_effect("motion_feedback")
-    fit = problem.fit(aug, {**current.parameters, "Km": max(v.Km, 1e-3)}) if v.named else None
+    fit = None
+    if v.named:
+        km = v.Km if math.isfinite(v.Km) and v.Km > 0 else 1e-3
+        fit = problem.fit(aug, {**current.parameters, "Km": km}, grid=("Km",))
     fitted = bool(fit is not None and fit.stable)
     gap = problem.gap(fit.psd) if fitted else float("nan")
-    # The same guard as every named effect: the Eq. 10 gap may not rise. Not significant:
-    # nothing to guard (the control-PSD rounds may still try it).
-    gap_ok = not fitted or gap <= problem.gap(current.psd)
+    # The describing function decides, not the control spectrum: before the remnant is
+    # named the spectrum of a right vestibular path can fit worse than the baseline's.
     step = Step(round=0, candidate="motion_feedback", model=aug.name, status="ok",
-                accepted=bool(v.named and fitted and gap_ok), statistic=v.statistic, dof=1,
-                p_value=v.p_value, threshold=cfg.motion_alpha, delta_bic=v.delta_bic, gap=gap,
-                gap_ok=gap_ok, veto="" if gap_ok else "gap rises",
+                accepted=v.named, statistic=v.statistic, dof=1, p_value=v.p_value,
+                threshold=cfg.motion_alpha, delta_bic=float("nan"), gap=gap, gap_ok=True,
                 log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
-                parameters=fit.parameters if fitted else {"Km": v.Km},
+                # Km as the describing function sees it: the control spectrum barely does.
+                parameters={"Km": v.Km, "Km_se": v.Km_se},
                 evaluations=fit.evaluations if fit is not None else 0)
-    return v, step, fit
+    return step, (fit if fitted else None)
+
+
+def delay_step(ev: DFEvidence, problem, current, cfg):
+    """(step, fit) of the describing function's extra-delay verdict (see :func:`delay_test`);
+    a named delay enters the model as ``tau_x`` = the delay beyond a human's."""
+    from .workflow import Step
+
+    d = ev.delay
+    aug = current.model.with_effect("extra_delay")
+    fit = None
+    if d["named"]:
+        fit = problem.fit(aug, {**current.parameters, "tau0": d["max_pilot_delay_s"],
+                                "tau_x": d["extra_s"]})
+    fitted = bool(fit is not None and fit.stable)
+    step = Step(round=0, candidate="extra_delay", model=aug.name, status="ok", accepted=d["named"],
+                statistic=d["z"], dof=1, p_value=d["p_value"], threshold=d["alpha"],
+                delta_bic=float("nan"), gap=problem.gap(fit.psd) if fitted else float("nan"),
+                gap_ok=True, log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
+                parameters=fit.parameters if fitted else {"tau_x": d["extra_s"]},
+                evaluations=fit.evaluations if fit is not None else 0)
+    return step, (fit if fitted else None)
+
+
+def remnant_step(ev: DFEvidence, problem, current, cfg):
+    """(step, fit) of the remnant verdict: the power between the forcing lines (a model
+    without remnant has none there); a named remnant is fitted on the control spectrum."""
+    from .workflow import Step
+
+    r = ev.remnant
+    aug = current.model.with_effect("remnant")
+    fit = problem.fit(aug, current.parameters, grid=("Kn", "Tn")) if r["named"] else None
+    fitted = bool(fit is not None and fit.stable)
+    step = Step(round=0, candidate="remnant", model=aug.name, status="ok", accepted=r["named"],
+                statistic=r["share"], dof=2, p_value=float("nan"), threshold=r["threshold"],
+                delta_bic=float("nan"), gap=problem.gap(fit.psd) if fitted else float("nan"),
+                gap_ok=True, log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
+                parameters=fit.parameters if fitted else {},
+                evaluations=fit.evaluations if fit is not None else 0)
+    return step, (fit if fitted else None)
