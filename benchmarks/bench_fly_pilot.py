@@ -53,7 +53,8 @@ from hesspipe.pilot.crossover import crossover, gain_scale
 from hesspipe.pilot.hess import model_from_name
 from hesspipe.pilot.simulation import Simulator
 from hesspipe.pilots.cohort import cohort_spec, synth_pilot
-from hesspipe.plants.fit import PlantsConfig, fit_plants
+from hesspipe.plants.fit import fit_plants
+from hesspipe.plants.settings import PlantsConfig
 
 EVERY = 3  # 120 Hz -> 40 Hz records, as the pipeline's JSBSim cohort
 RESTARTS, PASSES = 2, 10  # the pipeline's APID budget (--restarts/--passes change it)

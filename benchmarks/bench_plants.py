@@ -23,7 +23,8 @@ import numpy as np
 
 from hesspipe.core.errors import HesspipeError
 from hesspipe.flight.approach import FlightConfig, fly
-from hesspipe.plants.fit import PlantsConfig, fit_plants
+from hesspipe.plants.fit import fit_plants
+from hesspipe.plants.settings import PlantsConfig
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 

@@ -6,7 +6,7 @@ import pytest
 from scipy import signal
 
 from hesspipe.core.errors import HesspipeError
-from hesspipe.plants import arx, d2c
+from hesspipe.plants import arx, d2c, order, validation
 
 # A known discrete system: A = 1 - 1.5 q^-1 + 0.7 q^-2, B = 0.5 + 0.3 q^-1, nk = 1
 # (poles 0.75 ± 0.37j, |z| = 0.84).
@@ -24,7 +24,7 @@ def _arx_data(n=3000, noise=0.1, seed=1):
 
 def test_recovers_known_arx_system_orders_and_coefficients():
     u, y = _arx_data()
-    sel = arx.select_order(u, y, na_max=6, nb_max=6, nk_min=1, nk_max=3, criterion="bic")
+    sel = order.select_order(u, y, na_max=6, nb_max=6, nk_min=1, nk_max=3, criterion="bic")
     m = sel.model
     assert m.orders == (2, 2, 1)
     # Tolerance: about 5 standard errors of the LS estimate at this noise level and length.
@@ -37,7 +37,7 @@ def test_recovers_known_arx_system_orders_and_coefficients():
 @pytest.mark.parametrize("criterion", ["aic", "fpe"])
 def test_other_criteria_find_the_true_delay(criterion):
     u, y = _arx_data(seed=2)
-    m = arx.select_order(u, y, criterion=criterion).model
+    m = order.select_order(u, y, criterion=criterion).model
     assert m.nk == 1 and m.na >= 2 and m.nb >= 2
 
 
@@ -58,7 +58,7 @@ def test_simulation_focus_removes_output_error_bias():
 def test_simulate_and_predict_match_the_definition():
     u, y = _arx_data(n=500, noise=0.0)
     m = arx.arx_fit(u, y, 2, 2, 1)
-    assert arx.fit_percent(y, m.simulate(u)) > 99.99
+    assert validation.fit_percent(y, m.simulate(u)) > 99.99
     np.testing.assert_allclose(m.predict(u, y)[5:], y[5:], atol=1e-9)
     num, den = m.polynomials()
     assert m.tf().dt == 1.0 and len(num) == len(den) == 3
@@ -66,9 +66,9 @@ def test_simulate_and_predict_match_the_definition():
 
 def test_fit_percent():
     y = np.sin(np.linspace(0, 10, 200))
-    assert arx.fit_percent(y, y) == pytest.approx(100.0)
-    assert arx.fit_percent(y, np.full_like(y, y.mean())) == pytest.approx(0.0)
-    assert arx.fit_percent(y, y + 0.1 * (y - y.mean())) == pytest.approx(90.0)
+    assert validation.fit_percent(y, y) == pytest.approx(100.0)
+    assert validation.fit_percent(y, np.full_like(y, y.mean())) == pytest.approx(0.0)
+    assert validation.fit_percent(y, y + 0.1 * (y - y.mean())) == pytest.approx(90.0)
 
 
 def test_excitation_order():
@@ -85,13 +85,13 @@ def test_single_sine_is_not_persistently_exciting():
     u = np.sin(0.3 * t)
     y = signal.lfilter(np.r_[0.0, B_TRUE], A_TRUE, u)
     with pytest.raises(HesspipeError, match="not persistently exciting"):
-        arx.select_order(u, y, label="x.csv: column 'u'")
+        order.select_order(u, y, label="x.csv: column 'u'")
 
 
 def test_record_too_short():
     u, y = _arx_data(n=60)
     with pytest.raises(HesspipeError, match="record too short"):
-        arx.select_order(u, y, label="x.csv: column 'u'")
+        order.select_order(u, y, label="x.csv: column 'u'")
     with pytest.raises(HesspipeError, match="record too short"):
         arx.arx_fit(u[:20], y[:20], 2, 2, 1)
 
@@ -107,12 +107,12 @@ def test_residual_tests_pass_white_and_fail_coloured():
     rng = np.random.default_rng(4)
     u = rng.standard_normal(3000)
     white = rng.standard_normal(3000)
-    ok = arx.residual_tests(white, u)
+    ok = validation.residual_tests(white, u)
     assert ok.white and ok.independent
     coloured = signal.lfilter([1.0], [1.0, -0.8], white)
-    assert not arx.residual_tests(coloured, u).white
+    assert not validation.residual_tests(coloured, u).white
     leaking = white + 0.3 * np.r_[0.0, u[:-1]]  # residual still contains the input
-    assert not arx.residual_tests(leaking, u).independent
+    assert not validation.residual_tests(leaking, u).independent
     d = ok.to_dict()
     assert d["whiteness"]["bound"] == pytest.approx(2.5758 / np.sqrt(3000), rel=1e-3)
 

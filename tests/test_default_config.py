@@ -30,7 +30,7 @@ def test_flight(table):
 
 
 def test_plants_and_analytic(table):
-    from hesspipe.plants.fit import AnalyticConfig, PlantsConfig
+    from hesspipe.plants.settings import AnalyticConfig, PlantsConfig
 
     assert PlantsConfig.from_table(table["plants"], DEFAULT) == PlantsConfig()
     assert AnalyticConfig.from_table(table["analytic"], DEFAULT) == AnalyticConfig()
@@ -46,7 +46,7 @@ def test_pilots(table):
 
 
 def test_diagnose(table):
-    from hesspipe.diagnose.workflow import DiagnoseConfig
+    from hesspipe.diagnose.settings import DiagnoseConfig
 
     section = {k: v for k, v in table["diagnose"].items() if k not in ("run", "model")}
     assert DiagnoseConfig.from_table(section, DEFAULT) == DiagnoseConfig()

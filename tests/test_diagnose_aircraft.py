@@ -11,7 +11,9 @@ import pytest
 
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.diagnose.aircraft import plant_finding
-from hesspipe.diagnose.workflow import DiagnoseConfig, diagnose, plant_check
+from hesspipe.diagnose.checks import plant_check
+from hesspipe.diagnose.settings import DiagnoseConfig
+from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 
 PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay", "remnant")
@@ -96,8 +98,8 @@ def test_strong_motion_feedback_is_named_first_by_the_one_motion_test(tmp_path_f
     # A strong vestibular path (Km = Ke) on a tracking task with target and disturbance:
     # named first, and by the very test compare-pilots runs (same p-value).
     from hesspipe.identification.criteria import choose_k
-    from hesspipe.pilot.hess import PilotModel
     from hesspipe.identification.motion_test import motion_test
+    from hesspipe.pilot.hess import PilotModel
 
     run, plants = _one_task_trial(tmp_path_factory, "roll", ("motion_feedback",), 911, task="both",
                                   output="rate", km_ratio=1.0)

@@ -15,8 +15,13 @@ from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import write_plants, write_run
 from hesspipe.core.io import to_json
-from hesspipe.diagnose import workflow as D
-from hesspipe.plants.arx import independence_test
+from hesspipe.diagnose.examples import hidden_effect_run, validation_plants
+from hesspipe.diagnose.likelihood import _Problem
+from hesspipe.diagnose.report import format_report
+from hesspipe.diagnose.settings import DiagnoseConfig
+from hesspipe.diagnose.spectra import band_disagreement, welch_statistics
+from hesspipe.diagnose.workflow import diagnose
+from hesspipe.plants.validation import independence_test
 
 REQUIRED = ("motion_feedback", "extra_delay", "remnant", "dutch_roll")
 
@@ -31,24 +36,24 @@ HIDDEN = {
 NOISE = {"noise": 0.02, "control_noise": 0.001}   # the same recording noise in every case
 #: Cheaper search than the default (fewer grid levels and restarts) to keep the tests fast;
 #: benchmarks/bench_diagnose.py runs the default configuration.
-FAST = D.DiagnoseConfig(candidates=REQUIRED, max_effects=1, gain_levels=(0.3, 0.7), starts=2,
+FAST = DiagnoseConfig(candidates=REQUIRED, max_effects=1, gain_levels=(0.3, 0.7), starts=2,
                         max_evaluations=30)
 
 
 @pytest.fixture(scope="module")
 def plants():
-    return D.validation_plants()
+    return validation_plants()
 
 
 @pytest.fixture(scope="module")
 def runs(plants):
-    return {case: D.hidden_effect_run(plants, case, seed=3, parameters=p, **NOISE)
+    return {case: hidden_effect_run(plants, case, seed=3, parameters=p, **NOISE)
             for case, p in HIDDEN.items()}
 
 
 @pytest.fixture(scope="module")
 def diagnoses(runs, plants):
-    return {case: D.diagnose(run, plants, model="original", seed=0, config=FAST)
+    return {case: diagnose(run, plants, model="original", seed=0, config=FAST)
             for case, run in runs.items()}
 
 
@@ -109,7 +114,7 @@ def test_to_dict_has_the_required_keys_and_is_json(diagnoses):
 
 
 def test_report_is_labelled_and_names_the_effect(diagnoses):
-    text = D.format_report(diagnoses["remnant"])
+    text = format_report(diagnoses["remnant"])
     assert text.splitlines()[0].startswith("*** SYNTHETIC DATA")
     assert "Named: remnant" in text and "Gap" in text
 
@@ -152,7 +157,7 @@ def _plants(case):
     from hesspipe.core.formats import Plants
 
     if case == "validation":
-        return D.validation_plants()
+        return validation_plants()
     return Plants(*(ct.tf(*JSBSIM_737[k]) for k in ("control_to_output", "disturbance_to_output")),
                   {"source": "JSBSim 737 ARX plants (copied)"})
 
@@ -161,9 +166,9 @@ def _plants(case):
 def test_two_hidden_effects_are_both_named(case):
     plants = _plants(case)
     truth = TWO[case]
-    run = D.hidden_effect_run(plants, ("motion_feedback", "remnant"), seed=1, parameters=truth,
+    run = hidden_effect_run(plants, ("motion_feedback", "remnant"), seed=1, parameters=truth,
                               remnant_share=0.2, **NOISE)
-    d = D.diagnose(run, plants, config=replace(FAST, max_effects=2))
+    d = diagnose(run, plants, config=replace(FAST, max_effects=2))
     assert sorted(d.named_effects) == ["motion_feedback", "remnant"], \
         [(s.round, s.candidate, s.p_value, s.veto) for s in d.steps]
     gaps = [d.gap_before] + [s.gap for s in d.steps if s.accepted]
@@ -180,10 +185,10 @@ def test_remnant_expectation_is_the_welch_expectation_at_dc():
     from hesspipe.pilot.simulation import Simulator
 
     plants = _plants("jsbsim_737")
-    run = D.hidden_effect_run(plants, None, seed=2, parameters=TWO["jsbsim_737"])
+    run = hidden_effect_run(plants, None, seed=2, parameters=TWO["jsbsim_737"])
     model = PilotModel(("remnant",))
     params = {**model.defaults(), **TWO["jsbsim_737"], "Kn": 0.4}
-    problem = D._Problem(run, plants, FAST, seed=0)
+    problem = _Problem(run, plants, FAST, seed=0)
     loop = problem.loop(model, params)
     expected = problem.remnant_psd(loop)
     zeros = np.zeros(len(run))
@@ -206,7 +211,7 @@ def test_band_disagreement_finds_the_band_and_its_direction():
     measured = 1.0 / (1.0 + f ** 2)
     model = measured.copy()
     model[(f >= 1.0) & (f < 2.0)] *= 10 ** 0.6   # +6 dB
-    bands = D.band_disagreement(f, measured, model, (0, 1, 2, 5), var_floor=0.3, enbw_bins=1.36)
+    bands = band_disagreement(f, measured, model, (0, 1, 2, 5), var_floor=0.3, enbw_bins=1.36)
     assert [b.disagrees for b in bands] == [False, True, False]
     assert bands[1].level_db == pytest.approx(6.0) and bands[1].direction == "too much power"
     assert bands[1].share == pytest.approx(1.0)
@@ -215,7 +220,7 @@ def test_band_disagreement_finds_the_band_and_its_direction():
 def test_welch_statistics_match_a_monte_carlo_of_white_noise():
     from hesspipe.identification.spectra import psd
 
-    nu, var_floor, enbw = D.welch_statistics(3500)
+    nu, var_floor, enbw = welch_statistics(3500)
     assert enbw == pytest.approx(1.363, abs=0.01)
     rng = np.random.default_rng(1)
     logs = np.array([np.log(psd(rng.standard_normal(3500), 50.0)[1][5:500]) for _ in range(40)])
@@ -231,7 +236,7 @@ def test_remnant_psd_matches_simulated_remnant(plants, runs):
 
     model = PilotModel(("remnant",))
     params = {**model.defaults(), "Kn": 0.2, "Tn": 0.3}
-    problem = D._Problem(runs[None], plants, FAST, seed=0)
+    problem = _Problem(runs[None], plants, FAST, seed=0)
     loop = problem.loop(model, params)
     expected = problem.remnant_psd(loop)
     zeros = np.zeros(len(runs[None]))
@@ -243,15 +248,15 @@ def test_remnant_psd_matches_simulated_remnant(plants, runs):
 
 
 def test_config_from_table_checks_fields():
-    cfg = D.DiagnoseConfig.from_table({"alpha": 0.05, "candidates": ["remnant"]}, "p.toml")
+    cfg = DiagnoseConfig.from_table({"alpha": 0.05, "candidates": ["remnant"]}, "p.toml")
     assert cfg.alpha == 0.05 and cfg.candidates == ("remnant",)
-    assert D.DiagnoseConfig.from_table(None, "p.toml") == D.DiagnoseConfig()
+    assert DiagnoseConfig.from_table(None, "p.toml") == DiagnoseConfig()
     with pytest.raises(HesspipeError, match=r"p.toml: field 'diagnose.alpha'"):
-        D.DiagnoseConfig.from_table({"alpha": 2}, "p.toml")
+        DiagnoseConfig.from_table({"alpha": 2}, "p.toml")
     with pytest.raises(HesspipeError, match="unknown field"):
-        D.DiagnoseConfig.from_table({"alpah": 0.1}, "p.toml")
+        DiagnoseConfig.from_table({"alpah": 0.1}, "p.toml")
     with pytest.raises(HesspipeError, match="band_edges_hz"):
-        D.DiagnoseConfig.from_table({"band_edges_hz": [1, 0.5]}, "p.toml")
+        DiagnoseConfig.from_table({"band_edges_hz": [1, 0.5]}, "p.toml")
 
 
 def test_failed_candidate_is_reported_and_the_workflow_goes_on(runs, plants, monkeypatch):
@@ -263,7 +268,7 @@ def test_failed_candidate_is_reported_and_the_workflow_goes_on(runs, plants, mon
     broken = replace(effects.EFFECTS["extra_delay"], id="broken", parameters={"zz": (1.0, 0.0, 2.0)},
                      apply=explode)
     monkeypatch.setitem(effects.EFFECTS, "broken", broken)
-    d = D.diagnose(runs["extra_delay"], plants, candidates=["broken", "extra_delay"],
+    d = diagnose(runs["extra_delay"], plants, candidates=["broken", "extra_delay"],
                    config=replace(FAST, candidates=None))
     status = {s.candidate: s.status for s in d.steps}
     assert status == {"broken": "failed", "extra_delay": "ok"}
@@ -273,19 +278,19 @@ def test_failed_candidate_is_reported_and_the_workflow_goes_on(runs, plants, mon
 
 def test_same_seed_same_result(runs, plants):
     cfg = replace(FAST, candidates=("extra_delay",))
-    a = D.diagnose(runs["extra_delay"], plants, seed=5, config=cfg).to_dict()
-    b = D.diagnose(runs["extra_delay"], plants, seed=5, config=cfg).to_dict()
+    a = diagnose(runs["extra_delay"], plants, seed=5, config=cfg).to_dict()
+    b = diagnose(runs["extra_delay"], plants, seed=5, config=cfg).to_dict()
     assert to_json(a) == to_json(b)
 
 
 def test_library_errors(runs, plants):
     with pytest.raises(HesspipeError, match="unknown effect 'warp'"):
-        D.diagnose(runs[None], plants, candidates=["warp"])
+        diagnose(runs[None], plants, candidates=["warp"])
     short = runs[None]
     short = replace(short, time=short.time[:500], disturbance=short.disturbance[:500],
                     output=short.output[:500], control=short.control[:500], reference=short.reference[:500])
     with pytest.raises(HesspipeError, match="expected at least 1024"):
-        D.diagnose(short, plants)
+        diagnose(short, plants)
 
 
 # -- CLI ---------------------------------------------------------------------------------

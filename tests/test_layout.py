@@ -15,8 +15,6 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import pytest
-
 import hesspipe
 
 PACKAGE = Path(hesspipe.__file__).parent
@@ -137,7 +135,6 @@ def _cycles(graph) -> list[list[str]]:
     return cycles
 
 
-@pytest.mark.xfail(strict=True, reason="layout work in progress (issue 11): remove once it passes")
 def test_no_import_cycles():
     cycles = _cycles(_graph())
     assert not cycles, f"import cycles: {cycles}"
@@ -153,7 +150,6 @@ def test_the_checks_catch_violations():
     assert _cycles(graph) == [["hesspipe.pilot.x", "hesspipe.pilots.compare"]]
 
 
-@pytest.mark.xfail(strict=True, reason="layout work in progress (issue 11): remove once it passes")
 def test_no_module_is_too_long():
     long = {m: n for m, p in _modules().items() if (n := len(p.read_text().splitlines())) > 650}
     assert not long, f"modules over ~600 lines: {long}"

@@ -14,7 +14,8 @@ from hesspipe.core.formats import read_plants
 from hesspipe.core.paper import EQ16
 from hesspipe.plants import analytic
 from hesspipe.plants.d2c import frequency_response
-from hesspipe.plants.fit import PlantsConfig, fit_plants
+from hesspipe.plants.fit import fit_plants
+from hesspipe.plants.settings import PlantsConfig
 from hesspipe.viz.plants import draw_plants
 
 DT = 1 / 120

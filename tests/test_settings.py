@@ -9,10 +9,10 @@ import pytest
 
 from hesspipe.core.config import FieldError, Settings
 from hesspipe.core.errors import HesspipeError
-from hesspipe.diagnose.workflow import DiagnoseConfig
+from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.flight.approach import FlightConfig
 from hesspipe.pilots.settings import CompareSettings, PilotsConfig
-from hesspipe.plants.fit import AnalyticConfig, PlantsConfig
+from hesspipe.plants.settings import AnalyticConfig, PlantsConfig
 
 # (class, table, a bad field, its bad value, what the message says is expected)
 BAD = [

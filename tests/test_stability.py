@@ -21,7 +21,7 @@ from hesspipe.core.seeds import derive_seed
 from hesspipe.pilot.hess import PilotModel, table1
 from hesspipe.pilot.simulation import Simulator, growth_limit, simulate
 from hesspipe.pilots.cohort import CohortSpec, pilot_ids, synth_pilot
-from hesspipe.plants import arx
+from hesspipe.plants import order, validation
 from hesspipe.plants.slow_roots import reflect_slow_roots
 from pilot_data import DT, YD, N, multisine, reference_control
 
@@ -121,12 +121,12 @@ def _growing_pair_data(n=1400, dt=0.05, seed=4):
 def test_order_selection_accepts_poles_growing_slower_than_the_record_resolves():
     u, y, dt = _growing_pair_data()
     n = int(0.7 * len(u))
-    strict = arx.select_order(u[:n], y[:n], dt=dt, focus="simulation")
-    relaxed = arx.select_order(u[:n], y[:n], dt=dt, focus="simulation",
+    strict = order.select_order(u[:n], y[:n], dt=dt, focus="simulation")
+    relaxed = order.select_order(u[:n], y[:n], dt=dt, focus="simulation",
                                max_growth=growth_limit(dt * len(u)))
     assert not relaxed.model.is_stable() and relaxed.model.is_stable(growth_limit(dt * len(u)))
-    fit_relaxed = arx.fit_percent(y[n:], relaxed.model.simulate(u)[n:])
-    fit_strict = arx.fit_percent(y[n:], strict.model.simulate(u)[n:])
+    fit_relaxed = validation.fit_percent(y[n:], relaxed.model.simulate(u)[n:])
+    fit_strict = validation.fit_percent(y[n:], strict.model.simulate(u)[n:])
     assert fit_relaxed > 99.0 and fit_strict < fit_relaxed - 5.0, (fit_strict, fit_relaxed)
 
 
@@ -146,7 +146,7 @@ def test_reflecting_slow_roots_keeps_the_gain_and_moves_only_them():
 def test_plant_check_response_of_a_near_integrating_plant_matches_time_domain():
     # B747 seed 4's fitted Yc holds a pole at -1.3e-5 1/s: on s = j w with 4 records of
     # padding its tail wrapped around and diagnose's plant check read -465 %.
-    from hesspipe.diagnose.workflow import forced_response
+    from hesspipe.diagnose.checks import forced_response
 
     sys = ct.tf([2.0, 1.0], np.polymul([1.0, 1.3e-5], [1.0, 0.85, 1.0]))
     t = DT * np.arange(N)
@@ -161,7 +161,7 @@ def test_plant_check_response_of_a_near_integrating_plant_matches_time_domain():
 
 def test_slow_roots_setting_is_checked():
     from hesspipe.core.errors import HesspipeError
-    from hesspipe.plants.fit import PlantsConfig
+    from hesspipe.plants.settings import PlantsConfig
 
     assert PlantsConfig().slow_roots == "keep"
     assert PlantsConfig.from_table({"slow_roots": "reflect"}).slow_roots == "reflect"

@@ -35,7 +35,10 @@ def _diagnose(args) -> int:
     from ..core.errors import HesspipeError
     from ..core.formats import read_plants, read_run
     from ..core.io import write_json
-    from ..diagnose.workflow import SEGMENT, DiagnoseConfig, diagnose, format_report
+    from ..core.paper import WELCH_SEGMENT
+    from ..diagnose.report import format_report
+    from ..diagnose.settings import DiagnoseConfig
+    from ..diagnose.workflow import diagnose
     from ._outputs import check_file_outputs
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
@@ -50,7 +53,7 @@ def _diagnose(args) -> int:
     plants = read_plants(args.plants)
     from ._options import run_options
 
-    run = read_run(args.run, min_samples=SEGMENT, **run_options(args))
+    run = read_run(args.run, min_samples=WELCH_SEGMENT, **run_options(args))
     result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg)
     print(format_report(result))
     if args.json:

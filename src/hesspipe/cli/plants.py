@@ -24,7 +24,8 @@ def register(subparsers) -> None:
 def _run(args) -> int:
     from ..core.config import load_toml
     from ..core.io import check_output_dir
-    from ..plants.fit import AnalyticConfig, PlantsConfig, analytic_plants, describe_tf, fit_plants
+    from ..plants.fit import analytic_plants, describe_tf, fit_plants
+    from ..plants.settings import AnalyticConfig, PlantsConfig
 
     check_output_dir(args.out, "analytic" if args.analytic else "plants")  # before any work
     table = load_toml(args.config) if args.config is not None else {}

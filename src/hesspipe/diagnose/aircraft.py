@@ -1,6 +1,6 @@
 """Aircraft-side findings of ``diagnose``: what the plant check's gap is, and what closes it.
 
-The plant check (:func:`hesspipe.diagnose.workflow.plant_check`) drives the plants with the
+The plant check (:func:`hesspipe.diagnose.checks.plant_check`) drives the plants with the
 measured control and disturbance and compares the result with the measured output. When
 it fails (fit below ``fit_ok`` even with the record's initial state and the disturbance
 path's gain refitted) this module asks two questions, each by refitting the output and
@@ -21,7 +21,7 @@ comparing fits:
   that fits the output better than every aircraft candidate is a wrong-file verdict.
 
 Everything is a finding in the result, never an exception. The responses are computed
-once on an FFT grid (the convention of :func:`hesspipe.diagnose.workflow.forced_response`), so
+once on an FFT grid (the convention of :func:`hesspipe.diagnose.checks.forced_response`), so
 every candidate costs one multiplication and an inverse FFT.
 """
 
@@ -34,7 +34,7 @@ import numpy as np
 import scipy.fft as sfft
 import scipy.optimize
 
-from ..plants.arx import fit_percent
+from ..plants.validation import fit_percent
 
 #: Plant-check fit (percent) below which the plants are taken to miss part of the aircraft.
 FIT_OK = 90.0

@@ -158,7 +158,7 @@ def motion_step(ev: DFEvidence, problem, current, cfg):
     """For :func:`hesspipe.diagnose.workflow.diagnose`: (step, fit) of the describing function's
     motion verdict. A named motion path is fitted into the model on the control spectrum
     (Km started from the test's) so the later rounds extend it."""
-    from .workflow import Step
+    from .results import Step
 
     v = ev.motion
     aug = current.model.with_effect("motion_feedback")
@@ -183,7 +183,7 @@ def motion_step(ev: DFEvidence, problem, current, cfg):
 def delay_step(ev: DFEvidence, problem, current, cfg):
     """(step, fit) of the describing function's extra-delay verdict (see :func:`delay_test`);
     a named delay enters the model as ``tau_x`` = the delay beyond a human's."""
-    from .workflow import Step
+    from .results import Step
 
     d = ev.delay
     aug = current.model.with_effect("extra_delay")
@@ -204,7 +204,7 @@ def delay_step(ev: DFEvidence, problem, current, cfg):
 def remnant_step(ev: DFEvidence, problem, current, cfg):
     """(step, fit) of the remnant verdict: the power between the forcing lines (a model
     without remnant has none there); a named remnant is fitted on the control spectrum."""
-    from .workflow import Step
+    from .results import Step
 
     r = ev.remnant
     aug = current.model.with_effect("remnant")

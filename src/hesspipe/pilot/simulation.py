@@ -133,7 +133,7 @@ class Contour:
     mode slower than ``sigma0`` (slow decaying modes, and slowly growing ones
     the record cannot tell from stable) has decayed on the weighted grid
     before it could wrap around. The one convention of :class:`Simulator` and
-    :func:`hesspipe.diagnose.workflow.forced_response`.
+    :func:`hesspipe.diagnose.checks.forced_response`.
 
     Attributes
     ----------

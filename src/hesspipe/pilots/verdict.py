@@ -58,8 +58,7 @@ import numpy as np
 from scipy import stats
 
 # The per-pilot test lives with identification so that diagnose uses the very same one.
-from ..identification.motion_test import (ALPHA, analysis_window, forcing_lines,  # noqa: F401
-                                          motion_test, safe_motion_test)
+from ..identification.motion_test import ALPHA, analysis_window, forcing_lines, motion_test, safe_motion_test  # noqa: F401
 
 
 def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA) -> dict:

@@ -112,14 +112,15 @@ def validate(config: dict, source: str) -> None:
     HesspipeError
         Naming `source` and the first bad field.
     """
-    from ..diagnose.workflow import DiagnoseConfig, _resolve_candidates
+    from ..diagnose.settings import DiagnoseConfig
+    from ..diagnose.workflow import _resolve_candidates
     from ..flight.aircraft import load_aircraft
     from ..flight.approach import FlightConfig
     from ..pilot.hess import model_from_name
     from ..pilots.batch import check_scheduler_address
     from ..pilots.compare import PilotsConfig
     from ..plants.analytic import load_analytic
-    from ..plants.fit import AnalyticConfig, PlantsConfig
+    from ..plants.settings import AnalyticConfig, PlantsConfig
 
     flight, (aircraft,) = _split(config.get("flight", {}), "aircraft")
     FlightConfig.from_table(flight, source)
@@ -221,7 +222,8 @@ def plants(ctx) -> None:
         The stage's table (``ctx.section``), seed, staging folder
         (``ctx.out_dir``) and upstream folders.
     """
-    from ..plants.fit import PlantsConfig, fit_plants
+    from ..plants.fit import fit_plants
+    from ..plants.settings import PlantsConfig
     from ..viz.plants import draw_plants
 
     fit_plants(ctx.upstream["flight"], ctx.out_dir, PlantsConfig.from_table(ctx.section, ctx.source),
@@ -257,7 +259,8 @@ def analytic(ctx) -> None:
         The stage's table (``ctx.section``), seed, staging folder
         (``ctx.out_dir``) and upstream folders.
     """
-    from ..plants.fit import AnalyticConfig, analytic_plants
+    from ..plants.fit import analytic_plants
+    from ..plants.settings import AnalyticConfig
     from ..viz.plants import draw_analytic
 
     config = AnalyticConfig.from_table(ctx.section, ctx.source)
@@ -366,7 +369,9 @@ def diagnose(ctx) -> None:
     """
     from ..core.formats import read_plants, read_run
     from ..core.io import write_json, write_text
-    from ..diagnose.workflow import SEGMENT, DiagnoseConfig, format_report
+    from ..core.paper import WELCH_SEGMENT
+    from ..diagnose.report import format_report
+    from ..diagnose.settings import DiagnoseConfig
     from ..diagnose.workflow import diagnose as run_diagnose
     from ..viz.diagnose import plot_diagnosis
 
@@ -374,7 +379,7 @@ def diagnose(ctx) -> None:
     config = DiagnoseConfig.from_table(table, ctx.source)
     pilots_cfg = ctx.config.get("pilots", {})  # the runs' format settings ([pilots] columns, resample)
     try:
-        run = read_run(_diagnose_run(ctx), min_samples=SEGMENT, columns=pilots_cfg.get("columns") or None,
+        run = read_run(_diagnose_run(ctx), min_samples=WELCH_SEGMENT, columns=pilots_cfg.get("columns") or None,
                        resample=bool(pilots_cfg.get("resample", False)))
     except HesspipeError as exc:
         raise HesspipeError(_config_terms(str(exc))) from None

@@ -70,13 +70,13 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable, Mapping
+from typing import Callable
 
 import control as ct
 import numpy as np
 from scipy import signal
 
-from ..core.config import Fields, Settings, aircraft_file
+from ..core.config import aircraft_file
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, read_csv_columns, sample_interval, write_plants
 from ..core.io import staged_output, write_json, write_text
@@ -84,6 +84,8 @@ from ..core.provenance import file_hash, versions
 from ..pilot.motion import paper_motion_path
 from ..pilot.simulation import growth_limit
 from . import arx as _arx
+from . import order as _order
+from . import validation as _validation
 from .analytic import analytic_transfer_functions, load_analytic
 from .d2c import FrequencyCheck, compare_frequency_response, tustin_d2c
 
@@ -101,151 +103,8 @@ from .report import (  # noqa: F401
     format_tf,
     roots_table,
 )
+from .settings import CHANNELS, AnalyticConfig, Channel, PlantsConfig
 from .slow_roots import SlowRoots, phase_change, reflect_slow_roots
-
-
-@dataclass(frozen=True)
-class Channel:
-    """Where one plant's data live in a flight folder.
-
-    Attributes
-    ----------
-    key : str
-        ``"control_to_output"`` or ``"disturbance_to_output"``.
-    file : str
-        CSV file name inside the flight folder.
-    input, output : str
-        Column names of the plant's input and output.
-    title : str
-        Human-readable name (reports, figures).
-    """
-
-    key: str
-    file: str
-    input: str
-    output: str
-    title: str
-
-
-CHANNELS = (
-    Channel("disturbance_to_output", "wind.csv", "wind_lateral_fps", "roll_rate_rps",
-            "lateral wind -> roll rate"),
-    Channel("control_to_output", "aileron.csv", "aileron_cmd", "roll_rate_rps",
-            "aileron -> roll rate"),
-)
-
-
-@dataclass(frozen=True)
-class PlantsConfig(Settings):
-    """Configuration of stage two (the ``[plants]`` table).
-
-    Attributes
-    ----------
-    decimate : int
-        Decimation factor before identification (1 = none).
-    criterion : {"aic", "bic", "fpe"}
-        Information criterion for order and delay selection.
-    focus : {"simulation", "prediction"}
-        Least-squares weighting (:func:`hesspipe.plants.arx.arx_fit`): ``"simulation"``
-        (default) prefilters by 1/A (Steiglitz–McBride) so the fit is not
-        biased away from low frequencies; the criterion then uses the
-        simulation-error variance.
-    iterations : int
-        Prefiltering iterations of the simulation focus.
-    na_max, nb_max : int
-        Largest orders of A(q) and B(q) in the grid.
-    nk_min, nk_max : int
-        Delay range of the grid, in (decimated) samples.
-    validation_fraction : float
-        Held-out tail of each record used only for validation.
-    min_excitation_order : int
-        Fewest independent input lags (persistent excitation order) accepted.
-    excitation_rcond : float
-        Relative singular-value threshold of the excitation test.
-    residual_max_lag : int
-        Largest lag of the residual tests (decimated samples).
-    residual_confidence : float
-        Confidence level of the residual bounds and tests.
-    check_band_hz : (float, float)
-        Band of the continuous-vs-discrete frequency check.
-    check_gain_db, check_phase_deg : float
-        Largest accepted gain and phase difference in that band.
-    on_check_failure : {"error", "warn"}
-        A failed frequency check raises (default) or is only reported.
-    slow_roots : {"keep", "reflect"}
-        Right-half-plane poles and zeros slower than the record resolves
-        (step 7 of the module docstring): kept as fitted (default) or
-        reflected into the left half plane. Both fits are reported.
-    """
-
-    decimate: int = 6
-    criterion: str = "bic"
-    focus: str = "simulation"
-    iterations: int = 10
-    na_max: int = 6
-    nb_max: int = 6
-    nk_min: int = 1
-    nk_max: int = 3
-    validation_fraction: float = 0.3
-    min_excitation_order: int = 4
-    excitation_rcond: float = 1e-4
-    residual_max_lag: int = 25
-    residual_confidence: float = 0.99
-    check_band_hz: tuple[float, float] = (0.01, 2.0)
-    check_gain_db: float = 1.0
-    check_phase_deg: float = 5.0
-    on_check_failure: str = "error"
-    slow_roots: str = "keep"
-
-    def _checked(self, f: Fields) -> dict:
-        cfg = dict(
-            decimate=f.integer("decimate", min=1, max=50),
-            criterion=f.string("criterion", choices=_arx.CRITERIA),
-            focus=f.string("focus", choices=_arx.FOCUS),
-            iterations=f.integer("iterations", min=1, max=200),
-            na_max=f.integer("na_max", min=1, max=30),
-            nb_max=f.integer("nb_max", min=1, max=30),
-            nk_min=f.integer("nk_min", min=0, max=50),
-            nk_max=f.integer("nk_max", min=0, max=50),
-            validation_fraction=f.number("validation_fraction", min=0.05, max=0.8),
-            min_excitation_order=f.integer("min_excitation_order", min=1, max=30),
-            excitation_rcond=f.number("excitation_rcond", min=0, max=0.5, strict_min=True),
-            residual_max_lag=f.integer("residual_max_lag", min=1, max=1000),
-            residual_confidence=f.number("residual_confidence", min=0.5, max=0.9999),
-            check_band_hz=f.numbers("check_band_hz", length=2),
-            check_gain_db=f.number("check_gain_db", min=0, strict_min=True),
-            check_phase_deg=f.number("check_phase_deg", min=0, strict_min=True),
-            on_check_failure=f.string("on_check_failure", choices=("error", "warn")),
-            slow_roots=f.string("slow_roots", choices=("keep", "reflect")),
-        )
-        if cfg["nk_max"] < cfg["nk_min"]:
-            raise f.error("nk_max", f"an integer >= nk_min = {cfg['nk_min']}", cfg["nk_max"])
-        lo, hi = cfg["check_band_hz"]
-        if not 0 < lo < hi:
-            raise f.error("check_band_hz", "[low, high] with 0 < low < high (Hz)", list(cfg["check_band_hz"]))
-        return cfg
-
-    @classmethod
-    def from_table(cls, table: Mapping | None, source: str | Path = "<plants defaults>",
-                   prefix: str = "plants") -> "PlantsConfig":
-        """Build from the ``[plants]`` TOML table; unknown keys are rejected.
-
-        Parameters
-        ----------
-        table : mapping or None
-            The ``[plants]`` table (None: all defaults).
-        source : str or Path
-            The file it came from, named in error messages.
-        prefix : str
-            The table's name in error messages.
-        """
-        return cls._from_fields(Fields(table, source, prefix))
-
-    def to_dict(self) -> dict:
-        """The settings as JSON-ready values."""
-        out = asdict(self)
-        out["check_band_hz"] = list(self.check_band_hz)
-        return out
 
 
 @dataclass(frozen=True)
@@ -355,7 +214,7 @@ class ChannelFit:
     input: np.ndarray
     output: np.ndarray
     n_estimation: int
-    selection: _arx.OrderSelection
+    selection: _order.OrderSelection
     continuous: ct.TransferFunction
     conversion_notes: tuple[str, ...]
     check: FrequencyCheck
@@ -364,7 +223,7 @@ class ChannelFit:
     fit_estimation: float
     fit_validation: float
     fit_validation_continuous: float
-    residuals: _arx.ResidualTests
+    residuals: _validation.ResidualTests
     trim_input: float
     trim_output: float
     synthetic: bool = False
@@ -450,7 +309,7 @@ def prepare(record: Record, channel: Channel, config: PlantsConfig) -> Prepared:
     if config.check_band_hz[1] >= nyq:
         raise HesspipeError(f"plants: field 'check_band_hz': upper limit {config.check_band_hz[1]:g} Hz "
                             f"is not below the Nyquist frequency {nyq:g} Hz after decimation by {q}")
-    _arx.check_data(u[:n_est], y[:n_est], na_max=config.na_max, nb_max=config.nb_max,
+    _order.check_data(u[:n_est], y[:n_est], na_max=config.na_max, nb_max=config.nb_max,
                     nk_max=config.nk_max, min_excitation=config.min_excitation_order,
                     rcond=config.excitation_rcond, label=label)
     return Prepared(time=record.time[0] + dt * np.arange(len(u)), input=u, output=y, raw_dt=raw_dt,
@@ -472,7 +331,7 @@ def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
     p = prepared or prepare(record, channel, config)
     u, y, t, dt, n_est, label = p.input, p.output, p.time, p.dt, p.n_estimation, p.label
     limit = growth_limit(dt * len(u))
-    selection = _arx.select_order(u[:n_est], y[:n_est], na_max=config.na_max, nb_max=config.nb_max,
+    selection = _order.select_order(u[:n_est], y[:n_est], na_max=config.na_max, nb_max=config.nb_max,
                                   nk_min=config.nk_min, nk_max=config.nk_max,
                                   criterion=config.criterion, dt=dt,
                                   min_excitation=config.min_excitation_order,
@@ -482,7 +341,7 @@ def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
     y_sim = model.simulate(u)
     val = slice(n_est, None)
     residuals = (y - model.predict(u, y))[val]
-    tests = _arx.residual_tests(residuals, u[val], max_lag=config.residual_max_lag,
+    tests = _validation.residual_tests(residuals, u[val], max_lag=config.residual_max_lag,
                                 confidence=config.residual_confidence)
     sysd = model.tf()
     sysc, notes = tustin_d2c(sysd, label=f"{record.path}: {channel.title} ARX{model.orders}")
@@ -501,8 +360,8 @@ def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
     if reflected:
         y_res = np.asarray(ct.forced_response(resolved, T=t - t[0], U=u).outputs).reshape(-1)
     slow = SlowRoots(limit=limit, roots=tuple(reflected), applied=config.slow_roots,
-                     fit_validation_before=_arx.fit_percent(y[val], y_sim_c[val]),
-                     fit_validation_after=_arx.fit_percent(y[val], y_res[val]),
+                     fit_validation_before=_validation.fit_percent(y[val], y_sim_c[val]),
+                     fit_validation_after=_validation.fit_percent(y[val], y_res[val]),
                      max_phase_change_deg=phase_change(sysc, resolved, config.check_band_hz))
     if config.slow_roots == "reflect":
         sysc, y_sim_c = resolved, y_res
@@ -510,9 +369,9 @@ def identify_channel(record: Record, channel: Channel, config: PlantsConfig,
         channel=channel, source=record.path, raw_dt=p.raw_dt, time=t, input=u, output=y,
         n_estimation=n_est, selection=selection, continuous=sysc, conversion_notes=tuple(notes),
         check=check, simulated=y_sim, simulated_continuous=y_sim_c,
-        fit_estimation=_arx.fit_percent(y[:n_est], y_sim[:n_est]),
-        fit_validation=_arx.fit_percent(y[val], y_sim[val]),
-        fit_validation_continuous=_arx.fit_percent(y[val], y_sim_c[val]),
+        fit_estimation=_validation.fit_percent(y[:n_est], y_sim[:n_est]),
+        fit_validation=_validation.fit_percent(y[val], y_sim[val]),
+        fit_validation_continuous=_validation.fit_percent(y[val], y_sim_c[val]),
         residuals=tests, trim_input=p.trim_input, trim_output=p.trim_output,
         synthetic=record.synthetic, slow_roots=slow)
 
@@ -629,46 +488,6 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
 
 # -- the analytic aircraft ------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class AnalyticConfig(Settings):
-    """The ``[analytic]`` table.
-
-    Attributes
-    ----------
-    model : str
-        Analytic aircraft file name in ``aircraft/`` (or a path).
-    control : {"rolling", "full"}
-        Which aileron → roll-rate plant goes into ``control_to_output``:
-        the paper's rolling approximation (Eq. 14, default) or the full model.
-    disturbance : {"full", "rolling"}
-        Which wind → roll-rate plant goes into ``disturbance_to_output``: the
-        full model (default; the wind acts through sideslip, which the
-        rolling approximation does not have) or ``-(Lb/U) / (s - Lp)``.
-    """
-
-    model: str = "roskam"
-    control: str = "rolling"
-    disturbance: str = "full"
-
-    def _checked(self, f: Fields) -> dict:
-        return dict(model=f.string("model"), control=f.string("control", choices=("rolling", "full")),
-                    disturbance=f.string("disturbance", choices=("full", "rolling")))
-
-    @classmethod
-    def from_table(cls, table: Mapping | None, source: str | Path = "<analytic defaults>",
-                   prefix: str = "analytic") -> "AnalyticConfig":
-        """Build from the ``[analytic]`` TOML table; unknown keys are rejected.
-
-        Parameters
-        ----------
-        table : mapping or None
-            The ``[analytic]`` table (None: all defaults).
-        source : str or Path
-            The file it came from, named in error messages.
-        prefix : str
-            The table's name in error messages.
-        """
-        return cls._from_fields(Fields(table, source, prefix))
 
 
 def analytic_plants(name_or_path: str | Path, out_dir: str | Path,

@@ -19,7 +19,7 @@ def plot_diagnosis(diagnosis, path: str | Path) -> Path:
 
     Parameters
     ----------
-    diagnosis : hesspipe.diagnose.workflow.Diagnosis
+    diagnosis : hesspipe.diagnose.results.Diagnosis
         The diagnosis (PSDs in control units^2/Hz).
     path : str or Path
         The image file.
