@@ -23,6 +23,15 @@ def test_api_names_are_exported_and_documented():
         getattr(hesspipe, name)  # every exported name resolves
 
 
+def test_every_package_export_resolves():
+    import importlib
+
+    for package in ("core", "pilot", "flight", "plants", "identification", "pilots", "diagnose", "pipeline"):
+        module = importlib.import_module(f"hesspipe.{package}")
+        for name in getattr(module, "__all__", ()):
+            assert getattr(module, name) is not None, (package, name)
+
+
 def test_each_stage_is_a_package_with_its_entry_point_documented():
     import importlib
 
