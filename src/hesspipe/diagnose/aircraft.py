@@ -27,13 +27,17 @@ every candidate costs one multiplication and an inverse FFT.
 
 from __future__ import annotations
 
+import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
+import control as ct
 import numpy as np
 import scipy.fft as sfft
 import scipy.optimize
 
+from ..pilot.blocks import from_tf, tf
+from ..pilot.effects import actuator_lag_factor, dutch_roll_factor, roll_mode_factor
 from ..plants.validation import fit_percent
 
 #: Plant-check fit (percent) below which the plants are taken to miss part of the aircraft.
@@ -87,7 +91,6 @@ class _Paths:
     """Column spectra and plant responses on one zero-padded FFT grid."""
 
     def __init__(self, run, plants, edge_s: float = 1.0):
-        from ..pilot.blocks import from_tf
 
         self.n = len(run)
         self.dt = run.dt
@@ -178,7 +181,6 @@ def _aircraft_candidates(p: _Paths, plants) -> list[Explanation]:
     """Each candidate's output error with its factor in the path(s) it changes; the
     disturbance path's gain and the slow modes' initial conditions are refitted linearly
     (:meth:`_Paths.residual`) for every candidate alike."""
-    from ..pilot.effects import actuator_lag_factor, dutch_roll_factor, roll_mode_factor
 
     U, W = p.spec["control"], p.spec["disturbance"]
     yu, yw = p.yc * U, p.yd * W
@@ -261,7 +263,6 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
     """Sign, scale and swapped-column explanations, each with the two path gains refitted."""
     out: list[Explanation] = []
     roles = ("control", "disturbance", "output")
-    import itertools
 
     free = p.basis(_poles(plants.control_to_output, plants.disturbance_to_output))
     for perm in itertools.permutations(roles):
@@ -366,12 +367,8 @@ def corrected(run, plants, finding: PlantFinding):
     """(run, plants) with the finding applied, for the pilot's identification: the fitted
     aircraft factor in both paths (``rate_limit`` has no linear form: plants unchanged),
     or the columns and path gains of a wrong-file verdict."""
-    from dataclasses import replace
 
-    import control as ct
 
-    from ..pilot.blocks import tf
-    from ..pilot.effects import actuator_lag_factor, dutch_roll_factor, roll_mode_factor
 
     def times(sys, block):
         (t,) = block.terms  # each factor is one rational term without delay

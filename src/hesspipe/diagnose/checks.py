@@ -5,9 +5,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import control as ct
 import numpy as np
 
 from ..core.formats import Plants, Run
+from ..pilot.blocks import from_tf, max_real_root
+from ..pilot.simulation import Contour
 from ..plants.validation import ResidualTests, fit_percent, residual_tests
 
 # -- residual tests (plant check and control error) ----------------------------------------
@@ -54,10 +57,7 @@ def forced_response(sys, u: np.ndarray, dt: float, *, pad_factor: int = 4,
     wrap around. A plant with poles growing faster than ``sigma0`` falls back to
     python-control's time-domain solver.
     """
-    import control as ct
 
-    from ..pilot.blocks import from_tf, max_real_root
-    from ..pilot.simulation import Contour
 
     u = np.asarray(u, dtype=float)
     block = from_tf(sys)

@@ -8,6 +8,7 @@ import math
 from dataclasses import replace
 from typing import Mapping, Sequence
 
+import control as ct
 import numpy as np
 import scipy.optimize
 import scipy.signal
@@ -17,6 +18,8 @@ import scipy.stats
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run
 from ..core.seeds import derive_seed
+from ..pilot.hess import PilotModel
+from ..pilot.simulation import synthetic_run
 
 # -- hidden-effect validation data ------------------------------------------------------------
 
@@ -28,7 +31,6 @@ EQ16_DEN = (1.0, 84.37, 452.2, 1510.0, 628.8)
 def validation_plants() -> Plants:
     """Plants of the hidden-effect tests: Yc = 2.436/(s + 1.0496) (Table 4 rolling
     approximation), Yd = the paper's Eq. 16."""
-    import control as ct
 
     return Plants(ct.tf([2.436], [1.0, 1.0496]), ct.tf(list(EQ16_NUM), list(EQ16_DEN)),
                   {"source": "validation plants: Table 4 rolling approximation and Eq. 16"})
@@ -61,8 +63,6 @@ def hidden_effect_run(plants: Plants, effect: str | Sequence[str] | None = None,
     with Tn = 0: large enough, it is rightly named ``remnant``.
     The run is labelled synthetic and its comments name the hidden effects.
     """
-    from ..pilot.hess import PilotModel
-    from ..pilot.simulation import synthetic_run
 
     effects = () if effect is None else (effect,) if isinstance(effect, str) else tuple(effect)
     model = PilotModel()

@@ -96,6 +96,10 @@ import scipy.stats
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run
 from ..core.seeds import derive_seed
+from ..identification.spectra import PaperWelch
+from ..pilot.blocks import ZERO, from_tf
+from ..pilot.effects import get_effect
+from ..pilot.simulation import Simulator
 from .settings import DiagnoseConfig
 from .spectra import (
     _DB,
@@ -151,9 +155,6 @@ class _Problem:
     """
 
     def __init__(self, run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int):
-        from ..identification.spectra import PaperWelch
-        from ..pilot.blocks import from_tf
-        from ..pilot.simulation import Simulator
 
         self.run, self.plants, self.cfg = run, plants, cfg
         self.freq, self.measured = _psd(run.control, run.fs)
@@ -213,7 +214,6 @@ class _Problem:
     def control(self, model, params, loop=None) -> np.ndarray | None:
         """Deterministic control (remnant off) driven by the measured disturbance; None if
         the loop is unstable (a remnant filter has no poles in the right half plane)."""
-        from ..pilot.blocks import ZERO
 
         loop = self.loop(model, params) if loop is None else loop
         u = self.sim.control(loop.replace(noise=ZERO))
@@ -461,7 +461,6 @@ def _profile_variance(e2: np.ndarray, a: np.ndarray, floor: float, iterations: i
 
 
 def _effect(effect_id: str):
-    from ..pilot.effects import get_effect
 
     return get_effect(effect_id)
 

@@ -13,6 +13,8 @@ import scipy.signal
 import scipy.special
 import scipy.stats
 
+from ..identification.spectra import PaperWelch, fitness, psd
+
 _DB = 10.0 / math.log(10.0)
 
 
@@ -21,14 +23,12 @@ _DB = 10.0 / math.log(10.0)
 # -- spectra, bins and bands ----------------------------------------------------------------
 
 def _psd(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
-    from ..identification.spectra import psd
 
     f, p = psd(np.asarray(x, dtype=float), fs)
     return np.asarray(f, dtype=float), np.asarray(p, dtype=float)
 
 
 def _eq10(measured: np.ndarray, model: np.ndarray, freq: np.ndarray, band) -> float:
-    from ..identification.spectra import fitness
 
     return float(fitness(measured, model, freq, band=tuple(band)))
 
@@ -47,7 +47,6 @@ def welch_statistics(n_samples: int) -> tuple[float, float, float]:
         Equivalent noise bandwidth of the Hamming window in bins (bins per
         independent observation).
     """
-    from ..identification.spectra import PaperWelch
 
     est = PaperWelch()
     nu = 2.0 * max(n_samples / est.nperseg, 1.0)
@@ -151,7 +150,6 @@ def _window_gain(n_samples: int) -> float:
     ``mean(window^2) / U`` per full segment; the padding of the last segment (Eq. 9)
     carries no noise, so each segment counts by the window energy on its data samples.
     """
-    from ..identification.spectra import PaperWelch
 
     est = PaperWelch()
     w2 = np.asarray(est.window) ** 2
@@ -181,7 +179,6 @@ def welch_kernel(n_samples: int, fs: float, freq_hz: np.ndarray, grid_hz: np.nda
     the estimator never sees, and it wrecked the Eq. 10 gap (which includes DC) of every
     model with a remnant.
     """
-    from ..identification.spectra import PaperWelch
 
     est = PaperWelch()
     n = est.nperseg

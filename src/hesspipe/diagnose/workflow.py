@@ -45,9 +45,16 @@ import scipy.stats
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run
 from ..core.paper import WELCH_SEGMENT
+from ..core.seeds import check_seed
+from ..identification.criteria import choose_k
+from ..identification.fit import check_control
+from ..pilot.effects import EFFECTS, get_effect
+from ..pilot.hess import PilotModel, model_from_name
 from ..plants.validation import residual_tests
+from .aircraft import corrected, plant_finding
 from .checks import PlantCheck, plant_check
 from .likelihood import _effect, _Fit, _Problem
+from .motion import delay_step, df_evidence, motion_step, remnant_step
 from .results import Diagnosis, Step
 from .settings import DiagnoseConfig
 from .spectra import _DB
@@ -106,7 +113,6 @@ def _control_error_tests(problem: _Problem, fit: _Fit) -> dict | None:
 
 
 def _resolve_model(model):
-    from ..pilot.hess import PilotModel, model_from_name
 
     if isinstance(model, PilotModel):
         return model
@@ -116,7 +122,6 @@ def _resolve_model(model):
 
 
 def _resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ...]:
-    from ..pilot.effects import EFFECTS, get_effect
 
     if isinstance(candidates, str):
         candidates = [c.strip() for c in candidates.split(",") if c.strip()]
@@ -161,8 +166,6 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     base = _resolve_model(model)
     cands = _resolve_candidates(base, candidates, cfg)
     cfg = replace(cfg, candidates=cands)  # what was actually tried, for the record
-    from ..core.seeds import check_seed
-    from ..identification.fit import check_control  # a control that never moves holds nothing to diagnose
 
     check_seed(seed)
     check_control(run)
@@ -170,7 +173,6 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     check = plant_check(run, plants, max_lag=cfg.max_lag)
     # A failed plant check is a finding, never a refusal: the aircraft-side candidate that
     # closes it (or the file error it proves) is named and the pilot identified around it.
-    from .aircraft import corrected, plant_finding
 
     finding = plant_finding(run, plants, check, fit_ok=cfg.plant_fit_ok)
     before = None
@@ -182,12 +184,10 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     run, plants = corrected(run, plants, finding)
     cands = tuple(c for c in cands if _effect(c).where != "aircraft")  # judged on the output above
     problem = _Problem(run, plants, cfg, seed)
-    from .motion import delay_step, df_evidence, motion_step, remnant_step
 
     # Multisine lines: the describing function judges motion and delay and gives the
     # pilot's own dynamics (phase-aware); the baseline starts from them.
     start = base.defaults(k=cfg.k)
-    from ..identification.criteria import choose_k
 
     k_df = choose_k(plants)[0]
     ev = df_evidence(run, plants, base.defaults(k=k_df), k=k_df, cfg=cfg) \

@@ -65,6 +65,7 @@ from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
 from ..core.io import staged_output, write_json, write_text
 from ..core.provenance import file_hash, versions
+from ..core.seeds import check_seed
 from .aircraft import AircraftConfig, load_aircraft
 from .wind import Excitation, SideWind, heading_to_ned, ned_to_heading
 
@@ -412,7 +413,6 @@ def _check_envelope(t, rec, vc_trim, config: FlightConfig, label: str) -> None:
 # --------------------------------------------------------------------------- public
 
 def _check_seed(seed) -> int:
-    from ..core.seeds import check_seed  # the one seed rule
 
     return check_seed(seed)
 

@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import lfilter
 
 from ..core.config import Fields
 
@@ -243,7 +244,6 @@ def filtered_noise(n: int, *, dt: float, corner_hz: float, rms: float, seed):
     seed : int or numpy seed
         Seed of the white noise.
     """
-    from scipy.signal import lfilter
 
     w = np.random.default_rng(seed).standard_normal(n)
     a = np.exp(-2.0 * np.pi * corner_hz * dt)

@@ -34,9 +34,11 @@ from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover, tracking_crossover
 from ..pilot.hess import PilotModel, model_from_name
-from ..pilot.mcruer import bounded_powell
+from ..pilot.mcruer import bounded_powell, fit_precision
 from ..pilot.simulation import unstable_fitness
 from .apid import Field, bit_climb
+from .criteria import check_criterion, choose_k, identify_phase_aware
+from .frf import estimate_frf
 from .problem import (
     Identification,
     SpectralObjective,
@@ -82,7 +84,6 @@ def benchmark(run, plants, *, band=(0.0, 5.0), psd_method: str = "paper"):
     PrecisionFit
         Parameters and Eq. 10 fitness (control^2/Hz) of the benchmark.
     """
-    from ..pilot.mcruer import fit_precision
 
     key = _benchmark_key(run, plants, band, psd_method)
     if key not in _BENCHMARK_CACHE:
@@ -194,7 +195,6 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         Unknown parameter, bad field, record shorter than one segment, unstable Yd.
         Never for unstable parameter sets.
     """
-    from .criteria import check_criterion, choose_k, identify_phase_aware
 
     model = model_from_name(model)
     criterion = check_criterion(criterion)
@@ -268,7 +268,6 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
 
 def _try_frf(run, plants, seed):
     """The run's nonparametric describing function, or why there is none (a string)."""
-    from .frf import estimate_frf
 
     try:
         return estimate_frf(run, plants, seed=seed)

@@ -32,6 +32,7 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Mapping
 
+import control as ct
 import numpy as np
 from scipy.optimize import brentq
 
@@ -216,7 +217,6 @@ def reference_crossover(k: int = 1) -> float:
     k : int
         Table 1 column and plant order (1 or 2).
     """
-    import control as ct
 
     return float(crossover(PilotModel(), table1(k), ct.tf([1.0], [1.0] + [0.0] * k)).frequency_rad_s)
 

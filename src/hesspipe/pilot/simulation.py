@@ -34,6 +34,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from ..core.errors import HesspipeError
+from ..core.formats import Run
 from .blocks import ONE, Block, Loop, from_tf, max_delay, max_real_root, pade_order_for
 from .hess import model_from_name
 from .motion import motion_block, with_motion_path
@@ -539,7 +540,6 @@ def synthetic_run(model, params: Mapping[str, float] | None, plants, disturbance
     HesspipeError
         If the closed loop is unstable (there is nothing to record).
     """
-    from ..core.formats import Run
 
     model = model_from_name(model)
     p = model.complete(params, k)
