@@ -10,7 +10,6 @@ from hesspipe.identification.criteria import DFObjective, model_df, model_df_ref
 from hesspipe.identification.frf import estimate_frf
 from hesspipe.pilot.hess import PilotModel
 from hesspipe.pilot.simulation import Simulator, synthetic_run
-from hesspipe.pilots.settings import PilotsConfig
 
 from pilot_data import plants as eq_plants
 
@@ -101,12 +100,17 @@ def test_df_objective_fits_the_reference_lines_of_a_two_input_run():
     assert np.sum(r[:, n_fb:] ** 2) > 0.1 * np.sum(r ** 2)
 
 
-def test_pilots_target_setting_is_checked():
-    assert PilotsConfig().target == "none"
-    assert PilotsConfig.from_table({"target": "multisine", "target_rms": 0.03}, "x.toml").target_rms == 0.03
-    with pytest.raises(HesspipeError, match=r"target.*none.*multisine"):
-        PilotsConfig.from_table({"target": "chirp"}, "x.toml")
-    with pytest.raises(HesspipeError, match="target_rms"):
-        PilotsConfig.from_table({"target": "multisine", "target_rms": 1.0}, "x.toml")
-    with pytest.raises(HesspipeError, match="jsbsim"):
-        PilotsConfig.from_table({"target": "multisine", "simulator": "fft"}, "x.toml")
+def test_a_flight_with_a_target_records_it_and_refuses_a_second_reference(tmp_path):
+    from hesspipe.flight.approach import FlightConfig
+    from hesspipe.flight.closed_loop import fly_pilot_record
+
+    cfg = FlightConfig(duration_s=20.0)
+    tg = TargetForcing(target_rms=0.02, n_lines=6, f_min_hz=0.1)
+    f = fly_pilot_record("737", eq_plants(), "expanded", {}, seed=3, workdir=tmp_path, config=cfg, target=tg)
+    n = int(round(20.0 / cfg.dt_s))
+    _, ref = tg.signals(np.arange(n) * cfg.dt_s, f.truth["seeds"]["gust"])
+    assert np.array_equal(f.run.reference, ref) and f.truth["target"]["target_rms_rad_s"] == 0.02
+    assert "interleaved" in f.truth["disturbance"]["excitation"]
+    with pytest.raises(HesspipeError, match="reference"):
+        fly_pilot_record("737", eq_plants(), "expanded", {}, seed=3, workdir=tmp_path, config=cfg,
+                         target=tg, reference=np.zeros(n))

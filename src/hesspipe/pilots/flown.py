@@ -20,7 +20,6 @@ from ..core.provenance import versions
 from ..core.seeds import derive_seed
 from ..flight.approach import FlightConfig
 from ..flight.closed_loop import fly_pilot_record
-from ..flight.target import TargetForcing
 from .cohort import CohortSpec, _check_effects, cohort_spec, pilot_ids, synth_pilot
 
 
@@ -90,8 +89,6 @@ def fly_pipeline_cohort(config, plants: Plants, ctx):
     flight_config = replace(flight_config, duration_s=config.duration_s)
     seed = config.seed if config.seed is not None else int(ctx.seed)
     folder = Path(ctx.out_dir) / "cohort"
-    target = TargetForcing(target_rms=config.target_rms) if config.target == "multisine" else None
     fly_cohort(plants, config.n, seed, config.effects, folder, aircraft=aircraft, config=flight_config,
-               record_dt_s=config.dt_s, spec=cohort_spec(config.cohort, duration_s=config.duration_s),
-               target=target)
+               record_dt_s=config.dt_s, spec=cohort_spec(config.cohort, duration_s=config.duration_s))
     return replace(config, data=str(folder))

@@ -30,10 +30,6 @@ SIMULATORS = ("jsbsim", "fft")
 #: the crossover-model cohort (the pipeline's default) or the Table 1 draw of earlier versions
 #: (kept so that their studies repeat).
 COHORT_DRAWS = ("crossover_model", "table1")
-#: The JSBSim cohort's forcing (``[pilots] target``): the paper's disturbance-only task, or a
-#: roll-rate target multisine on lines interleaved with the wind's
-#: (:class:`hesspipe.flight.target.TargetForcing`; same names as its TARGET_KINDS).
-TARGETS = ("none", "multisine")
 #: Identification settings that :class:`PilotsConfig` and :class:`CompareSettings` share by name.
 _SHARED = ("optimizer", "passes", "km_fixed", "start", "restarts", "benchmark", "criterion")
 
@@ -174,13 +170,6 @@ class PilotsConfig(Settings):
     cohort : str
         How the synthetic pilots are drawn (:data:`COHORT_DRAWS`): "crossover_model"
         (default; within the crossover-model limits, :mod:`hesspipe.pilots.cohort`) or "table1".
-    target : str
-        The JSBSim cohort's forcing (:data:`TARGETS`): "none" (default, the paper's
-        disturbance-only task with its broadband wind excitation) or "multisine" (the
-        wind excitation on 12 sparse lines and a roll-rate target multisine on the lines
-        between, :class:`hesspipe.flight.target.TargetForcing`). Only with simulator "jsbsim".
-    target_rms : float
-        RMS of the target, rad/s (0 < x <= 0.2).
     """
 
     data: str = ""
@@ -204,8 +193,6 @@ class PilotsConfig(Settings):
     simulator: str = "jsbsim"
     criterion: str = DEFAULT_CRITERION
     cohort: str = "crossover_model"
-    target: str = "none"
-    target_rms: float = 0.05
 
     def _checked(self, f: Fields) -> dict:
         effects = f.strings("effects")
@@ -220,12 +207,7 @@ class PilotsConfig(Settings):
                    figures=f.boolean("figures"), columns=f.string("columns"),
                    resample=f.boolean("resample"), simulator=f.string("simulator", choices=SIMULATORS),
                    cohort=f.string("cohort", choices=COHORT_DRAWS),
-                   target=f.string("target", choices=TARGETS),
-                   target_rms=f.number("target_rms", min=0.0, max=0.2, strict_min=True),
                    **_identification(f, "band_hz"))
-        if out["target"] != "none" and out["simulator"] != "jsbsim":
-            raise f.fail("target", f"a target is flown only by simulator 'jsbsim'; expected 'none' "
-                                   f"with simulator {out['simulator']!r}")
         try:
             _parse_columns(out["columns"])
         except HesspipeError as exc:
