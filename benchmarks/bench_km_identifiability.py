@@ -43,6 +43,8 @@ def main(argv=None) -> int:
     ap.add_argument("--pilots", type=int, default=10)
     ap.add_argument("--target-pilots", type=int, default=10)
     ap.add_argument("--target-rms", type=float, default=0.05, help="roll-rate target RMS, rad/s")
+    ap.add_argument("--fft-pilots", type=int, default=4,
+                    help="pilots of the noise-free structural check (FFT generator)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737; identified with the fitted plants")
     with tempfile.TemporaryDirectory() as tmp:
@@ -80,6 +82,8 @@ def main(argv=None) -> int:
 
         if args.target_pilots:
             target_study(plants, corner, args, root)
+        if args.fft_pilots:
+            structure_check(plants, args)
     return 0
 
 
@@ -141,6 +145,44 @@ def target_study(plants, corner, args, root):
         if e["Ke"]:
             print(f"  {case}, {name} ({len(e['Ke'])} pilots): "
                   + ", ".join(f"{k} {100 * statistics.median(v):.0f} %" for k, v in e.items()))
+
+
+def structure_check(plants, args):
+    """Noise-free two-input runs of identification's own FFT generator: what the line sets pin.
+
+    No plant error, steady state (the second of two periods analysed); without remnant what is
+    left is the structure, with the cohort's remnant share what noise does to it. Signed errors, so a common scale of Ke and Km shows.
+    """
+    from hesspipe.core.formats import Run
+    from hesspipe.pilot.hess import PilotModel
+    from hesspipe.pilot.remnant import remnant_gain
+    from hesspipe.pilot.simulation import Simulator, synthetic_run
+
+    dt, n = 0.025, 2800
+    print("\nstructural check (SYNTHETIC, identification's own FFT generator, with and without the cohort's remnant, "
+          "fitted plants; signed errors, default free set, df criterion):")
+    for i in range(args.fft_pilots):
+        pid = f"pilot{i + 1:02d}"
+        pseed, truth, params = B.draw(plants, pid, 1, ("motion_feedback",))
+        p = {k: v for k, v in params.items() if k not in ("Kn", "Tn")}
+        for rms, remnant in ((0.0, False), (args.target_rms, False), (0.0, True), (args.target_rms, True)):
+            wind, ref = TargetForcing(target_rms=rms).signals(np.arange(n) * dt, pseed)
+            model, pr = "expanded", dict(p)
+            if remnant:  # the cohort's remnant share of the control variance
+                model = PilotModel(("motion_feedback", "remnant"))
+                sim = Simulator(plants, np.tile(wind, 2), dt, reference=np.tile(ref, 2), noise_seed=pseed)
+                pr["Kn"] = remnant_gain(model, model.complete(pr, 1), sim, truth["remnant_share"])
+            full = synthetic_run(model, pr, plants, np.tile(wind, 2), dt, seed=pseed,
+                                 reference=np.tile(ref, 2))
+            run = Run(time=full.time[:n], disturbance=wind, output=full.output[n:],
+                      control=full.control[n:], reference=ref, id=pid, synthetic=True)
+            q = identify(run, plants, "expanded", seed=pseed, criterion="df", with_benchmark=False,
+                         with_identifiability=False).parameters
+            sgn = {"Ke": q["Ke"] / p["Ke"] - 1, "Km": q["Km"] / p["Km"] - 1,
+                   "Km/Ke": q["Km"] / q["Ke"] / (p["Km"] / p["Ke"]) - 1,
+                   "K1K2/Ke": q["K1"] * q["K2"] / q["Ke"] / (p["K1"] * p["K2"] / p["Ke"]) - 1}
+            print(f"  {pid} target {rms:g} rad/s, {'remnant' if remnant else 'no remnant'}: " + ", ".join(f"{k} {100 * v:+.0f} %" for k, v in sgn.items()),
+                  flush=True)
 
 
 if __name__ == "__main__":
