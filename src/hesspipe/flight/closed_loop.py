@@ -217,7 +217,8 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
                      *, seed: int, workdir: Path, config: FlightConfig = FlightConfig(),
                      aircraft_effects: AircraftEffects = AircraftEffects(), reference=None,
                      max_bank_deg: float = MAX_BANK_DEG, record_every: int = 1,
-                     remnant_share: float | None = None, run_id: str = "pilot") -> PilotFlight:
+                     remnant_share: float | None = None, run_id: str = "pilot",
+                     target=None) -> PilotFlight:
     """Fly one closed-loop record with the pilot model in JSBSim.
 
     Parameters
@@ -247,6 +248,9 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
     remnant_share : float, optional
         Share of control variance for the remnant when Kn is not given
         (default :data:`DEFAULT_REMNANT_SHARE`).
+    target : hesspipe.flight.target.TargetForcing, optional
+        Two-input forcing: its wind lines replace ``config.wind_excitation`` and its
+        target lines are the reference (then `reference` must not be given).
 
     Raises
     ------
@@ -268,7 +272,13 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
     t = np.arange(n) * dt
     gust_seed, remnant_seed = derive_seed(seed, "gust"), derive_seed(seed, "remnant")
     along, lateral = config.side_wind(t, config.duration_s)
-    lateral = lateral + config.wind_excitation.signal(t, gust_seed)
+    if target is not None:
+        if reference is not None:
+            raise HesspipeError("reference: expected either a reference or a target forcing, not both")
+        wind, reference = target.signals(t, gust_seed)
+        lateral = lateral + wind
+    else:
+        lateral = lateral + config.wind_excitation.signal(t, gust_seed)
     r = np.zeros(n) if reference is None else np.asarray(reference, dtype=float)
     if r.shape != (n,) or not np.isfinite(r).all():
         raise HesspipeError(f"reference: expected {n} finite samples (one per step), got shape {r.shape}")
@@ -330,8 +340,10 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
         "simulation_dt_s": dt,
         "duration_s": config.duration_s,
         "disturbance": {"side_wind": vars(config.side_wind),
-                        "excitation": config.wind_excitation.describe("ft/s"),
+                        "excitation": (config.wind_excitation.describe("ft/s") if target is None
+                                       else "interleaved multisine (see target)"),
                         "signal": "lateral wind relative to the actual heading, ft/s"},
+        "target": None if target is None else target.describe(),
         "envelope": {"speed_kts": [float(rec["vc_kts"].min()), float(rec["vc_kts"].max())],
                      "trim_speed_kts": trim["vc_kts"],
                      "min_agl_ft": float(rec["h_agl_ft"].min()),

@@ -138,6 +138,46 @@ def model_df(loop, s: np.ndarray) -> np.ndarray:
     return nm * v / loop.return_difference(s, None)
 
 
+def model_df_reference(loop, s: np.ndarray, yc: np.ndarray) -> np.ndarray:
+    """Pilot describing function U/E of a model loop at the reference (target) lines.
+
+    With d = 0 at those lines the visual path sees e = r - y but the motion
+    path still senses y = Yc u, so it closes an inner loop around the plant:
+    ``H = NM visual / (1 + NM PF + NM vestibular Yc)``. Against :func:`model_df`
+    (disturbance lines, ``NM (visual + vestibular) / (1 + NM PF)``) the two sets
+    separate the visual and vestibular channels (the two-input method of
+    Stapleford, McRuer & Magdaleno).
+
+    Parameters
+    ----------
+    loop : Loop
+        The pilot's loop (vestibular block through the plants' motion path).
+    s : array of complex
+        Laplace variable at the lines, 1/s.
+    yc : array of complex
+        The control plant's response at `s` (output units per control unit,
+        without the loop's own :attr:`~hesspipe.pilot.blocks.Loop.plant` block).
+
+    Returns
+    -------
+    ndarray of complex
+        Control per unit displayed error (``u = H e``, e = r - y).
+    """
+    nm = loop.neuromuscular.response(s)
+    return nm * loop.visual.response(s) / loop.return_difference(s, yc, visual=False)
+
+
+def _reliable(resp) -> np.ndarray:
+    """Lines of a response whose relative error is below FIT_RELIABLE (at least 3)."""
+    rel = resp.sigma / np.maximum(np.abs(resp.H), 1e-300)
+    # Lines the remnant swamps carry little information, and a model that bends to
+    # fit one (a lightly damped neuromuscular peak at a noisy high line) is fitting noise.
+    keep = rel < FIT_RELIABLE
+    if keep.sum() < 3:
+        keep = np.isin(np.arange(rel.size), np.argsort(rel)[:3])
+    return keep
+
+
 class _Base:
     """Shared: parameter completion, stability grading, scalar score."""
 
@@ -191,7 +231,9 @@ class DFObjective(_Base):
     base : mapping
         Complete parameter values (free ones overwritten per call).
     frf : hesspipe.identification.frf.Frf
-        The run's describing-function estimate at the disturbance lines.
+        The run's describing-function estimate at the disturbance lines, and at the
+        reference lines when the reference has its own (``frf.reference``; then both
+        sets are fitted, :func:`model_df_reference`).
     sim : Simulator, optional
         A prepared simulator of the run (built if not given).
     """
@@ -206,18 +248,29 @@ class DFObjective(_Base):
     def __init__(self, run, plants, model, base, frf, sim=None):
         super().__init__(run, plants, model, base, sim)
         resp = frf.feedback
-        rel = resp.sigma / np.maximum(np.abs(resp.H), 1e-300)
-        # Lines the remnant swamps (relative error above FIT_RELIABLE) are left out: each
-        # carries little information, and a model that bends to fit one (a lightly damped
-        # neuromuscular peak at a noisy high line) is fitting noise.
-        keep = rel < FIT_RELIABLE
-        if keep.sum() < 3:
-            keep = np.isin(np.arange(rel.size), np.argsort(rel)[:3])
+        keep = _reliable(resp)
         self.used = keep
         self.s = 1j * resp.freq_rad_s[keep]
         self.H = resp.H[keep]
-        self.scale = np.sqrt(resp.sigma[keep] ** 2 + (REL_FLOOR * np.abs(self.H)) ** 2)
-        self.norm = 1.0 / np.sqrt(2 * self.H.size)  # sum of squares = mean |e|^2 over lines
+        scale = np.sqrt(resp.sigma[keep] ** 2 + (REL_FLOOR * np.abs(self.H)) ** 2)
+        # Reference (target) lines, when the run has its own: fitted beside the
+        # disturbance's, each line weighted by its own uncertainty (model_df_reference).
+        ref = getattr(frf, "reference", None)
+        self.n_feedback = int(self.H.size)
+        self.s_ref = np.zeros(0, complex)
+        self.yc_ref = np.zeros(0, complex)
+        H_ref = np.zeros(0, complex)
+        scale_ref = np.zeros(0)
+        if ref is not None and ref.H.size:
+            keep_r = _reliable(ref)
+            self.used_reference = keep_r
+            self.s_ref = 1j * ref.freq_rad_s[keep_r]
+            H_ref = ref.H[keep_r]
+            scale_ref = np.sqrt(ref.sigma[keep_r] ** 2 + (REL_FLOOR * np.abs(H_ref)) ** 2)
+            self.yc_ref = self.sim.yc_block.response(self.s_ref)
+        self.H_all = np.concatenate((self.H, H_ref))
+        self.scale = np.concatenate((scale, scale_ref))
+        self.norm = 1.0 / np.sqrt(2 * self.H_all.size)  # sum of squares = mean |e|^2 over lines
         self.f_scale = 2.0 * self.norm  # a residual component of 2 standard deviations
         self.prior_weight = self.norm
 
@@ -235,7 +288,11 @@ class DFObjective(_Base):
             Real and imaginary parts, scaled so that the sum of squares is the mean
             squared error in line standard deviations (dimensionless).
         """
-        e = (model_df(self.sim.prepare(loop), self.s) - self.H) / self.scale  # plants' motion_path
+        loop = self.sim.prepare(loop)  # the vestibular path through the plants' motion_path
+        h = model_df(loop, self.s)
+        if self.s_ref.size:
+            h = np.concatenate((h, model_df_reference(loop, self.s_ref, self.yc_ref)))
+        e = (h - self.H_all) / self.scale
         return np.concatenate((e.real, e.imag)) * (np.sqrt(2) * self.norm)
 
 

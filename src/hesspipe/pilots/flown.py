@@ -25,7 +25,7 @@ from .cohort import CohortSpec, _check_effects, cohort_spec, pilot_ids, synth_pi
 
 def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_dir: str | os.PathLike, *,
                aircraft: str = "737", config: FlightConfig = FlightConfig(), record_dt_s: float = 0.02,
-               spec=None) -> list[Path]:
+               spec=None, target=None) -> list[Path]:
     """The pipeline's cohort, flown in JSBSim: ``<id>.csv``, ``<id>.truth.json``, ``cohort.json``.
 
     Each pilot is drawn exactly as :func:`hesspipe.pilots.cohort.synth_pilot` draws it
@@ -33,7 +33,9 @@ def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_di
     makes is discarded), then flies `aircraft` at ``config.dt_s``; Kn is
     re-derived for that step from the pilot's remnant share. Records keep every
     ``ceil(record_dt_s / dt_s)``-th step (0.02 s at 1/120 s: every 3rd, 40 Hz, whose
-    times are exact in the CSV's decimal digits).
+    times are exact in the CSV's decimal digits). `target` (a
+    :class:`hesspipe.flight.target.TargetForcing`, optional) replaces the wind excitation
+    by its interleaved wind and target multisines.
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise HesspipeError(f"n: expected an integer >= 1, got {n!r}")
@@ -51,7 +53,8 @@ def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_di
                 params = {k: v for k, v in drawn["parameters"].items() if k != "Kn"}
                 flight = fly_pilot_record(aircraft, plants, drawn["model"], params, seed=pseed,
                                           workdir=Path(work), config=config, record_every=every,
-                                          remnant_share=drawn["remnant_share"], run_id=pid)
+                                          remnant_share=drawn["remnant_share"], run_id=pid,
+                                          target=target)
                 truth = dict(flight.truth, base_seed=seed, draws=drawn["draws"],
                              distributions=drawn["distributions"],
                              **{k: drawn[k] for k in ("target_crossover_rad_s", "crossover") if k in drawn})
@@ -64,6 +67,7 @@ def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_di
             "simulator": "jsbsim",
             "note": "SYNTHETIC DATA: Hess pilot models flying the JSBSim aircraft in closed loop, "
                     "not measured",
+            "target": None if target is None else target.describe(),
             "aircraft": aircraft, "n": n, "seed": seed, "effects": list(summary and truth["effects"]),
             "dt_s": config.dt_s * every, "simulation_dt_s": config.dt_s,
             "plants": {"control_to_output": tf_coefficients(plants.control_to_output),

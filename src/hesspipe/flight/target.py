@@ -1,0 +1,136 @@
+"""Two-input forcing for closed-loop flights: a target multisine interleaved with the wind's.
+
+The paper's task is disturbance-only: the pilot sees e = -y at every excited
+frequency, so the visual and the vestibular channel act on the same signal and
+the identification cannot tell Km from the proprioceptive loop. The field's
+remedy (Stapleford, McRuer & Magdaleno's two-input method; van der Vaart; Pool
+et al.) adds a target (reference) multisine on lines interleaved with the
+disturbance's: at the target lines the motion path still senses only y, so the
+describing function there differs from the one at the disturbance lines by the
+vestibular channel (:func:`hesspipe.identification.criteria.model_df_reference`).
+
+:class:`TargetForcing` makes both signals: the lateral-wind excitation (ft/s) on
+the disturbance lines and the roll-rate reference (rad/s) on the lines one bin
+above them, both periodic over the record so that each line falls on one DFT
+bin, with the bins between left free for the remnant.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.errors import HesspipeError
+from ..core.seeds import derive_seed
+
+TARGET_KINDS = ("none", "multisine")
+"""``[pilots] target``: the paper's disturbance-only task, or a target multisine added."""
+
+
+def interleaved_lines(period_s: float, n_lines: int, f_min_hz: float, f_max_hz: float):
+    """Disturbance and target line numbers (multiples of 1/period_s), disjoint and interleaved.
+
+    Disturbance lines are log-spaced over the band, at least three bins apart and
+    never below k = 2; the target takes k + 1 of each.
+
+    Parameters
+    ----------
+    period_s : float
+        The record's period, s.
+    n_lines : int
+        Lines per set.
+    f_min_hz, f_max_hz : float
+        Band, Hz.
+
+    Returns
+    -------
+    k_disturbance, k_target : ndarray of int
+    """
+    k_lo = max(2, int(round(f_min_hz * period_s)))
+    k_hi = int(np.floor(f_max_hz * period_s)) - 1
+    if n_lines < 1 or k_hi < k_lo + 3 * (n_lines - 1):
+        raise HesspipeError(f"target: {n_lines} lines three bins apart do not fit between "
+                            f"{f_min_hz:g} and {f_max_hz:g} Hz in a {period_s:g} s record")
+    k = np.round(np.geomspace(k_lo, k_hi, n_lines)).astype(int)
+    for i in range(1, n_lines):
+        k[i] = max(k[i], k[i - 1] + 3)
+    for i in range(n_lines - 1, 0, -1):  # squeeze from the top if spacing pushed past k_hi
+        k[i] = min(k[i], k_hi - 3 * (n_lines - 1 - i))
+    return k, k + 1
+
+
+def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: float = 0.0) -> np.ndarray:
+    """Sum of sines on lines `k` (cycles per `period_s`), random phases, RMS `rms`.
+
+    Amplitudes are flat, or with `corner_hz` > 0 proportional to ``f / (f + corner_hz)``:
+    a rate whose integral (the bank angle of a roll-rate target) stays bounded at the
+    low lines.
+    """
+    t = np.asarray(t, dtype=float)
+    f = np.asarray(k, dtype=float) / period_s
+    a = f / (f + corner_hz) if corner_hz > 0 else np.ones_like(f)
+    phases = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, len(k))
+    x = np.sin(2.0 * np.pi * np.outer(t - t[0], f) + phases) @ a
+    sd = float(np.std(x))
+    return x * (rms / sd) if sd > 0 else x
+
+
+@dataclass(frozen=True)
+class TargetForcing:
+    """A wind excitation and a roll-rate target on interleaved multisine lines.
+
+    Attributes
+    ----------
+    target_rms : float
+        RMS of the reference, rad/s (roll rate).
+    wind_rms : float
+        RMS of the lateral-wind excitation, ft/s (replaces the flight's own).
+    n_lines : int
+        Lines per set.
+    f_min_hz, f_max_hz : float
+        Band of both sets, Hz.
+    corner_hz : float
+        The target's amplitudes rise like ``f / (f + corner_hz)`` (Hz): a roll-rate
+        target whose bank angle stays small at the low lines.
+    """
+
+    target_rms: float = 0.02
+    wind_rms: float = 3.0
+    n_lines: int = 12
+    f_min_hz: float = 0.03
+    f_max_hz: float = 2.0
+    corner_hz: float = 0.3
+
+    def __post_init__(self):
+        for name in ("target_rms", "wind_rms", "f_min_hz", "f_max_hz", "corner_hz"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0):
+                raise HesspipeError(f"target: {name}: expected a finite number >= 0, got {v!r}")
+        if not self.f_max_hz > self.f_min_hz:
+            raise HesspipeError(f"target: f_max_hz: expected above f_min_hz ({self.f_min_hz:g}), "
+                                f"got {self.f_max_hz!r}")
+
+    def signals(self, t, seed: int):
+        """(wind excitation ft/s, reference rad/s) on `t` (uniform, s), periodic over the record.
+
+        Parameters
+        ----------
+        t : array
+            Sample times, s.
+        seed : int
+            Seed of both sets' phases (derived per set).
+        """
+        t = np.asarray(t, dtype=float)
+        period = (t[-1] - t[0]) + (t[1] - t[0])
+        kd, kt = interleaved_lines(period, self.n_lines, self.f_min_hz, self.f_max_hz)
+        wind = line_multisine(t, kd, period, self.wind_rms, derive_seed(seed, "target-wind"))
+        ref = line_multisine(t, kt, period, self.target_rms, derive_seed(seed, "target"), self.corner_hz)
+        return wind, ref
+
+    def describe(self) -> dict:
+        """The forcing's settings (JSON-ready, units in the names)."""
+        return {"kind": "multisine", "target_rms_rad_s": self.target_rms,
+                "wind_rms_ft_s": self.wind_rms, "lines_per_set": self.n_lines,
+                "band_hz": [self.f_min_hz, self.f_max_hz], "target_corner_hz": self.corner_hz,
+                "note": "disturbance and target on interleaved lines (target = disturbance line + 1)"}

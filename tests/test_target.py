@@ -1,0 +1,116 @@
+"""Two-input forcing (hesspipe.flight.target) and the df criterion's reference lines. SYNTHETIC data."""
+
+import numpy as np
+import pytest
+
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import Run
+from hesspipe.flight.target import TargetForcing, interleaved_lines
+from hesspipe.identification.criteria import DFObjective, model_df, model_df_reference
+from hesspipe.identification.frf import estimate_frf
+from hesspipe.pilot.hess import PilotModel
+from hesspipe.pilot.simulation import Simulator, synthetic_run
+
+from pilot_data import plants as eq_plants
+
+PARAMS = {"Ke": 2.0, "K1": 1.0, "K2": 2.0, "1/T1": 0.5, "Km": 0.8, "tau0": 0.2}
+
+
+def _loop(plants, params=PARAMS):
+    m = PilotModel(("motion_feedback",))
+    sim = Simulator(plants, np.zeros(64), 0.02)
+    return m, sim, sim.prepare(m.loop(m.complete(params, 1)))
+
+
+def _solve(loop, yc, s, r, d_out):
+    """Brute force: u, y of the loop's signal equations at one s, by a 2x2 linear solve.
+
+    u = NM (visual (r - y) - vestibular y - PF u) and y = Yc' u + d_out.
+    """
+    nm, vis = loop.neuromuscular.response(s)[0], loop.visual.response(s)[0]
+    ves, pf = loop.vestibular.response(s)[0], loop.proprioceptive.response(s)[0]
+    ycp = yc * loop.plant.response(s)[0]
+    a = np.array([[1 + nm * pf, nm * (vis + ves)], [-ycp, 1.0]], dtype=complex)
+    b = np.array([nm * vis * r, d_out], dtype=complex)
+    return np.linalg.solve(a, b)
+
+
+def test_lines_are_disjoint_interleaved_and_on_the_records_bins():
+    kd, kt = interleaved_lines(70.0, 12, 0.03, 2.0)
+    assert not set(kd) & set(kt) and np.all(np.diff(kd) >= 3) and kd.min() >= 2
+    t = np.arange(2800) * 0.025
+    wind, ref = TargetForcing(target_rms=0.03, wind_rms=2.5).signals(t, seed=4)
+    assert np.std(wind) == pytest.approx(2.5) and np.std(ref) == pytest.approx(0.03)
+    for x, k in ((wind, kd), (ref, kt)):
+        p = np.abs(np.fft.rfft(x)) ** 2
+        assert np.nonzero(p > 1e-9 * p.max())[0].tolist() == sorted(k.tolist())
+    with pytest.raises(HesspipeError, match="do not fit"):
+        interleaved_lines(10.0, 12, 0.03, 0.5)
+
+
+def test_reference_line_df_equals_a_brute_force_closed_loop():
+    plants = eq_plants()
+    _, sim, loop = _loop(plants)
+    w = np.array([0.3, 1.0, 2.5, 6.0])
+    got_r = model_df_reference(loop, 1j * w, sim.yc_block.response(1j * w))
+    got_d = model_df(loop, 1j * w)
+    for i, x in enumerate(w):
+        s = np.array([1j * x])
+        yc = sim.yc_block.response(s)[0]
+        u, y = _solve(loop, yc, s, 1.0, 0.0)  # target only
+        assert got_r[i] == pytest.approx(u / (1.0 - y), rel=1e-9)
+        u, y = _solve(loop, yc, s, 0.0, 1.0)  # disturbance only (e = -y)
+        assert got_d[i] == pytest.approx(u / (-y), rel=1e-9)
+    # With motion feedback the two sets differ (what makes them informative), without they agree.
+    assert np.max(np.abs(got_r / got_d - 1)) > 0.05
+    _, sim0, loop0 = _loop(plants, dict(PARAMS, Km=0.0))
+    assert np.allclose(model_df_reference(loop0, 1j * w, sim0.yc_block.response(1j * w)),
+                       model_df(loop0, 1j * w), rtol=1e-12)
+
+
+def test_df_objective_fits_the_reference_lines_of_a_two_input_run():
+    plants = eq_plants()
+    dt, n = 0.025, 1400
+    wind, ref = TargetForcing(target_rms=0.2, wind_rms=1.0).signals(np.arange(n) * dt, seed=7)
+    m = PilotModel(("motion_feedback",))
+    p = m.complete(PARAMS, 1)
+    # Two periods from rest; the second (steady state) is analysed.
+    full = synthetic_run(m, p, plants, np.tile(wind, 2), dt, seed=1, reference=np.tile(ref, 2))
+    run = Run(time=full.time[:n], disturbance=wind, output=full.output[n:], control=full.control[n:],
+              reference=ref, id="two-input", synthetic=True)
+    frf = estimate_frf(run, plants)
+    kd, kt = interleaved_lines(n * dt, 12, 0.03, 2.0)
+    assert frf.reference is not None and frf.reference.bins.tolist() == kt.tolist()
+    obj = DFObjective(run, plants, m, p, frf)
+    assert obj.H_all.size > obj.n_feedback >= 3
+    # The closed loop simulated by the FFT model matches the reference-line formula...
+    loop = obj.sim.prepare(m.loop(p))
+    s = 1j * frf.reference.freq_rad_s
+    hr = model_df_reference(loop, s, obj.sim.yc_block.response(s))
+    assert np.max(np.abs(frf.reference.H / hr - 1)) < 0.02
+    # ...the objective is near zero at the truth and counts the reference lines' misfit
+    # of a wrong Km (which those lines see through the vestibular loop around the plant).
+    fb_only = DFObjective(run, plants, m, p, type(frf)(**{**frf.__dict__, "reference": None}))
+    assert obj(dict()) < 0.5 and fb_only(dict()) < 0.5
+    wrong = obj.sim.prepare(m.loop(dict(p, Km=0.0)))
+    miss = np.abs(model_df_reference(wrong, s, obj.sim.yc_block.response(s)) - frf.reference.H)
+    assert np.max(miss / frf.reference.sigma) > 10
+    n_fb = obj.n_feedback
+    r = obj.residuals_loop(m.loop(dict(p, Km=0.0))).reshape(2, -1)
+    assert np.sum(r[:, n_fb:] ** 2) > 0.1 * np.sum(r ** 2)
+
+
+def test_a_flight_with_a_target_records_it_and_refuses_a_second_reference(tmp_path):
+    from hesspipe.flight.approach import FlightConfig
+    from hesspipe.flight.closed_loop import fly_pilot_record
+
+    cfg = FlightConfig(duration_s=20.0)
+    tg = TargetForcing(target_rms=0.02, n_lines=6, f_min_hz=0.1)
+    f = fly_pilot_record("737", eq_plants(), "expanded", {}, seed=3, workdir=tmp_path, config=cfg, target=tg)
+    n = int(round(20.0 / cfg.dt_s))
+    _, ref = tg.signals(np.arange(n) * cfg.dt_s, f.truth["seeds"]["gust"])
+    assert np.array_equal(f.run.reference, ref) and f.truth["target"]["target_rms_rad_s"] == 0.02
+    assert "interleaved" in f.truth["disturbance"]["excitation"]
+    with pytest.raises(HesspipeError, match="reference"):
+        fly_pilot_record("737", eq_plants(), "expanded", {}, seed=3, workdir=tmp_path, config=cfg,
+                         target=tg, reference=np.zeros(n))
