@@ -29,11 +29,11 @@ from scipy import signal
 
 sys.path.insert(0, str(Path(__file__).parent))
 import bench_fly_pilot as B  # noqa: E402  (the same plants, draws and helpers)
+from hesspipe.flight.closed_loop import fly_pilot_record  # noqa: E402
 from hesspipe.flight.target import TargetForcing  # noqa: E402
+from hesspipe.identification.fit import identify  # noqa: E402
 from hesspipe.identification.frf import estimate_frf  # noqa: E402
 from hesspipe.pilot.crossover import crossover  # noqa: E402
-from hesspipe.flight.closed_loop import fly_pilot_record  # noqa: E402
-from hesspipe.identification.fit import identify  # noqa: E402
 from hesspipe.pilot.hess import table1  # noqa: E402
 from hesspipe.pilots.cohort import hess_corner  # noqa: E402
 
@@ -140,7 +140,7 @@ def target_study(plants, corner, args, root):
                 e["LG"].append(abs(B.loop_gain("expanded", p, plants, wc) - 1.0))
                 row.append(f"{name}: " + " ".join(f"{k} {100 * e[k][-1]:.0f}%" for k in keys))
             print(" | ".join(row), flush=True)
-    print(f"median |relative error| (two-input study; LG = | |L_id(j wc_true)| - 1 |):")
+    print("median |relative error| (two-input study; LG = | |L_id(j wc_true)| - 1 |):")
     for (case, name), e in errs.items():
         if e["Ke"]:
             print(f"  {case}, {name} ({len(e['Ke'])} pilots): "

@@ -10,7 +10,6 @@ from hesspipe.identification.criteria import DFObjective, model_df, model_df_ref
 from hesspipe.identification.frf import estimate_frf
 from hesspipe.pilot.hess import PilotModel
 from hesspipe.pilot.simulation import Simulator, synthetic_run
-
 from pilot_data import plants as eq_plants
 
 PARAMS = {"Ke": 2.0, "K1": 1.0, "K2": 2.0, "1/T1": 0.5, "Km": 0.8, "tau0": 0.2}
