@@ -377,9 +377,16 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
     pd_, pr_ = np.abs(D) ** 2, np.abs(R) ** 2
     d_lines = _lines(pd_) if np.ptp(d) > 0 else np.zeros(0, int)
     r_lines = _lines(pr_) if has_r else np.zeros(0, int)
-    # A bin belongs to the set that dominates it (interleaved sets share none).
-    d_lines = np.array([k for k in d_lines if pd_[k] >= pr_[k]], dtype=int)
-    r_lines = np.array([k for k in r_lines if pr_[k] > pd_[k]], dtype=int)
+    # Interleaved sets share no bin. A bin found in both (leakage of one signal's drift, or
+    # sets that do overlap) goes to the signal in which it stands out more, judged on each
+    # signal's own scale: the disturbance (ft/s, or the control's units) and the target (the
+    # output's units) are not comparable in raw power.
+    both = np.intersect1d(d_lines, r_lines)
+    if both.size:
+        rel_d = pd_[both] / pd_[1:].sum()
+        rel_r = pr_[both] / pr_[1:].sum()
+        d_lines = np.setdiff1d(d_lines, both[rel_r > rel_d])
+        r_lines = np.setdiff1d(r_lines, both[rel_r <= rel_d])
     e = r - y
     yc = None if plants is None else getattr(plants, "control_to_output", plants)
     notes = []
