@@ -59,9 +59,12 @@ from ..core.io import check_output_dir, staged_output, write_json
 from ..core.provenance import versions
 from ..core.seeds import derive_seed
 from ..pilot.blocks import Loop
+from ..pilot.crossover import gain_scale
 from ..pilot.discrete import DiscretePilot
+from ..pilot.hess import model_from_name
 from ..pilot.motion import motion_block, with_motion_path
 from ..pilot.remnant import remnant_gain_of_loops
+from ..pilot.simulation import Simulator
 from .aircraft import AircraftConfig, load_aircraft
 from .approach import FlightConfig, _check_seed, _jsbsim, _load, _quiet_logger, _sanitised_aircraft, _trim
 from .wind import heading_to_ned, ned_to_heading
@@ -166,7 +169,6 @@ def _remnant_gain(model, p, plants, wind, r, dt, noise_seed, share) -> float:
     the record (a high-gain pilot against the fitted 737 plants' slow
     right-half-plane zero), as the cohort does.
     """
-    from ..pilot.simulation import Simulator
 
     loop0, loop1 = (pilot_loop(model, {**p, "Kn": kn}, plants) for kn in (0.0, 1.0))
     sim = Simulator(plants, wind, dt, reference=r, noise_seed=noise_seed)
@@ -257,8 +259,6 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
     HesspipeError
         Bad parameters, trim failure, or a limit left (one line, limit and time).
     """
-    from ..pilot.crossover import gain_scale
-    from ..pilot.hess import model_from_name
 
     ac = aircraft if isinstance(aircraft, AircraftConfig) else load_aircraft(aircraft)
     seed = _check_seed(seed)

@@ -28,9 +28,17 @@ from __future__ import annotations
 from typing import Mapping, Sequence
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from ..core.choices import CRITERIA, DEFAULT_CRITERION  # noqa: F401  (re-exported)
 from ..core.errors import HesspipeError
+from ..pilot.blocks import from_tf
+from ..pilot.crossover import loop_crossover, tracking_crossover
+from ..pilot.hess import PilotModel
+from ..pilot.mcruer import fit_precision
+from ..pilot.simulation import UNSTABLE_FITNESS, Simulator, unstable_fitness
+from .frf import estimate_frf
+from .problem import Identification, SpectralObjective, _resolve, default_free
 
 # scipy and the model modules are imported where they are used.
 
@@ -80,7 +88,6 @@ def plant_slope(plants, band=(1.0, 5.0)) -> float:
     band : (float, float)
         Angular frequencies, rad/s.
     """
-    from ..pilot.blocks import from_tf
 
     yc = from_tf(getattr(plants, "control_to_output", plants))
     w = np.logspace(np.log10(band[0]), np.log10(band[1]), 41)
@@ -186,7 +193,6 @@ class _Base:
     f_scale = 1.0
 
     def __init__(self, run, plants, model, base: Mapping[str, float], sim=None):
-        from ..pilot.simulation import Simulator
 
         self.model = model
         self.base = dict(base)
@@ -204,7 +210,6 @@ class _Base:
 
     def score_loop(self, loop, threshold=None) -> float:
         """Criterion value of a loop; unstable: graded, at least UNSTABLE_FITNESS."""
-        from ..pilot.simulation import UNSTABLE_FITNESS, unstable_fitness
 
         self.calls += 1
         rate = self.sim.growth_rate(loop)
@@ -397,9 +402,7 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
     (values, fitness, stable)
         The best stable end point (or the best unstable one, flagged).
     """
-    from scipy.optimize import least_squares
 
-    from ..pilot.simulation import UNSTABLE_FITNESS
 
     names = list(names)
     logm = np.array([n in LOG_PARAMETERS for n in names])
@@ -529,12 +532,6 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
     -------
     Identification
     """
-    from ..pilot.crossover import loop_crossover, tracking_crossover
-    from ..pilot.hess import PilotModel
-    from ..pilot.mcruer import fit_precision
-    from ..pilot.simulation import UNSTABLE_FITNESS, Simulator
-    from .frf import estimate_frf
-    from .problem import Identification, SpectralObjective, _resolve, default_free
 
     if free is None:
         core = PHASE_AWARE_FREE[int(k)]

@@ -78,8 +78,12 @@ from ..core.provenance import versions
 from ..core.seeds import check_seed, derive_seed
 from ..flight.wind import Excitation, SideWind
 from ..pilot.blocks import from_tf
-from ..pilot.crossover import CrossoverLimits
+from ..pilot.crossover import CrossoverLimits, crossover, gain_scale
+from ..pilot.effects import EFFECTS
+from ..pilot.hess import PilotModel
+from ..pilot.motion import motion_block, with_motion_path
 from ..pilot.remnant import remnant_gain
+from ..pilot.simulation import Simulator, synthetic_run
 from .settings import COHORT_DRAWS
 
 #: Remnant noise is part of every synthetic pilot: real pilots are never noise free.
@@ -246,7 +250,6 @@ def draw_parameters(model, rng: np.random.Generator, spec: CohortSpec = CohortSp
         Every parameter of ``model.parameter_names()``; the remnant gain Kn is
         left at its default (:func:`remnant_gain` sets it from the loop).
     """
-    from ..pilot.hess import PilotModel
 
     params = dict(model.defaults(spec.k, gain))
     # Bounds of the largest model, so that a draw never depends on which effects are present:
@@ -298,8 +301,6 @@ def draw_crossover_parameters(model, rng: np.random.Generator, spec: CohortSpec,
     target ``wc``. The caller checks the crossover the report will compute
     (it may find another crossing first) and the phase margin.
     """
-    from ..pilot.hess import PilotModel
-    from ..pilot.motion import motion_block, with_motion_path
 
     params = dict(model.defaults(spec.k, gain))
     bounds = PilotModel(("motion_feedback", REMNANT)).bounds(gain)
@@ -354,9 +355,6 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
     truth : dict
         Parameters, effects, seeds, disturbance and distributions.
     """
-    from ..pilot.crossover import gain_scale
-    from ..pilot.hess import PilotModel
-    from ..pilot.simulation import Simulator, synthetic_run
 
     model = PilotModel(effects=_with_remnant(effects))
     gain = gain_scale(plants, spec.k)
@@ -412,7 +410,6 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
 
 
 def _truth_crossover(model, params, plants, spec: CohortSpec) -> dict:
-    from ..pilot.crossover import crossover
 
     core = {k: v for k, v in params.items() if k not in ("Kn", "Tn")}
     return crossover(model.name, core, plants, limits=spec.limits, k=spec.k,
@@ -421,7 +418,6 @@ def _truth_crossover(model, params, plants, spec: CohortSpec) -> dict:
 
 def _meets_crossover_model(model, params, plants, target: float, spec: CohortSpec, gain: float) -> bool:
     """The drawn pilot's tracking crossover is the target and within the limits."""
-    from ..pilot.hess import PilotModel
 
     # Ke inside the identification's box (times the plants' gain scale), or no identification
     # could find this pilot.
@@ -438,7 +434,6 @@ def _with_remnant(effects: Sequence[str]) -> tuple[str, ...]:
 
 
 def _check_effects(effects: Sequence[str]) -> tuple[str, ...]:
-    from ..pilot.effects import EFFECTS
 
     effects = tuple(e.strip() for e in effects if e.strip())
     for e in effects:

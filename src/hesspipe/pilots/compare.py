@@ -33,9 +33,16 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, Run, _parse_columns, read_run
+from ..core.formats import Plants, Run, _parse_columns, read_run, tf_coefficients
 from ..core.seeds import derive_seed
+from ..identification.criteria import choose_k
+from ..identification.fit import benchmark as mcruer_benchmark
+from ..identification.fit import identify
+from ..identification.problem import SpectralObjective
+from ..pilot.crossover import gain_scale, loop_crossover, tracking_crossover
+from ..pilot.hess import PilotModel, model_from_name
 from .batch import run_batch
+from .cohort import cohort_spec, synth_cohort
 
 # The stage's settings live in .settings and its text in .report; their names are imported
 # here too, where users and older code look for them.
@@ -49,7 +56,7 @@ from .settings import (  # noqa: F401
     CompareSettings,
     PilotsConfig,
 )
-from .verdict import safe_motion_test
+from .verdict import cohort_verdict, safe_motion_test
 
 
 @dataclass(frozen=True)
@@ -165,7 +172,6 @@ class Comparison:
 
     def verdict(self) -> dict:
         """Does motion feedback improve the fit? :func:`hesspipe.pilots.verdict.cohort_verdict`."""
-        from .verdict import cohort_verdict
 
         return cohort_verdict({p.id: p.motion_test for p in self.pilots})
 
@@ -224,8 +230,6 @@ class Comparison:
 def _km_fixed(settings: CompareSettings, plants) -> float:
     if settings.km_fixed is not None:
         return float(settings.km_fixed)
-    from ..pilot.crossover import gain_scale
-    from ..pilot.hess import PilotModel
 
     # Table 1's Km, in the same plant-gain units as the identification's defaults.
     return float(PilotModel(("motion_feedback",)).defaults(settings.k, gain_scale(plants, settings.k))["Km"])
@@ -239,10 +243,6 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
     Returns a dict with the keys of ``Identification.to_dict(spectra=False)``
     that apply (``free`` empty, ``evaluations`` 1) plus ``simulated_psd``.
     """
-    from ..identification.fit import benchmark as mcruer_benchmark
-    from ..identification.problem import SpectralObjective
-    from ..pilot.crossover import loop_crossover, tracking_crossover
-    from ..pilot.hess import model_from_name
 
     model = model_from_name(model)
     complete = model.complete(params, k, strict=True)
@@ -328,7 +328,6 @@ def _reduced(original: dict) -> dict:
 
 def _polish(run, plants, model, initial, seed, common):
     """Bounded Powell from `initial` over the same free parameters and box."""
-    from ..identification.fit import identify
 
     return identify(run, plants, model, seed=seed, initial=initial,
                     **{**common, "optimizer": "scipy", "restarts": 1})
@@ -341,7 +340,6 @@ def _search(run, plants, model, seed, common, initial=None):
     give sharp spectral peaks): a continuous local search from its result
     finishes the job. Returns the result and the evaluations spent.
     """
-    from ..identification.fit import identify
 
     first = identify(run, plants, model, seed=seed, initial=initial, **common)
     if common["optimizer"] == "scipy" or common.get("criterion", "paper") != "paper":
@@ -357,7 +355,6 @@ def _with_k(settings: CompareSettings, plants: Plants) -> CompareSettings:
     """`settings` with ``k`` chosen by Hess's rule on the control plant when it is None."""
     if settings.k is not None:
         return settings
-    from ..identification.criteria import choose_k
 
     return replace(settings, k=choose_k(plants)[0])
 
@@ -542,7 +539,6 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     failures += [r for r in results if isinstance(r, PilotFailure)]
     order = {str(p): i for i, p in enumerate(paths)}
     failures.sort(key=lambda f: order.get(f.source, len(order)))
-    from ..core.formats import tf_coefficients
 
     return Comparison(pilots=pilots, failures=tuple(failures), settings=settings,
                       plants={"control_to_output": tf_coefficients(plants.control_to_output),
@@ -561,7 +557,6 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
     are listed in the outputs; the caller decides whether ``not result.ok``
     fails the stage. `draw` is :func:`write_comparison`'s, used when ``config.figures``.
     """
-    from .cohort import cohort_spec, synth_cohort
 
     out_dir = Path(out_dir)
     settings = config.settings(seed)
