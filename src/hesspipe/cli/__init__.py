@@ -8,6 +8,8 @@ stderr and exit status 1; argparse usage errors exit with status 2.
 
 from __future__ import annotations
 
+# Imports sit inside the functions: `hesspipe --help` and argument errors load no numpy
+# (tests/test_api.py), and each command loads only its own stage.
 import argparse
 import signal
 import sys

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+# Imports sit inside the functions: `hesspipe --help` and argument errors load no numpy
+# (tests/test_api.py), and each command loads only its own stage.
+
 
 def check_file_outputs(*, json: str | None = None, figure: str | None = None) -> None:
     """Raise HesspipeError unless `json` (a file) and `figure` (an image file) can be written."""

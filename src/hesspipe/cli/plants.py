@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+# Imports sit inside the functions: `hesspipe --help` and argument errors load no numpy
+# (tests/test_api.py), and each command loads only its own stage.
 from pathlib import Path
 
 

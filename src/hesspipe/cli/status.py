@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+# Imports sit inside the functions: `hesspipe --help` and argument errors load no numpy
+# (tests/test_api.py), and each command loads only its own stage.
+
 
 def register(sub) -> None:
     p = sub.add_parser("status", help="show which pipeline stages are fresh or stale, and why")

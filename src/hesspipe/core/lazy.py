@@ -7,6 +7,7 @@ that module, and the command line starts without numpy.
 
 from __future__ import annotations
 
+import sys
 from importlib import import_module
 from typing import Callable, Mapping
 
@@ -26,13 +27,11 @@ def attach(package: str, names: Mapping[str, str]) -> tuple[Callable, Callable, 
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         value = getattr(import_module(f".{module}", package), name)
-        import sys
 
         setattr(sys.modules[package], name, value)  # later look-ups skip this function
         return value
 
     def __dir__():
-        import sys
 
         return sorted(set(vars(sys.modules[package])) | set(names))
 

@@ -18,7 +18,7 @@ from ..core.seeds import derive_seed
 from . import forcing, pilots
 from .lti import discretise, ss_from_tf, zoh
 from .plants import Plant, make_plant
-from .simulate import Wiring, delay_steps
+from .simulate import Wiring, compile_loop, delay_steps
 from .truth import build_truth, outer_holds
 
 EFFECTS = ("motion_feedback", "extra_delay", "remnant", "dutch_roll", "actuator_lag", "rate_limit")
@@ -350,7 +350,6 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     HesspipeError
         If the simulated loop diverges (it should not for a drawn pilot).
     """
-    from .simulate import compile_loop
 
     o = spec.options
     fs, ratio = float(o["fs"]), int(fine_ratio or o["fine_ratio"])

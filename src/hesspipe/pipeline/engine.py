@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
 from .. import __version__
+from ..core.config import Fields, load_toml
 from ..core.errors import HesspipeError
 from ..core.io import STAGING_PREFIX, check_output_dir, mark_output_dir, staged_output, write_json
 from ..core.provenance import file_hash, versions
@@ -470,7 +471,6 @@ def load_stages(path) -> list[Stage]:
     path : str or Path
         The stages file.
     """
-    from ..core.config import Fields, load_toml
 
     data = load_toml(path)
     tables = data.get("stage")

@@ -9,6 +9,8 @@ start quickly.
 
 from __future__ import annotations
 
+# Each stage function imports its stage's package when it runs, so that `hesspipe status`
+# and a pipeline of some stages load only what they need.
 import json
 from pathlib import Path
 

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..identification.criteria import model_df
+from ..pilot.hess import model_from_name
 from . import save_figure
+from .frf import frf_figure
 from .pilots import plot_psd_comparison
 
 #: Legend labels of the three configurations, in the paper's Fig. 8 wording.
@@ -45,9 +48,6 @@ def plot_df(pilot, path: str | Path) -> Path:
     path : str or Path
         PNG to write.
     """
-    from ..identification.criteria import model_df
-    from ..pilot.hess import model_from_name
-    from .frf import frf_figure
 
     models = {}
     for name in ("original", "expanded"):

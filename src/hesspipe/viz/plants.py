@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import control as ct
 import numpy as np
 
 from ..plants.d2c import frequency_response
+from ..plants.report import PAPER_EQ16
 from . import save_figure, subplots
 
 
@@ -157,9 +159,7 @@ def draw_plants(folder: str | Path, fits: dict, *, synthetic: bool = False) -> l
     synthetic : bool
         Label the figures SYNTHETIC.
     """
-    import control as ct
 
-    from ..plants.report import PAPER_EQ16
 
     folder = Path(folder)
     plot_validation(fits, folder / "plants_validation.png", synthetic=synthetic)
