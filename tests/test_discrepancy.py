@@ -16,7 +16,7 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import write_plants, write_run
 from hesspipe.core.io import to_json
 from hesspipe.diagnose.examples import hidden_effect_run, validation_plants
-from hesspipe.diagnose.likelihood import _Problem
+from hesspipe.diagnose.fitting import Problem
 from hesspipe.diagnose.report import format_report
 from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.diagnose.spectra import band_disagreement, welch_statistics
@@ -188,13 +188,13 @@ def test_remnant_expectation_is_the_welch_expectation_at_dc():
     run = hidden_effect_run(plants, None, seed=2, parameters=TWO["jsbsim_737"])
     model = PilotModel(("remnant",))
     params = {**model.defaults(), **TWO["jsbsim_737"], "Kn": 0.4}
-    problem = _Problem(run, plants, FAST, seed=0)
-    loop = problem.loop(model, params)
-    expected = problem.remnant_psd(loop)
+    problem = Problem(run, plants, FAST, seed=0)
+    loop = problem.spectrum.loop(model, params)
+    expected = problem.spectrum.remnant_psd(loop)
     zeros = np.zeros(len(run))
     draws = np.mean([psd(Simulator(plants, zeros, run.dt, noise_seed=s).control(loop), run.fs)[1]
                      for s in range(40)], axis=0)
-    band = problem.freq <= 5.0
+    band = problem.likelihood.freq <= 5.0
     ratio = draws[band] / expected[band]
     assert np.median(ratio) == pytest.approx(1.0, abs=0.05)
     # DC: the point value of the density is 20x too high. The expectation integrates the
@@ -236,14 +236,14 @@ def test_remnant_psd_matches_simulated_remnant(plants, runs):
 
     model = PilotModel(("remnant",))
     params = {**model.defaults(), "Kn": 0.2, "Tn": 0.3}
-    problem = _Problem(runs[None], plants, FAST, seed=0)
-    loop = problem.loop(model, params)
-    expected = problem.remnant_psd(loop)
+    problem = Problem(runs[None], plants, FAST, seed=0)
+    loop = problem.spectrum.loop(model, params)
+    expected = problem.spectrum.remnant_psd(loop)
     zeros = np.zeros(len(runs[None]))
     from hesspipe.identification.spectra import psd
 
     draws = [psd(Simulator(plants, zeros, 0.02, noise_seed=s).control(loop), 50.0)[1] for s in range(30)]
-    ratio = np.mean(draws, axis=0)[problem.mask] / expected[problem.mask]
+    ratio = np.mean(draws, axis=0)[problem.likelihood.mask] / expected[problem.likelihood.mask]
     assert np.median(ratio) == pytest.approx(1.0, abs=0.05)
 
 

@@ -17,6 +17,7 @@ import scipy.stats
 
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run
+from ..core.paper import EQ16
 from ..core.seeds import derive_seed
 from ..pilot.hess import PilotModel
 from ..pilot.simulation import synthetic_run
@@ -24,8 +25,7 @@ from ..pilot.simulation import synthetic_run
 # -- hidden-effect validation data ------------------------------------------------------------
 
 #: Eq. 16 wind → roll-rate plant of the paper (SPEC.md), 1/s per ft/s.
-EQ16_NUM = (-0.2554, 14.4, -272.6, 25.72)
-EQ16_DEN = (1.0, 84.37, 452.2, 1510.0, 628.8)
+EQ16_NUM, EQ16_DEN = EQ16
 
 
 def validation_plants() -> Plants:

@@ -1,5 +1,6 @@
-"""The diagnosis's likelihood: the expected control spectrum of a model, log-spectral
-residuals, their variances, fits and the likelihood-ratio statistics.
+"""The diagnosis's likelihood: log-spectral residuals of a model's expected control
+spectrum (:mod:`hesspipe.diagnose.expected`) against the measured one, their variances and
+the likelihood-ratio statistics; the fits are in :mod:`hesspipe.diagnose.fitting`.
 
 The criterion
 -------------
@@ -84,86 +85,38 @@ effect win in the benchmark, not a guarantee.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
 
 import numpy as np
-import scipy.optimize
-import scipy.signal
 import scipy.special
-import scipy.stats
 
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, Run
-from ..core.seeds import derive_seed
-from ..identification.spectra import PaperWelch
-from ..pilot.blocks import ZERO, from_tf
-from ..pilot.effects import get_effect
-from ..pilot.simulation import Simulator
+from ..core.formats import Run
 from .settings import DiagnoseConfig
-from .spectra import (
-    _DB,
-    Band,
-    _eq10,
-    _log_residual,
-    _psd,
-    _window_gain,
-    band_disagreement,
-    welch_kernel,
-    welch_statistics,
-)
-
-_UNSTABLE_RESIDUAL = 25.0  # ln-units per bin for an unstable parameter set (e^25 mismatch)
-#: Welch bins of the density beyond the highest reported frequency folded into the
-#: expected remnant PSD (Hamming sidelobes 32 bins out are below -60 dB).
-_KERNEL_MARGIN = 32
-#: Slowest remnant (s) for which the widened Kn box (:meth:`_Problem.bounds`) still lets
-#: the remnant carry twice the measured control's RMS.
-_REMNANT_TN_REF = 2.0
-#: Frequency (Hz) below which the expected remnant PSD samples the density on the
-#: simulator's fine grid (:meth:`_Problem.remnant_psd`).
-_FINE_HZ = 1.0
+from .spectra import _DB, Band, _eq10, _log_residual, _psd, band_disagreement, welch_statistics
 
 
+class Likelihood:
+    """The measured control spectrum and the likelihood of a model's expected one against it.
 
+    See the module docstring for the criterion: log-spectral residuals over the band's
+    Welch bins, bin variances from the model's random share and a profiled model error.
 
-# -- fitting --------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class _Fit:
-    model: Any
-    parameters: dict
-    free: tuple[str, ...]
-    psd: np.ndarray          # model control PSD: deterministic part + expected remnant
-    residual: np.ndarray     # ln model PSD - ln measured PSD over the band's bins
-    evaluations: int
-    stable: bool
-    nll: float = math.inf    # -2 log-likelihood (+ constant) over the band's bins
-
-    @property
-    def variance(self) -> float:
-        return float(np.mean(self.residual ** 2))
-
-
-class _Problem:
-    """Measured spectra and the fitting machinery shared by every fit of one diagnosis.
-
-    The model's control PSD is the paper-Welch PSD of its deterministic response to the
-    measured disturbance (and reference), plus the expected PSD of its remnant through
-    the closed loop (zero without remnant), computed exactly rather than from a random
-    draw so that fits and scores do not depend on a noise realization.
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run (its control column).
+    cfg : DiagnoseConfig
+        Band (Hz), band edges, weighting, resolution and dynamic range (dB), alpha.
     """
 
-    def __init__(self, run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int):
-
-        self.run, self.plants, self.cfg = run, plants, cfg
+    def __init__(self, run: Run, cfg: DiagnoseConfig):
+        self.run, self.cfg = run, cfg
         self.freq, self.measured = _psd(run.control, run.fs)
         lo, hi = cfg.band_hz
         self.mask = (self.freq > 0) & (self.freq >= lo) & (self.freq <= hi)
         if int(self.mask.sum()) < 3:
             raise HesspipeError(f"{run.source or run.id}: fewer than 3 Welch bins in the band "
                                 f"{lo:g}-{hi:g} Hz; expected a longer record or a wider band")
-        est = PaperWelch()
         self.nu, self.var_floor, self.enbw = welch_statistics(len(run))
         self.n_eff = float(self.mask.sum()) / self.enbw
         self.log_bias = float(scipy.special.digamma(self.nu / 2.0) - math.log(self.nu / 2.0))
@@ -171,93 +124,6 @@ class _Problem:
         # A Hamming window's leakage (highest sidelobe -43 dB) bounds what a Welch
         # estimate can resolve below its peak; deeper bins are compared at that level.
         self.psd_floor = float(np.max(self.measured[self.mask])) * 10.0 ** (-cfg.dynamic_range_db / 10.0)
-        self.window_gain = _window_gain(len(run))
-        # The remnant is evaluated in expectation, so the simulator's noise is never used;
-        # its seed is derived all the same for reproducibility.
-        self.sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference,
-                             noise_seed=derive_seed(seed, "diagnose"))
-        f = self.freq.copy()
-        f[0] = f[1] * 1e-6
-        self.s = 2j * np.pi * f
-        self.yc = from_tf(plants.control_to_output).response(self.s)
-        # Expected remnant PSD (see :meth:`remnant_psd`): the density up to `_KERNEL_MARGIN`
-        # bins past the highest reported frequency, folded through the window kernel. It
-        # is sampled every 1/16 Welch bin below `_FINE_HZ`, where the narrow features are
-        # (lightly damped aircraft pairs, slow remnant that the loop barely opposes), every
-        # quarter bin above (closed-loop features there are broad), and geometrically
-        # from 1e-6 Hz up to the first fine point: a plant with a near-zero static gain
-        # leaves a spike at DC narrower than any affordable uniform grid.
-        top = max(float(cfg.band_hz[1]), float(cfg.band_edges_hz[-1]))
-        self.n_kernel = int(np.searchsorted(self.freq, top, side="right"))
-        bin_hz = run.fs / est.nperseg
-        end = min(top + _KERNEL_MARGIN * bin_hz, run.fs / 2)
-        fine = np.arange(bin_hz / 16, min(_FINE_HZ, end), bin_hz / 16)
-        grid = np.concatenate([[0.0], np.geomspace(1e-6, fine[0], 41)[:-1], fine,
-                               np.arange(fine[-1] + bin_hz / 4, end + bin_hz / 8, bin_hz / 4)])
-        self.kernel = welch_kernel(len(run), run.fs, self.freq[:self.n_kernel], grid)
-        g = grid.copy()
-        g[0] = 1e-9   # finite value just above DC (integrating plants)
-        # One evaluation per block serves both: the fine grid, then the bins above it.
-        self.n_fine = g.size
-        self.s_all = np.concatenate([2j * np.pi * g, self.s[self.n_kernel:]])
-        self.yc_all = from_tf(plants.control_to_output).response(self.s_all)
-
-    # model pieces -----------------------------------------------------------------------
-    def loop(self, model, params):
-        # Through the plants' motion path, as the Simulator sees it (remnant_density too).
-        return self.sim.prepare(model.loop(model.complete(params)))
-
-    def stochastic(self, model, params) -> bool:
-        """Whether the model's loop has a remnant."""
-        return not self.loop(model, params).noise.is_zero
-
-    def control(self, model, params, loop=None) -> np.ndarray | None:
-        """Deterministic control (remnant off) driven by the measured disturbance; None if
-        the loop is unstable (a remnant filter has no poles in the right half plane)."""
-
-        loop = self.loop(model, params) if loop is None else loop
-        u = self.sim.control(loop.replace(noise=ZERO))
-        return None if u is None or not np.all(np.isfinite(u)) else u
-
-    def remnant_density(self, loop, s: np.ndarray, yc: np.ndarray) -> np.ndarray:
-        """Two-sided PSD (control units^2/Hz) of the remnant's share of the control at `s`.
-
-        The unit-variance white sequence of :class:`hesspipe.pilot.simulation.Simulator` has a
-        two-sided density ``dt``; the closed loop passes it to the control through
-        ``noise / (1 + NM PF + NM (visual + vestibular) Yc plant)`` (the loop of
-        :class:`hesspipe.pilot.blocks.Loop`); `yc` is Yc's response at `s`.
-        """
-        nm = loop.neuromuscular.response(s)
-        den = 1.0 + nm * loop.proprioceptive.response(s) + nm * (
-            loop.visual.response(s) + loop.vestibular.response(s)) * yc * loop.plant.response(s)
-        return np.abs(loop.noise.response(s) / den) ** 2 * self.run.dt
-
-    def remnant_psd(self, loop) -> np.ndarray:
-        """Expected paper-Welch PSD of the remnant's share of the control.
-
-        Up to the highest reported frequency the density is folded through the window
-        kernel (:func:`welch_kernel`), which is what the estimator's expectation is; above
-        it (outside every fit, score and report) the density at the bin times the
-        window's gain (:func:`_window_gain`) stands in.
-        """
-        if loop.noise.is_zero:
-            return np.zeros_like(self.freq)
-        dens = self.remnant_density(loop, self.s_all, self.yc_all)
-        return np.concatenate([self.kernel @ dens[:self.n_fine], dens[self.n_fine:] * self.window_gain])
-
-    def residual(self, model, params, s2: float | None = None) -> tuple[np.ndarray, np.ndarray, float] | None:
-        """(likelihood residual vector, model PSD on the full grid, s2), None for an
-        unstable loop. The vector's sum of squares is -2 log-likelihood
-        (:meth:`likelihood_vector`, with the model-error variance `s2` given or profiled)."""
-        loop = self.loop(model, params)
-        u = self.control(model, params, loop)
-        if u is None:
-            return None
-        _, det = _psd(u, self.run.fs)
-        rem = self.remnant_psd(loop)
-        p = det + rem
-        vec, s2 = self.likelihood_vector(p, rem, s2)
-        return vec, p, s2
 
     def log_residual(self, psd: np.ndarray) -> np.ndarray:
         """``ln P_model - ln P_measured`` over the band's bins (floored, see module doc)."""
@@ -313,115 +179,7 @@ class _Problem:
         first = e / np.sqrt(var) if given else np.sqrt(e2 / var)
         return np.concatenate([first, np.sqrt(np.log(var / self.resolution))]), s2
 
-    # identification --------------------------------------------------------------------
-    def bounds(self, model) -> dict[str, tuple[float, float]]:
-        """Search boxes: the model's, with the remnant gain's widened to the data's level.
-
-        Kn is in control units, so a fixed box cannot suit every control column (a
-        normalised aileron command of 0.03 RMS and a stick of 1 RMS). The upper bound is
-        raised, if needed, to what lets the remnant alone, open loop and as slow as
-        ``Tn = _REMNANT_TN_REF``, carry twice the measured control's RMS
-        (``Kn sqrt(dt / (2 Tn))`` is the RMS of sampled white noise through
-        ``Kn / (Tn s + 1)``): the closed loop only lowers it, so any remnant share of the
-        control up to the whole of it stays inside the box.
-        """
-        out = dict(model.bounds())
-        if "Kn" in out:
-            lo, hi = out["Kn"]
-            need = 2.0 * float(np.std(self.run.control)) * math.sqrt(2.0 * _REMNANT_TN_REF / self.run.dt)
-            out["Kn"] = (lo, max(hi, need))
-        return out
-
-    def free_parameters(self, model) -> tuple[str, ...]:
-        names = model.parameter_names()
-        missing = [p for p in self.cfg.free if p not in names]
-        if missing:
-            raise HesspipeError(f"diagnose: free parameter '{missing[0]}' is not a parameter of model "
-                                f"{model.name} (its parameters: {', '.join(names)})")
-        return tuple(self.cfg.free) + tuple(
-            p for e in model.effects for p in _effect(e).parameters if p not in self.cfg.free)
-
-    def fit(self, model, start: Mapping[str, float], grid: Sequence[str] = ()) -> _Fit:
-        """Least-squares fit of the free parameters of `model` on the log-spectral residual.
-
-        Starts: `start`, the effect switched off (:data:`_NULL`) and a grid over the
-        `grid` parameters; then bounded least squares from the best start. A point is
-        kept only if it lowers the sum of squares, so an augmented model is never worse
-        than the model it extends.
-        """
-        names = model.parameter_names()
-        bounds = self.bounds(model)
-        params = {**model.defaults(k=self.cfg.k), **{k: v for k, v in start.items() if k in names}}
-        free = self.free_parameters(model)
-        scale = _UnitScale([bounds[p] for p in free], [p not in self.cfg.free for p in free])
-        bad = np.full(2 * int(self.mask.sum()), _UNSTABLE_RESIDUAL)
-        count = [0]
-
-        def residual(values: Mapping[str, float], s2: float | None = None) -> np.ndarray:
-            count[0] += 1
-            out = self.residual(model, {**params, **values}, s2)
-            return bad if out is None else out[0]
-
-        def model_error_variance(values) -> float:
-            """The profiled s2 at `values`: the fixed weights of a least-squares run."""
-            out = self.residual(model, {**params, **values})
-            return self.resolution if out is None else out[2]
-
-        best_vals = {p: float(np.clip(params[p], bounds[p][0], bounds[p][1])) for p in free}
-        best_r = residual(best_vals)
-
-        def consider(vals):
-            nonlocal best_vals, best_r
-            r = residual(vals)
-            if float(r @ r) < float(best_r @ best_r):
-                best_vals, best_r = dict(vals), r
-
-        consider({**best_vals, **{p: v for p, v in _NULL.items() if p in free and p not in self.cfg.free}})
-        starts = [best_vals]
-        if grid:
-            # Least squares alone stalls on the periodic stretches of a delay, the
-            # narrow valley of a resonance or the several valleys of Ke and K1. The
-            # `grid` parameters are gridded over their box jointly with the core gains
-            # (at their start values and at quarter points of their box: an added effect
-            # often moves the gains far, e.g. a delay against a gain stuck at its
-            # bound); least squares over all free parameters then runs from the best few.
-            base_u = scale.to_unit([best_vals[p] for p in free])
-            n_new = max(len([p for p in grid if p not in self.cfg.free]), 1)
-            levels = self.cfg.grid if n_new == 1 else max(3, self.cfg.grid // n_new)
-            axes = []
-            for i, p in enumerate(free):
-                if p in grid:
-                    axes.append((np.arange(levels) + 0.5) / levels)
-                elif p in self.cfg.free:
-                    axes.append(np.unique([base_u[i], *self.cfg.gain_levels]))
-                else:
-                    axes.append(np.array([base_u[i]]))
-            ranked = []
-            for point in np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, len(free)):
-                vals = dict(zip(free, scale.from_unit(point)))
-                r = residual(vals)
-                ranked.append((float(r @ r), vals))
-                if float(r @ r) < float(best_r @ best_r):
-                    best_vals, best_r = vals, r
-            ranked.sort(key=lambda sv: sv[0])
-            starts = [best_vals] + [v for _, v in ranked[:self.cfg.starts] if v is not best_vals]
-        for start_vals in (starts if free else []):
-            u0 = scale.to_unit([start_vals[p] for p in free])
-            s2 = model_error_variance(start_vals)
-            sol = scipy.optimize.least_squares(lambda u: residual(dict(zip(free, scale.from_unit(u))), s2),
-                                               u0, bounds=(0.0, 1.0), diff_step=1e-2,
-                                               max_nfev=self.cfg.max_evaluations, method="trf")
-            consider(dict(zip(free, scale.from_unit(sol.x))))
-        final = {**params, **best_vals}
-        out = self.residual(model, final)
-        p = None if out is None else out[1]
-        if p is None:
-            nan = np.full_like(self.measured, np.nan)
-            return _Fit(model, final, free, nan, bad[:bad.size // 2], count[0] + 1, False, math.inf)
-        return _Fit(model, final, free, p, self.log_residual(p), count[0] + 1, True, float(best_r @ best_r))
-
-    # scoring and reporting ---------------------------------------------------------------
-    def variance(self, fit: _Fit) -> float:
+    def variance(self, fit) -> float:
         """Residual variance, floored at the resolution (see the module docstring)."""
         return max(fit.variance, self.resolution)
 
@@ -436,11 +194,6 @@ class _Problem:
 
     def gap(self, psd: np.ndarray) -> float:
         return _eq10(self.measured, psd, self.freq, self.cfg.band_hz)
-
-
-#: Parameter values that switch an effect off (the augmented model then equals the
-#: model it extends). Effects not listed start from their defaults only.
-_NULL = {"Km": 0.0, "Ko": 0.0, "tau_x": 0.0, "Kn": 0.0, "r_dr": 1.0}
 
 
 def _profile_variance(e2: np.ndarray, a: np.ndarray, floor: float, iterations: int = 30) -> float:
@@ -458,37 +211,3 @@ def _profile_variance(e2: np.ndarray, a: np.ndarray, floor: float, iterations: i
             break
         s2 = new
     return s2
-
-
-def _effect(effect_id: str):
-
-    return get_effect(effect_id)
-
-
-class _UnitScale:
-    """Map parameter boxes to the unit cube for the optimizer.
-
-    Parameters flagged `log` (effect parameters with a box starting at or above zero)
-    are mapped logarithmically over three decades below the upper bound (or from the
-    lower bound if higher): a delay, a remnant gain or a damping ratio matters in
-    ratios, and 0.01 must be as reachable as 1. Values below that range sit at the
-    cube's edge. The others (the pilot gains) are mapped linearly.
-    """
-
-    def __init__(self, boxes, log):
-        lo = np.array([b[0] for b in boxes], dtype=float)
-        hi = np.array([b[1] for b in boxes], dtype=float)
-        self.log = np.asarray(log, dtype=bool) & (lo >= 0) & (hi > 0)
-        lo_log = np.log(np.maximum(np.maximum(lo, hi * 1e-3), 1e-300))
-        self.lo = np.where(self.log, lo_log, lo)
-        self.hi = np.where(self.log, np.log(np.maximum(hi, 1e-300)), hi)
-        self.span = np.where(self.hi > self.lo, self.hi - self.lo, 1.0)
-
-    def to_unit(self, x) -> np.ndarray:
-        x = np.asarray(x, dtype=float)
-        y = np.where(self.log, np.log(np.maximum(x, 1e-300)), x)
-        return np.clip((y - self.lo) / self.span, 0.0, 1.0)
-
-    def from_unit(self, u) -> list[float]:
-        y = self.lo + np.clip(np.asarray(u, dtype=float), 0.0, 1.0) * self.span
-        return [float(v) for v in np.where(self.log, np.exp(y), y)]

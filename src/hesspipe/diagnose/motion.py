@@ -167,13 +167,13 @@ def motion_step(ev: DFEvidence, problem, current, cfg):
         km = v.Km if math.isfinite(v.Km) and v.Km > 0 else 1e-3
         fit = problem.fit(aug, {**current.parameters, "Km": km}, grid=("Km",))
     fitted = bool(fit is not None and fit.stable)
-    gap = problem.gap(fit.psd) if fitted else float("nan")
+    gap = problem.likelihood.gap(fit.psd) if fitted else float("nan")
     # The describing function decides, not the control spectrum: before the remnant is
     # named the spectrum of a right vestibular path can fit worse than the baseline's.
     step = Step(round=0, candidate="motion_feedback", model=aug.name, status="ok",
                 accepted=v.named, statistic=v.statistic, dof=1, p_value=v.p_value,
                 threshold=cfg.motion_alpha, delta_bic=float("nan"), gap=gap, gap_ok=True,
-                log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
+                log_rms_db=problem.likelihood.log_rms_db(fit.psd) if fitted else float("nan"),
                 # Km as the describing function sees it: the control spectrum barely does.
                 parameters={"Km": v.Km, "Km_se": v.Km_se},
                 evaluations=fit.evaluations if fit is not None else 0)
@@ -194,8 +194,8 @@ def delay_step(ev: DFEvidence, problem, current, cfg):
     fitted = bool(fit is not None and fit.stable)
     step = Step(round=0, candidate="extra_delay", model=aug.name, status="ok", accepted=d["named"],
                 statistic=d["z"], dof=1, p_value=d["p_value"], threshold=d["alpha"],
-                delta_bic=float("nan"), gap=problem.gap(fit.psd) if fitted else float("nan"),
-                gap_ok=True, log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
+                delta_bic=float("nan"), gap=problem.likelihood.gap(fit.psd) if fitted else float("nan"),
+                gap_ok=True, log_rms_db=problem.likelihood.log_rms_db(fit.psd) if fitted else float("nan"),
                 parameters=fit.parameters if fitted else {"tau_x": d["extra_s"]},
                 evaluations=fit.evaluations if fit is not None else 0)
     return step, (fit if fitted else None)
@@ -212,8 +212,8 @@ def remnant_step(ev: DFEvidence, problem, current, cfg):
     fitted = bool(fit is not None and fit.stable)
     step = Step(round=0, candidate="remnant", model=aug.name, status="ok", accepted=r["named"],
                 statistic=r["share"], dof=2, p_value=float("nan"), threshold=r["threshold"],
-                delta_bic=float("nan"), gap=problem.gap(fit.psd) if fitted else float("nan"),
-                gap_ok=True, log_rms_db=problem.log_rms_db(fit.psd) if fitted else float("nan"),
+                delta_bic=float("nan"), gap=problem.likelihood.gap(fit.psd) if fitted else float("nan"),
+                gap_ok=True, log_rms_db=problem.likelihood.log_rms_db(fit.psd) if fitted else float("nan"),
                 parameters=fit.parameters if fitted else {},
                 evaluations=fit.evaluations if fit is not None else 0)
     return step, (fit if fitted else None)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..core.errors import HesspipeError
-from .likelihood import _effect
+from .fitting import _effect
 from .results import Diagnosis
 
 # -- readable report ------------------------------------------------------------------------

@@ -53,7 +53,7 @@ from ..pilot.hess import PilotModel, model_from_name
 from ..plants.validation import residual_tests
 from .aircraft import corrected, plant_finding
 from .checks import PlantCheck, plant_check
-from .likelihood import _effect, _Fit, _Problem
+from .fitting import Problem, _effect, _Fit
 from .motion import delay_step, df_evidence, motion_step, remnant_step
 from .results import Diagnosis, Step
 from .settings import DiagnoseConfig
@@ -97,15 +97,15 @@ def _veto(step: "Step", gap_now: float, check: PlantCheck) -> str:
     return ""
 
 
-def _control_error_tests(problem: _Problem, fit: _Fit) -> dict | None:
+def _control_error_tests(problem: Problem, fit: _Fit) -> dict | None:
     """Residual tests on the time-domain control error ``measured - model`` (the model
     driven by the measured disturbance), for deterministic models only: with a remnant
     the error is coloured by design. Whiteness: Ljung-Box of
     :func:`hesspipe.plants.validation.residual_tests`, with its (prewhitened) independence of the
     disturbance. 99 % level."""
-    if not fit.stable or problem.stochastic(fit.model, fit.parameters):
+    if not fit.stable or problem.spectrum.stochastic(fit.model, fit.parameters):
         return None
-    err = problem.run.control - problem.control(fit.model, fit.parameters)
+    err = problem.run.control - problem.spectrum.control(fit.model, fit.parameters)
     tests = residual_tests(err, problem.run.disturbance, max_lag=problem.cfg.max_lag)
     p_ind = tests.independence_p
     return {"whiteness_p": tests.whiteness_p, "white": tests.white, "independence_p": p_ind,
@@ -179,11 +179,11 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     if finding.verdict == "aircraft":
         # "Before" is the pilot identified around the plants as given (same measured
         # spectrum), so the report shows what naming the aircraft effect closed.
-        before = _Problem(run, plants, cfg, seed)
+        before = Problem(run, plants, cfg, seed)
         before = (before, before.fit(base, base.defaults(k=cfg.k), grid=before.free_parameters(base)))
     run, plants = corrected(run, plants, finding)
     cands = tuple(c for c in cands if _effect(c).where != "aircraft")  # judged on the output above
-    problem = _Problem(run, plants, cfg, seed)
+    problem = Problem(run, plants, cfg, seed)
 
     # Multisine lines: the describing function judges motion and delay and gives the
     # pilot's own dynamics (phase-aware); the baseline starts from them.
@@ -241,17 +241,17 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
                                    error=f"{type(exc).__name__}: {exc}".splitlines()[0]), None))
                 continue
             dof = len(fit.free) - len(current.free)
-            stat = (current.nll - fit.nll) / problem.enbw
+            stat = (current.nll - fit.nll) / problem.likelihood.enbw
             tried.append((Step(round=rnd, candidate=cand, model=aug.name, status="ok", statistic=stat,
                                dof=dof, p_value=float(scipy.stats.chi2.sf(stat, max(dof, 1))),
-                               delta_bic=stat - dof * math.log(problem.n_eff), gap=problem.gap(fit.psd),
-                               log_rms_db=problem.log_rms_db(fit.psd), parameters=fit.parameters,
+                               delta_bic=stat - dof * math.log(problem.likelihood.n_eff), gap=problem.likelihood.gap(fit.psd),
+                               log_rms_db=problem.likelihood.log_rms_db(fit.psd), parameters=fit.parameters,
                                evaluations=fit.evaluations), fit))
         ok = [(s, f) for s, f in tried if s.status == "ok"]
         threshold = cfg.alpha / max(len(ok), 1)
         # The Eq. 10 gap a candidate may not exceed: the current model's (see the module
         # docstring, "Two measures").
-        gap_now = problem.gap(current.psd)
+        gap_now = problem.likelihood.gap(current.psd)
         tried = [(replace(s, threshold=threshold, gap_ok=bool(s.gap <= gap_now),
                           veto=_veto(s, gap_now, check)) if s.status == "ok" else s, f)
                  for s, f in tried]
@@ -269,14 +269,14 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
 
     # Band verdicts are relative to the scatter the final model leaves (or the resolution):
     # a band disagrees if its mismatch is beyond what the rest of the record shows.
-    scatter = problem.variance(current)
+    scatter = problem.likelihood.variance(current)
     p0, baseline = (problem, baseline) if before is None or not before[1].stable else before
     return Diagnosis(
         run_id=run.id, synthetic=run.synthetic, baseline_model=base.name, final_model=current.model.name,
-        named_effects=tuple(named), gap_before=p0.gap(baseline.psd), gap_after=problem.gap(current.psd),
-        log_rms_db_before=p0.log_rms_db(baseline.psd), log_rms_db_after=problem.log_rms_db(current.psd),
+        named_effects=tuple(named), gap_before=p0.likelihood.gap(baseline.psd), gap_after=problem.likelihood.gap(current.psd),
+        log_rms_db_before=p0.likelihood.log_rms_db(baseline.psd), log_rms_db_after=problem.likelihood.log_rms_db(current.psd),
         parameters_before=baseline.parameters, parameters_after=current.parameters, steps=tuple(steps),
-        bands_before=p0.bands(baseline.psd, scatter), bands_after=problem.bands(current.psd, scatter),
+        bands_before=p0.likelihood.bands(baseline.psd, scatter), bands_after=problem.likelihood.bands(current.psd, scatter),
         plant_check=check, control_error_before=_control_error_tests(p0, baseline),
         control_error_after=_control_error_tests(problem, current),
         criterion={"name": "likelihood-ratio test on log-spectral residuals over Welch bins "
@@ -287,11 +287,11 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
                                     "(hesspipe.diagnose.aircraft), not on the control spectrum",
                    "motion_feedback": "judged first on the describing function's shape "
                                       "(hesspipe.diagnose.motion)",
-                   "alpha": cfg.alpha, "n_bins": int(problem.mask.sum()), "n_eff": problem.n_eff,
-                   "enbw_bins": problem.enbw, "welch_dof": problem.nu, "resolution_db": cfg.resolution_db,
+                   "alpha": cfg.alpha, "n_bins": int(problem.likelihood.mask.sum()), "n_eff": problem.likelihood.n_eff,
+                   "enbw_bins": problem.likelihood.enbw, "welch_dof": problem.likelihood.nu, "resolution_db": cfg.resolution_db,
                    "scatter_db": _DB * math.sqrt(scatter),
-                   "welch_scatter_db": _DB * math.sqrt(problem.var_floor)},
-        config=cfg, freq_hz=problem.freq, measured_psd=problem.measured, baseline_psd=baseline.psd,
+                   "welch_scatter_db": _DB * math.sqrt(problem.likelihood.var_floor)},
+        config=cfg, freq_hz=problem.likelihood.freq, measured_psd=problem.likelihood.measured, baseline_psd=baseline.psd,
         final_psd=current.psd, seed=seed, source=run.source, plant_finding=finding.to_dict(),
         motion_verdict=None if ev is None else ev.motion.to_dict(),
         delay_verdict=None if ev is None else ev.delay,

@@ -260,8 +260,7 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
     obj = SpectralObjective(run, plants, model, complete, band=band)
     loop = obj.sim.prepare(model.loop(complete))
     sim_psd = obj.loop_psd(loop)
-    fit = (float(np.sqrt(np.mean((obj.measured[obj.mask] - sim_psd[obj.mask]) ** 2)))
-           if sim_psd is not None else obj.unstable_fitness(loop))  # finite, never NaN
+    fit = obj.psd_fitness(sim_psd) if sim_psd is not None else obj.unstable_fitness(loop)  # never NaN
     bench_fit, bench_par = math.nan, {}
     if benchmark:
         bench = mcruer_benchmark(run, plants, band=band)

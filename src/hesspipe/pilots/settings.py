@@ -15,6 +15,7 @@ from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
 from ..core.formats import _parse_columns, record_samples
+from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import MAX_SEED
 from ..pilot.effects import EFFECTS
 
@@ -23,7 +24,7 @@ CONFIGURATIONS = ("original", "expanded_fixed", "expanded")
 #: Where the expanded search starts (see :class:`CompareSettings`).
 STARTS = ("warm", "random")
 #: Fewest samples a run needs: one Welch segment of the paper's spectra (Eq. 9 pads the rest).
-MIN_SAMPLES = 1024  # = hesspipe.identification.spectra.PaperWelch().nperseg; checked in tests
+MIN_SAMPLES = WELCH_SEGMENT  # one segment of the paper's Welch estimate
 #: How the pipeline's synthetic cohort is simulated (``[pilots] simulator``).
 SIMULATORS = ("jsbsim", "fft")
 #: How a cohort's pilots are drawn (``[pilots] cohort``, :func:`hesspipe.pilots.cohort.cohort_spec`):
