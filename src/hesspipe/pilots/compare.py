@@ -78,6 +78,10 @@ class PilotComparison:
         Frequency bins (Hz) and the measured control PSD.
     simulated_psd : dict
         Configuration name → simulated control PSD on `freq_hz`.
+    frf : object
+        The run's describing function used by the identification (None if none).
+    motion_test : dict
+        The per-pilot motion test (:func:`hesspipe.identification.motion_test.safe_motion_test`).
     """
 
     id: str
@@ -94,12 +98,30 @@ class PilotComparison:
     motion_test: dict = field(default_factory=dict)   # hesspipe.pilots.verdict.motion_test
 
     def configuration(self, name: str) -> dict:
-        """The result of configuration `name` (one of :data:`CONFIGURATIONS`)."""
+        """The result of configuration `name` (one of :data:`CONFIGURATIONS`).
+
+        Parameters
+        ----------
+        name : str
+            "original", "expanded_fixed" or "expanded".
+
+        Raises
+        ------
+        HesspipeError
+            For an unknown `name`.
+        """
         if name not in CONFIGURATIONS:
             raise HesspipeError(f"unknown configuration {name!r}; expected one of {', '.join(CONFIGURATIONS)}")
         return getattr(self, name)
 
     def to_dict(self, *, psd: bool = True) -> dict:
+        """The pilot's results as a JSON-ready dict.
+
+        Parameters
+        ----------
+        psd : bool
+            Include the measured and simulated control PSDs (control units^2/Hz).
+        """
         out = {"id": self.id, "source": self.source, "synthetic": self.synthetic}
         for name in CONFIGURATIONS:
             out[name] = self.configuration(name)
@@ -113,13 +135,24 @@ class PilotComparison:
 
 @dataclass(frozen=True)
 class PilotFailure:
-    """A run that could not be read or identified."""
+    """A run that could not be read or identified.
+
+    Attributes
+    ----------
+    id : str
+        Pilot id (file stem).
+    source : str
+        The file.
+    error : str
+        Why it failed, one line.
+    """
 
     id: str
     source: str
     error: str
 
     def to_dict(self) -> dict:
+        """The failure as a JSON-ready dict."""
         return {"id": self.id, "source": self.source, "error": self.error}
 
 
@@ -155,6 +188,7 @@ class Comparison:
 
     @property
     def improvements(self) -> np.ndarray:
+        """Each pilot's improvement (``1 - expanded / original`` fitness), in pilot order."""
         return np.array([p.improvement for p in self.pilots], dtype=float)
 
     def improvement_stats(self) -> dict:
@@ -168,6 +202,7 @@ class Comparison:
 
     @property
     def mean_improvement(self) -> float:
+        """Mean improvement over the pilots, NaNs excluded (NaN if none)."""
         return self.improvement_stats()["mean"]
 
     def verdict(self) -> dict:
@@ -176,6 +211,13 @@ class Comparison:
         return cohort_verdict({p.id: p.motion_test for p in self.pilots})
 
     def to_dict(self, *, psd: bool = True) -> dict:
+        """The comparison as a JSON-ready dict (the content of ``comparison.json``).
+
+        Parameters
+        ----------
+        psd : bool
+            Include each pilot's measured and simulated control PSDs.
+        """
         stats = self.improvement_stats()
         n_synth = sum(p.synthetic for p in self.pilots)
         return {
@@ -242,6 +284,27 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
 
     Returns a dict with the keys of ``Identification.to_dict(spectra=False)``
     that apply (``free`` empty, ``evaluations`` 1) plus ``simulated_psd``.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The run.
+    plants : hesspipe.core.formats.Plants
+        Yc and Yd.
+    model : hesspipe.pilot.hess.PilotModel or str
+        The model or its name.
+    params : mapping of str to float
+        Its parameters (completed strictly for order `k`).
+    band : (float, float)
+        Frequency band of the fitness, Hz.
+    k : int
+        Hess model order.
+    benchmark : bool
+        Also fit the McRuer benchmark (its fitness otherwise NaN).
+    criterion : {"paper", "df", "output"}
+        As in :func:`hesspipe.identification.fit.identify`.
+    frf : hesspipe.identification.frf.Frf, optional
+        The run's describing function, for the "df" criterion.
     """
 
     model = model_from_name(model)
@@ -448,6 +511,16 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
     """The run files of a folder (``*.csv``, sorted) or of an explicit list.
 
     ``*.truth.json`` and other non-CSV files beside the runs are ignored.
+
+    Parameters
+    ----------
+    paths_or_dir : path or iterable of paths
+        A folder, one CSV file, or a list of files (taken as given).
+
+    Raises
+    ------
+    HesspipeError
+        A folder without CSV files, a path that does not exist, or an empty list.
     """
     if isinstance(paths_or_dir, (str, Path)):
         path = Path(paths_or_dir)
@@ -467,7 +540,24 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
 
 def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
               min_samples: int = MIN_SAMPLES) -> tuple[list[Run], list[PilotFailure]]:
-    """Read every file; a bad file becomes a :class:`PilotFailure`, not an exception."""
+    """Read every file; a bad file becomes a :class:`PilotFailure`, not an exception.
+
+    A second file with a pilot id already read is a failure too.
+
+    Parameters
+    ----------
+    paths : sequence of Path
+        The run files.
+    columns, resample, min_samples
+        Passed to :func:`hesspipe.core.formats.read_run`.
+
+    Returns
+    -------
+    runs : list of Run
+        The runs read, in file order.
+    failures : list of PilotFailure
+        The files that could not be read.
+    """
     runs, failures = [], []
     seen: dict[str, Path] = {}
     for path in paths:
@@ -556,6 +646,21 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
     ``comparison.md`` and ``figures/<pilot>.png`` are written. Failed pilots
     are listed in the outputs; the caller decides whether ``not result.ok``
     fails the stage. `draw` is :func:`write_comparison`'s, used when ``config.figures``.
+
+    Parameters
+    ----------
+    config : PilotsConfig
+        The ``[pilots]`` settings.
+    plants : hesspipe.core.formats.Plants
+        Yc and Yd.
+    out_dir : str or Path
+        Output folder.
+    seed : int
+        Base seed, used when ``config`` sets none.
+    progress : bool, optional
+        Progress bar (default: only on a terminal).
+    draw : callable, optional
+        Figure writer of :func:`hesspipe.pilots.report.write_comparison`.
     """
 
     out_dir = Path(out_dir)
