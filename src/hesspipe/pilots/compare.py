@@ -78,10 +78,8 @@ class PilotComparison:
         Frequency bins (Hz) and the measured control PSD.
     simulated_psd : dict
         Configuration name → simulated control PSD on `freq_hz`.
-    frf : object
-        The run's describing function used by the identification (None if none).
-    motion_test : dict
-        The per-pilot motion test (:func:`hesspipe.identification.motion_test.safe_motion_test`).
+    frf, motion_test : object, dict
+        The run's describing function (None if none) and the per-pilot motion test.
     """
 
     id: str
@@ -103,12 +101,7 @@ class PilotComparison:
         Parameters
         ----------
         name : str
-            "original", "expanded_fixed" or "expanded".
-
-        Raises
-        ------
-        HesspipeError
-            For an unknown `name`.
+            "original", "expanded_fixed" or "expanded" (else HesspipeError).
         """
         if name not in CONFIGURATIONS:
             raise HesspipeError(f"unknown configuration {name!r}; expected one of {', '.join(CONFIGURATIONS)}")
@@ -139,12 +132,8 @@ class PilotFailure:
 
     Attributes
     ----------
-    id : str
-        Pilot id (file stem).
-    source : str
-        The file.
-    error : str
-        Why it failed, one line.
+    id, source, error : str
+        Pilot id (file stem), the file, and why it failed (one line).
     """
 
     id: str
@@ -287,24 +276,18 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
 
     Parameters
     ----------
-    run : hesspipe.core.formats.Run
-        The run.
-    plants : hesspipe.core.formats.Plants
-        Yc and Yd.
-    model : hesspipe.pilot.hess.PilotModel or str
-        The model or its name.
-    params : mapping of str to float
-        Its parameters (completed strictly for order `k`).
+    run, plants : Run, Plants
+        The run; Yc and Yd.
+    model, params : PilotModel or str, mapping of str to float
+        The model (or its name) and its parameters (completed strictly for order `k`).
     band : (float, float)
         Frequency band of the fitness, Hz.
     k : int
         Hess model order.
     benchmark : bool
         Also fit the McRuer benchmark (its fitness otherwise NaN).
-    criterion : {"paper", "df", "output"}
-        As in :func:`hesspipe.identification.fit.identify`.
-    frf : hesspipe.identification.frf.Frf, optional
-        The run's describing function, for the "df" criterion.
+    criterion, frf
+        As in :func:`hesspipe.identification.fit.identify` ("paper", "df" or "output").
     """
 
     model = model_from_name(model)
@@ -515,12 +498,8 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
     Parameters
     ----------
     paths_or_dir : path or iterable of paths
-        A folder, one CSV file, or a list of files (taken as given).
-
-    Raises
-    ------
-    HesspipeError
-        A folder without CSV files, a path that does not exist, or an empty list.
+        A folder, one CSV file, or a list of files (taken as given); an empty folder or
+        list, or a missing path, raises HesspipeError.
     """
     if isinstance(paths_or_dir, (str, Path)):
         path = Path(paths_or_dir)
@@ -542,7 +521,7 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
               min_samples: int = MIN_SAMPLES) -> tuple[list[Run], list[PilotFailure]]:
     """Read every file; a bad file becomes a :class:`PilotFailure`, not an exception.
 
-    A second file with a pilot id already read is a failure too.
+    Returns ``(runs, failures)`` in file order; a repeated pilot id is a failure too.
 
     Parameters
     ----------
@@ -550,13 +529,6 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
         The run files.
     columns, resample, min_samples
         Passed to :func:`hesspipe.core.formats.read_run`.
-
-    Returns
-    -------
-    runs : list of Run
-        The runs read, in file order.
-    failures : list of PilotFailure
-        The files that could not be read.
     """
     runs, failures = [], []
     seen: dict[str, Path] = {}
@@ -649,18 +621,14 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
 
     Parameters
     ----------
-    config : PilotsConfig
-        The ``[pilots]`` settings.
-    plants : hesspipe.core.formats.Plants
-        Yc and Yd.
+    config, plants : PilotsConfig, Plants
+        The ``[pilots]`` settings; Yc and Yd.
     out_dir : str or Path
         Output folder.
     seed : int
         Base seed, used when ``config`` sets none.
-    progress : bool, optional
-        Progress bar (default: only on a terminal).
-    draw : callable, optional
-        Figure writer of :func:`hesspipe.pilots.report.write_comparison`.
+    progress, draw
+        Progress bar (default: only on a terminal); figure writer (see above).
     """
 
     out_dir = Path(out_dir)
