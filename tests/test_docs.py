@@ -22,13 +22,11 @@ import hesspipe
 PACKAGE = Path(hesspipe.__file__).parent
 
 #: Folders (all their modules) and single modules (path relative to the package).
-COVERED = ("core", "pilot", "plants/arx.py", "plants/d2c.py", "plants/slow_roots.py",
-           "plants/analytic.py", "plants/fit.py", "identification", "flight/aircraft.py",
-           "flight/wind.py", "flight/approach.py", "pilots/batch.py", "pilots/report.py",
-           "pilots/settings.py", "plants/report.py", "pipeline/engine.py", "pipeline/stages.py", "pipeline/report.py",
-           "viz", "humanlike")
+#: Everything but ``cli``: the command-line layer is documented by its argparse help.
+COVERED = ("core", "pilot", "flight", "plants", "identification", "pilots", "diagnose",
+           "pipeline", "viz", "humanlike")
 #: Left out for now (being rewritten elsewhere); the lead extends COVERED to them later.
-EXCLUDED = ()
+EXCLUDED = ("diagnose/motion.py",)
 
 
 def _files() -> list[Path]:

@@ -55,7 +55,24 @@ SCALE_RATIO = 3.0
 @dataclass(frozen=True)
 class Explanation:
     """One refit of the plant check: ``kind`` "aircraft" or "file"; ``fit_percent`` of the
-    output; ``parameters`` fitted; ``how`` one line saying what was changed."""
+    output; ``parameters`` fitted; ``how`` one line saying what was changed.
+
+    Attributes
+    ----------
+    id : str
+        Candidate name: an aircraft candidate ("dutch_roll", "roll_mode", "actuator_lag",
+        "rate_limit"), "nominal" for the reference refit, or a file verdict such as
+        "swapped", "sign", "scale" (joined by "+") or "gains".
+    kind : str
+        "aircraft", "file" or "reference" (the nominal plants, refitted).
+    fit_percent : float
+        Fit of the output, percent (:func:`hesspipe.plants.validation.fit_percent`; 100
+        is perfect, may be negative).
+    parameters : dict
+        The fitted parameters of the candidate.
+    how : str
+        One line saying what was changed.
+    """
 
     id: str
     kind: str
@@ -64,6 +81,7 @@ class Explanation:
     how: str
 
     def to_dict(self) -> dict:
+        """The explanation as a JSON-ready dict (the attributes by name)."""
         return {"id": self.id, "kind": self.kind, "fit_percent": self.fit_percent,
                 "parameters": self.parameters, "how": self.how}
 
@@ -72,7 +90,23 @@ class Explanation:
 class PlantFinding:
     """Verdict on the plants: ``verdict`` is "match" (the check passes), "aircraft" (an
     aircraft-side candidate closes the gap: ``named``), "wrong_file" (sign, scale or swapped
-    columns: ``named`` says which) or "unexplained"; ``message`` says it in words."""
+    columns: ``named`` says which) or "unexplained"; ``message`` says it in words.
+
+    Attributes
+    ----------
+    verdict : str
+        "match", "aircraft", "wrong_file" or "unexplained".
+    fit_percent : float
+        Fit (percent) of the plant check with the nominal plants.
+    named : str or None
+        The candidate that closes the gap (an :attr:`Explanation.id`), None if none.
+    parameters : dict
+        That candidate's fitted parameters (empty if none).
+    explanations : tuple of Explanation
+        The refits tried, best fit first (empty, or the nominal refit alone, for a match).
+    message : str
+        The finding in words.
+    """
 
     verdict: str
     fit_percent: float
@@ -82,6 +116,7 @@ class PlantFinding:
     message: str = ""
 
     def to_dict(self) -> dict:
+        """The finding as a JSON-ready dict, explanations included."""
         return {"verdict": self.verdict, "fit_percent": self.fit_percent, "named": self.named,
                 "parameters": self.parameters, "message": self.message,
                 "explanations": [e.to_dict() for e in self.explanations]}
@@ -366,7 +401,22 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
 def corrected(run, plants, finding: PlantFinding):
     """(run, plants) with the finding applied, for the pilot's identification: the fitted
     aircraft factor in both paths (``rate_limit`` has no linear form: plants unchanged),
-    or the columns and path gains of a wrong-file verdict."""
+    or the columns and path gains of a wrong-file verdict.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run.
+    plants : hesspipe.core.formats.Plants
+        The plants the finding was made against.
+    finding : PlantFinding
+        The verdict; "match" and "unexplained" leave `run` and `plants` unchanged.
+
+    Returns
+    -------
+    tuple of (Run, Plants)
+        The corrected run and plants (new objects; the inputs are not modified).
+    """
 
 
 

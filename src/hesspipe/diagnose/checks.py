@@ -22,6 +22,16 @@ class PlantCheck:
     ``tests_control`` / ``tests_disturbance`` are :func:`hesspipe.plants.validation.residual_tests`
     (whiteness, correlations and bounds; independence with the input prewhitened);
     ``passes`` uses their independence p-values (99 % level).
+
+    Attributes
+    ----------
+    fit_percent : float
+        Fit of the measured output, percent (100 is perfect, may be negative).
+    residual_rms : float
+        RMS of the output residual (measured minus simulated), in output units (roll
+        rate, rad/s).
+    tests_control, tests_disturbance : hesspipe.plants.validation.ResidualTests
+        Residual tests against the measured control and disturbance.
     """
 
     fit_percent: float
@@ -31,14 +41,17 @@ class PlantCheck:
 
     @property
     def independence_p(self) -> dict:
+        """Independence-test p-values of the residual, keyed "control" and "disturbance"."""
         return {"control": self.tests_control.independence_p,
                 "disturbance": self.tests_disturbance.independence_p}
 
     @property
     def passes(self) -> bool:
+        """True if both independence p-values are at least 0.01."""
         return all(p >= 0.01 for p in self.independence_p.values())
 
     def to_dict(self) -> dict:
+        """The check as a JSON-ready dict, ``passes`` and the test results included."""
         return {"fit_percent": self.fit_percent, "residual_rms": self.residual_rms,
                 "passes": self.passes, "independence_p": self.independence_p,
                 "tests_control": self.tests_control.to_dict(),
@@ -56,6 +69,25 @@ def forced_response(sys, u: np.ndarray, dt: float, *, pad_factor: int = 4,
     plant pole slower than the padding (a fitted near-integrator at -1e-5 1/s) does not
     wrap around. A plant with poles growing faster than ``sigma0`` falls back to
     python-control's time-domain solver.
+
+    Parameters
+    ----------
+    sys : control.TransferFunction
+        Continuous-time transfer function (time in s).
+    u : ndarray
+        Input samples, uniform step `dt`, in the input units of `sys`.
+    dt : float
+        Sample step, s.
+    pad_factor : int
+        Zero-padding of the FFT grid, multiples of the record length.
+    decays : float
+        How many e-folds the weight ``exp(-sigma0 t)`` falls over the padded FFT (see
+        :meth:`hesspipe.pilot.simulation.Contour.for_record`).
+
+    Returns
+    -------
+    ndarray
+        Output samples, same length as `u`, in the output units of `sys`.
     """
 
 
@@ -75,6 +107,18 @@ def plant_check(run: Run, plants: Plants, *, max_lag: int = 25, edge_s: float = 
     The first and last `edge_s` seconds are left out of the fit and the tests: the
     zero-initial-state start and the record's end (where a band-limited simulation
     rings) are not the plants' fault.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        Measured run: control, disturbance (lateral wind, ft/s) and output (roll rate,
+        rad/s).
+    plants : hesspipe.core.formats.Plants
+        ``control_to_output`` (Yc) and ``disturbance_to_output`` (Yd).
+    max_lag : int
+        Largest lag (samples) of the residual correlation tests.
+    edge_s : float
+        Time left out at each end, s (at most a tenth of the record).
     """
     y_sim = (forced_response(plants.control_to_output, run.control, run.dt)
              + forced_response(plants.disturbance_to_output, run.disturbance, run.dt))

@@ -39,7 +39,26 @@ def validation_plants() -> Plants:
 def validation_disturbance(n: int, dt: float, *, seed: int, rms: float = 5.0,
                            corner_hz: float = 2.0) -> np.ndarray:
     """Lateral wind for validation runs: white noise low-passed (4th-order Butterworth at
-    `corner_hz`) and scaled to `rms` ft/s."""
+    `corner_hz`) and scaled to `rms` ft/s.
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    dt : float
+        Sample step, s.
+    seed : int
+        Seed of the white noise.
+    rms : float
+        RMS of the returned wind, ft/s.
+    corner_hz : float
+        Low-pass corner, Hz.
+
+    Returns
+    -------
+    ndarray
+        `n` samples of lateral wind, ft/s (SYNTHETIC).
+    """
     rng = np.random.default_rng(seed)
     b, a = scipy.signal.butter(4, corner_hz, fs=1.0 / dt)
     w = scipy.signal.lfilter(b, a, rng.standard_normal(n + 500))[500:]
@@ -62,6 +81,38 @@ def hidden_effect_run(plants: Plants, effect: str | Sequence[str] | None = None,
     recorded control is, to a control spectrum, broadband control noise, i.e. a remnant
     with Tn = 0: large enough, it is rightly named ``remnant``.
     The run is labelled synthetic and its comments name the hidden effects.
+
+    Parameters
+    ----------
+    plants : hesspipe.core.formats.Plants
+        Plants the model flies (e.g. :func:`validation_plants`).
+    effect : str or sequence of str or None
+        Hidden effect id(s) of :meth:`hesspipe.pilot.hess.PilotModel.with_effect`; None
+        for the baseline model.
+    seed : int
+        Seed; the wind, remnant and sensor-noise seeds are derived from it.
+    parameters : mapping of str to float, optional
+        Model parameters overriding the defaults.
+    noise, control_noise : float
+        White recording noise on the output and on the control, fraction of each
+        signal's RMS (0: none).
+    duration : float
+        Run length, s.
+    dt : float
+        Sample step, s.
+    remnant_share : float, optional
+        Share in (0, 1) of the control variance made up by the remnant; needs
+        "remnant" among the effects.
+
+    Returns
+    -------
+    hesspipe.core.formats.Run
+        The synthetic run (lateral wind ft/s, roll rate rad/s).
+
+    Raises
+    ------
+    HesspipeError
+        If `remnant_share` is outside (0, 1) or the remnant is not among the effects.
     """
 
     effects = () if effect is None else (effect,) if isinstance(effect, str) else tuple(effect)

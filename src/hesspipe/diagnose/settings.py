@@ -139,7 +139,17 @@ class DiagnoseConfig(Settings):
     @classmethod
     def from_table(cls, table: Mapping | None, source: str = "<config>",
                    prefix: str = "diagnose") -> "DiagnoseConfig":
-        """Build from a ``[diagnose]`` TOML table; unknown keys and bad values raise."""
+        """Build from a ``[diagnose]`` TOML table; unknown keys and bad values raise.
+
+        Parameters
+        ----------
+        table : mapping or None
+            The ``[diagnose]`` table (None: all defaults).
+        source : str
+            The file it came from, named in error messages.
+        prefix : str
+            The table's name in error messages.
+        """
         return cls._from_fields(Fields(table, source, prefix))
 
 

@@ -36,6 +36,11 @@ def _eq10(measured: np.ndarray, model: np.ndarray, freq: np.ndarray, band) -> fl
 def welch_statistics(n_samples: int) -> tuple[float, float, float]:
     """Chance properties of the paper's Welch estimate of an `n_samples` record.
 
+    Parameters
+    ----------
+    n_samples : int
+        Samples in the record.
+
     Returns
     -------
     nu : float
@@ -66,6 +71,25 @@ class Band:
     ``p_value``: chance of a mismatch this large if the band's log residuals scattered
     like the reference variance (chi-square over the band's independent bins);
     ``disagrees``: ``p_value < alpha``.
+
+    Attributes
+    ----------
+    lo_hz, hi_hz : float
+        Band edges, Hz.
+    n_bins : int
+        PSD bins in the band (DC left out).
+    level_db : float
+        Mean of 10 log10(model/measured), dB; > 0 when the model has too much power.
+    rms_db : float
+        RMS of the same ratio, dB.
+    share : float
+        Fraction of the band set's squared log residual found in this band.
+    eq10_share : float
+        The same for the squared linear PSD difference of Eq. 10.
+    p_value : float
+        Chance of a mismatch this large (chi-square over the independent bins).
+    disagrees : bool
+        ``p_value < alpha``.
     """
 
     lo_hz: float
@@ -80,11 +104,14 @@ class Band:
 
     @property
     def direction(self) -> str:
+        """"wrong shape" when ``|level_db| < rms_db / 2``, else "too much power" or "too
+        little power" by the sign of ``level_db``."""
         if abs(self.level_db) < 0.5 * self.rms_db:
             return "wrong shape"
         return "too much power" if self.level_db > 0 else "too little power"
 
     def to_dict(self) -> dict:
+        """The band as a JSON-ready dict, ``direction`` included."""
         return {**asdict(self), "direction": self.direction}
 
 
@@ -178,6 +205,25 @@ def welch_kernel(n_samples: int, fs: float, freq_hz: np.ndarray, grid_hz: np.nda
     is near zero, so the loop does not oppose slow noise. A point value there is what
     the estimator never sees, and it wrecked the Eq. 10 gap (which includes DC) of every
     model with a remnant.
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples in the record.
+    fs : float
+        Sample rate, Hz.
+    freq_hz : ndarray
+        Frequencies of the Welch bins, Hz.
+    grid_hz : ndarray
+        Increasing grid (starting at 0) the density ``S`` is sampled on, Hz.
+    lattice : int
+        FFT length on which the window's squared transform is tabulated.
+
+    Returns
+    -------
+    ndarray
+        ``G``, shape ``(len(freq_hz), len(grid_hz))``; ``G @ S`` is in the units of
+        ``S`` (control units^2/Hz for a control spectrum).
     """
 
     est = PaperWelch()

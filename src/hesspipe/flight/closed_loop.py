@@ -113,6 +113,7 @@ class AircraftEffects:
 
     @property
     def actuator(self) -> bool:
+        """True if a hidden actuator (lag or rate limit) sits between the pilot and JSBSim."""
         return self.actuator_lag_s > 0 or self.rate_limit_per_s is not None
 
     def to_dict(self) -> dict:
@@ -155,7 +156,23 @@ class PilotFlight:
 def pilot_loop(model, params: Mapping[str, float], plants: Plants | None = None) -> Loop:
     """The loop of `model` with complete `params`, its vestibular feedback acting through
     the plants' ``motion_path`` (:func:`hesspipe.pilot.motion.with_motion_path`; absent: the
-    paper's platform × washout)."""
+    paper's platform × washout).
+
+    Parameters
+    ----------
+    model : hesspipe.pilot.hess.PilotModel
+        The pilot model (with its effects).
+    params : mapping of str to float
+        A complete parameter set of `model`.
+    plants : hesspipe.core.formats.Plants, optional
+        Plants whose ``motion_path`` (if any) replaces the paper's motion path; None
+        keeps the paper's.
+
+    Returns
+    -------
+    Loop
+        ``model.loop(params)``, its vestibular feedback through the plants' motion path.
+    """
     loop = model.loop(params)
     return loop if plants is None else with_motion_path(loop, motion_block(plants))
 

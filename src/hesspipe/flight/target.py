@@ -66,6 +66,27 @@ def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: floa
     Amplitudes are flat, or with `corner_hz` > 0 proportional to ``f / (f + corner_hz)``:
     a rate whose integral (the bank angle of a roll-rate target) stays bounded at the
     low lines.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times, s (the phases are referred to ``t[0]``).
+    k : sequence of int
+        Line numbers: line ``k`` has frequency ``k / period_s`` Hz.
+    period_s : float
+        Period of the multisine, s.
+    rms : float
+        Standard deviation of the returned signal, in the signal's units (rad/s for a
+        roll-rate target, ft/s for a wind).
+    seed : int
+        Seed of the random phases.
+    corner_hz : float
+        Amplitude corner, Hz (0: flat amplitudes).
+
+    Returns
+    -------
+    ndarray
+        The multisine at `t`.
     """
     t = np.asarray(t, dtype=float)
     f = np.asarray(k, dtype=float) / period_s

@@ -161,6 +161,11 @@ class CohortSpec:
         (spread 0.2, within 0.05-0.5 s): SPEC.md's typical identified values
         (crossover 1.5-4 rad/s, visual delay 0.2-0.3 s); kept only within the
         crossover-model limits (1-5 rad/s, 20-60 deg).
+
+        Parameters
+        ----------
+        **kw
+            Fields overriding these defaults.
         """
         return cls(**{"crossover_rad_s": (1.5, 4.0), "tau0_s": 0.2, "tau0_spread": 0.2, **kw})
 
@@ -209,7 +214,21 @@ class CohortSpec:
 
 
 def cohort_spec(draw: str = "crossover_model", **kw) -> CohortSpec:
-    """:class:`CohortSpec` of the named draw (:data:`COHORT_DRAWS`), other fields from `kw`."""
+    """:class:`CohortSpec` of the named draw (:data:`COHORT_DRAWS`), other fields from `kw`.
+
+    Parameters
+    ----------
+    draw : str
+        "crossover_model" (:meth:`CohortSpec.crossover_model`) or "table1" (the
+        :class:`CohortSpec` defaults).
+    **kw
+        Further :class:`CohortSpec` fields.
+
+    Raises
+    ------
+    HesspipeError
+        For an unknown `draw`.
+    """
     if draw == "crossover_model":
         return CohortSpec.crossover_model(**kw)
     if draw == "table1":
@@ -283,6 +302,18 @@ def hess_corner(plants, band=(1.0, 5.0)) -> float:
     that makes ``|(j w + 1/T1) Yc(j w)|`` flattest (least log variance) over
     `band`, within :data:`CORNER_RANGE`: Table 1's 0.01 for ``1/s``, the roll
     mode (about 1 rad/s) for the JSBSim 737's roll plant ``~ K/(s + 1)``.
+
+    Parameters
+    ----------
+    plants : hesspipe.core.formats.Plants or control.TransferFunction
+        The plants (their ``control_to_output`` is used) or Yc itself.
+    band : (float, float)
+        Frequency range of the rule, rad/s.
+
+    Returns
+    -------
+    float
+        1/T1, rad/s, on a log grid of :data:`CORNER_RANGE`.
     """
     yc = from_tf(getattr(plants, "control_to_output", plants))
     w = np.logspace(math.log10(band[0]), math.log10(band[1]), 40)
@@ -300,6 +331,28 @@ def draw_crossover_parameters(model, rng: np.random.Generator, spec: CohortSpec,
     ``Ke = 1 / |L(j wc)|`` of the same pilot with Ke = 1 puts |L| = 1 at the
     target ``wc``. The caller checks the crossover the report will compute
     (it may find another crossing first) and the phase margin.
+
+    Parameters
+    ----------
+    model : hesspipe.pilot.hess.PilotModel
+        The pilot model.
+    rng : numpy.random.Generator
+        Source of the draws.
+    spec : CohortSpec
+        The cohort; its ``crossover_rad_s`` must be set.
+    gain : float
+        Plant gain scale (:func:`hesspipe.pilot.crossover.gain_scale`).
+    plants : hesspipe.core.formats.Plants
+        Plants the pilot flies (Yc and any ``motion_path``).
+    corner : float
+        1/T1 for k = 1, rad/s (:func:`hess_corner`).
+
+    Returns
+    -------
+    params : dict
+        The pilot's parameters, Ke solved (the remnant gain Kn left at its default).
+    wc : float
+        The target crossover, rad/s.
     """
 
     params = dict(model.defaults(spec.k, gain))
@@ -327,7 +380,15 @@ def draw_crossover_parameters(model, rng: np.random.Generator, spec: CohortSpec,
 
 
 def disturbance(spec: CohortSpec, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """Time (s) and lateral wind (ft/s): the side-wind profile plus seeded gusts."""
+    """Time (s) and lateral wind (ft/s): the side-wind profile plus seeded gusts.
+
+    Parameters
+    ----------
+    spec : CohortSpec
+        Record length, sample interval, side wind and gusts.
+    seed : int
+        Seed of the gusts.
+    """
     n = int(round(spec.duration_s / spec.dt_s))
     t = spec.dt_s * np.arange(n)
     _, lateral = spec.side_wind(t, spec.duration_s)
@@ -445,7 +506,13 @@ def _check_effects(effects: Sequence[str]) -> tuple[str, ...]:
 
 
 def pilot_ids(n: int) -> list[str]:
-    """``pilot01`` ... (zero-padded so that files sort in pilot order)."""
+    """``pilot01`` ... (zero-padded so that files sort in pilot order).
+
+    Parameters
+    ----------
+    n : int
+        Number of pilots.
+    """
     width = max(2, len(str(n)))
     return [f"pilot{i + 1:0{width}d}" for i in range(n)]
 

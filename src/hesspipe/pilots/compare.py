@@ -78,6 +78,8 @@ class PilotComparison:
         Frequency bins (Hz) and the measured control PSD.
     simulated_psd : dict
         Configuration name → simulated control PSD on `freq_hz`.
+    frf, motion_test : object, dict
+        The run's describing function (None if none) and the per-pilot motion test.
     """
 
     id: str
@@ -94,12 +96,25 @@ class PilotComparison:
     motion_test: dict = field(default_factory=dict)   # hesspipe.pilots.verdict.motion_test
 
     def configuration(self, name: str) -> dict:
-        """The result of configuration `name` (one of :data:`CONFIGURATIONS`)."""
+        """The result of configuration `name` (one of :data:`CONFIGURATIONS`).
+
+        Parameters
+        ----------
+        name : str
+            "original", "expanded_fixed" or "expanded" (else HesspipeError).
+        """
         if name not in CONFIGURATIONS:
             raise HesspipeError(f"unknown configuration {name!r}; expected one of {', '.join(CONFIGURATIONS)}")
         return getattr(self, name)
 
     def to_dict(self, *, psd: bool = True) -> dict:
+        """The pilot's results as a JSON-ready dict.
+
+        Parameters
+        ----------
+        psd : bool
+            Include the measured and simulated control PSDs (control units^2/Hz).
+        """
         out = {"id": self.id, "source": self.source, "synthetic": self.synthetic}
         for name in CONFIGURATIONS:
             out[name] = self.configuration(name)
@@ -113,13 +128,20 @@ class PilotComparison:
 
 @dataclass(frozen=True)
 class PilotFailure:
-    """A run that could not be read or identified."""
+    """A run that could not be read or identified.
+
+    Attributes
+    ----------
+    id, source, error : str
+        Pilot id (file stem), the file, and why it failed (one line).
+    """
 
     id: str
     source: str
     error: str
 
     def to_dict(self) -> dict:
+        """The failure as a JSON-ready dict."""
         return {"id": self.id, "source": self.source, "error": self.error}
 
 
@@ -155,6 +177,7 @@ class Comparison:
 
     @property
     def improvements(self) -> np.ndarray:
+        """Each pilot's improvement (``1 - expanded / original`` fitness), in pilot order."""
         return np.array([p.improvement for p in self.pilots], dtype=float)
 
     def improvement_stats(self) -> dict:
@@ -168,6 +191,7 @@ class Comparison:
 
     @property
     def mean_improvement(self) -> float:
+        """Mean improvement over the pilots, NaNs excluded (NaN if none)."""
         return self.improvement_stats()["mean"]
 
     def verdict(self) -> dict:
@@ -176,6 +200,13 @@ class Comparison:
         return cohort_verdict({p.id: p.motion_test for p in self.pilots})
 
     def to_dict(self, *, psd: bool = True) -> dict:
+        """The comparison as a JSON-ready dict (the content of ``comparison.json``).
+
+        Parameters
+        ----------
+        psd : bool
+            Include each pilot's measured and simulated control PSDs.
+        """
         stats = self.improvement_stats()
         n_synth = sum(p.synthetic for p in self.pilots)
         return {
@@ -242,6 +273,21 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
 
     Returns a dict with the keys of ``Identification.to_dict(spectra=False)``
     that apply (``free`` empty, ``evaluations`` 1) plus ``simulated_psd``.
+
+    Parameters
+    ----------
+    run, plants : Run, Plants
+        The run; Yc and Yd.
+    model, params : PilotModel or str, mapping of str to float
+        The model (or its name) and its parameters (completed strictly for order `k`).
+    band : (float, float)
+        Frequency band of the fitness, Hz.
+    k : int
+        Hess model order.
+    benchmark : bool
+        Also fit the McRuer benchmark (its fitness otherwise NaN).
+    criterion, frf
+        As in :func:`hesspipe.identification.fit.identify` ("paper", "df" or "output").
     """
 
     model = model_from_name(model)
@@ -447,6 +493,12 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
     """The run files of a folder (``*.csv``, sorted) or of an explicit list.
 
     ``*.truth.json`` and other non-CSV files beside the runs are ignored.
+
+    Parameters
+    ----------
+    paths_or_dir : path or iterable of paths
+        A folder, one CSV file, or a list of files (taken as given); an empty folder or
+        list, or a missing path, raises HesspipeError.
     """
     if isinstance(paths_or_dir, (str, Path)):
         path = Path(paths_or_dir)
@@ -466,7 +518,17 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
 
 def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
               min_samples: int = MIN_SAMPLES) -> tuple[list[Run], list[PilotFailure]]:
-    """Read every file; a bad file becomes a :class:`PilotFailure`, not an exception."""
+    """Read every file; a bad file becomes a :class:`PilotFailure`, not an exception.
+
+    Returns ``(runs, failures)`` in file order; a repeated pilot id is a failure too.
+
+    Parameters
+    ----------
+    paths : sequence of Path
+        The run files.
+    columns, resample, min_samples
+        Passed to :func:`hesspipe.core.formats.read_run`.
+    """
     runs, failures = [], []
     seen: dict[str, Path] = {}
     for path in paths:
@@ -555,6 +617,17 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
     ``comparison.md`` and ``figures/<pilot>.png`` are written. Failed pilots
     are listed in the outputs; the caller decides whether ``not result.ok``
     fails the stage. `draw` is :func:`write_comparison`'s, used when ``config.figures``.
+
+    Parameters
+    ----------
+    config, plants : PilotsConfig, Plants
+        The ``[pilots]`` settings; Yc and Yd.
+    out_dir : str or Path
+        Output folder.
+    seed : int
+        Base seed, used when ``config`` sets none.
+    progress, draw
+        Progress bar (default: only on a terminal); figure writer (see above).
     """
 
     out_dir = Path(out_dir)

@@ -36,6 +36,39 @@ def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_di
     times are exact in the CSV's decimal digits). `target` (a
     :class:`hesspipe.flight.target.TargetForcing`, optional) replaces the wind excitation
     by its interleaved wind and target multisines.
+
+    Parameters
+    ----------
+    plants : hesspipe.core.formats.Plants
+        The plants the pilots are drawn for (gain scale, corner, remnant level).
+    n : int
+        Number of pilots (>= 1).
+    seed : int
+        Base seed; each pilot's seed is derived from it and the pilot id.
+    effects : sequence of str
+        Pilot-side effects of every pilot.
+    out_dir : str or path
+        Output folder (written atomically).
+    aircraft : str
+        JSBSim aircraft.
+    config : hesspipe.flight.approach.FlightConfig
+        Flight settings (simulation step ``dt_s``, s).
+    record_dt_s : float
+        Wanted record interval, s (rounded up to whole simulation steps).
+    spec : CohortSpec, optional
+        How pilots are drawn (default: :class:`CohortSpec` with the flight's duration).
+    target : hesspipe.flight.target.TargetForcing, optional
+        Wind and roll-rate target multisines replacing the wind excitation.
+
+    Returns
+    -------
+    list of Path
+        The run files, in pilot order.
+
+    Raises
+    ------
+    HesspipeError
+        If `n` is not an integer >= 1, or an effect is unknown or listed twice.
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise HesspipeError(f"n: expected an integer >= 1, got {n!r}")
@@ -82,6 +115,16 @@ def fly_pipeline_cohort(config, plants: Plants, ctx):
     `config` is the stage's :class:`hesspipe.pilots.compare.PilotsConfig`; the aircraft and
     the flight settings are the ``[flight]`` table's (the aircraft the plants were
     fitted on, unless the user changes it). Returns `config` pointing at the cohort.
+
+    Parameters
+    ----------
+    config : hesspipe.pilots.compare.PilotsConfig
+        The ``[pilots]`` settings (n, effects, cohort draw, duration, record interval).
+    plants : hesspipe.core.formats.Plants
+        The fitted plants.
+    ctx
+        The pipeline's stage context (its ``config``, ``source``, ``seed`` and
+        ``out_dir`` are used).
     """
     table = dict(ctx.config.get("flight", {}))
     aircraft = table.pop("aircraft", "737")

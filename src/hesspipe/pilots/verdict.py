@@ -116,7 +116,13 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA) -> dic
 
 
 def verdict_lines(verdict: Mapping) -> list[str]:
-    """Plain-text lines of a :func:`cohort_verdict`: the sentence, then one line per pilot."""
+    """Plain-text lines of a :func:`cohort_verdict`: the sentence, then one line per pilot.
+
+    Parameters
+    ----------
+    verdict : mapping
+        A :func:`cohort_verdict` result (``sentence``, ``per_pilot``, ``method``).
+    """
     out = [f"MOTION VERDICT: {verdict['sentence']}"]
     for pid, t in verdict.get("per_pilot", {}).items():
         if t.get("available", True) is False:
