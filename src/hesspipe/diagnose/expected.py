@@ -83,17 +83,43 @@ class ExpectedSpectrum:
     # model pieces -----------------------------------------------------------------------
 
     def loop(self, model, params):
-        """The model's loop for `params`, prepared for the simulator (motion path applied)."""
+        """The model's loop for `params`, prepared for the simulator (motion path applied).
+
+        Parameters
+        ----------
+        model : hesspipe.pilot.hess.PilotModel
+            The model, with its effects.
+        params : mapping
+            Its parameters (missing: defaults).
+        """
         # Through the plants' motion path, as the Simulator sees it (remnant_density too).
         return self.sim.prepare(model.loop(model.complete(params)))
 
     def stochastic(self, model, params) -> bool:
-        """Whether the model's loop has a remnant."""
+        """Whether the model's loop has a remnant.
+
+        Parameters
+        ----------
+        model : hesspipe.pilot.hess.PilotModel
+            The model, with its effects.
+        params : mapping
+            Its parameters (missing: defaults).
+        """
         return not self.loop(model, params).noise.is_zero
 
     def control(self, model, params, loop=None) -> np.ndarray | None:
         """Deterministic control (remnant off) driven by the measured disturbance; None if
-        the loop is unstable (a remnant filter has no poles in the right half plane)."""
+        the loop is unstable (a remnant filter has no poles in the right half plane).
+
+        Parameters
+        ----------
+        model : hesspipe.pilot.hess.PilotModel
+            The model, with its effects.
+        params : mapping
+            Its parameters (missing: defaults).
+        loop : hesspipe.pilot.blocks.Loop, optional
+            The prepared loop, when the caller has it already.
+        """
 
         loop = self.loop(model, params) if loop is None else loop
         u = self.sim.control(loop.replace(noise=ZERO))
@@ -106,6 +132,15 @@ class ExpectedSpectrum:
         two-sided density ``dt``; the closed loop passes it to the control through
         ``noise / (1 + NM PF + NM (visual + vestibular) Yc plant)`` (the loop of
         :class:`hesspipe.pilot.blocks.Loop`); `yc` is Yc's response at `s`.
+
+        Parameters
+        ----------
+        loop : hesspipe.pilot.blocks.Loop
+            The prepared loop (with its remnant filter).
+        s : array of complex
+            Laplace variable, 1/s.
+        yc : array of complex
+            Yc's response at `s`, output units per control unit.
         """
         den = loop.return_difference(s, yc)
         return np.abs(loop.noise.response(s) / den) ** 2 * self.run.dt
@@ -117,6 +152,11 @@ class ExpectedSpectrum:
         kernel (:func:`welch_kernel`), which is what the estimator's expectation is; above
         it (outside every fit, score and report) the density at the bin times the
         window's gain (:func:`_window_gain`) stands in.
+
+        Parameters
+        ----------
+        loop : hesspipe.pilot.blocks.Loop
+            The prepared loop; zeros when it has no remnant.
         """
         if loop.noise.is_zero:
             return np.zeros_like(self.freq)

@@ -100,6 +100,11 @@ class Problem:
         (``Kn sqrt(dt / (2 Tn))`` is the RMS of sampled white noise through
         ``Kn / (Tn s + 1)``): the closed loop only lowers it, so any remnant share of the
         control up to the whole of it stays inside the box.
+
+        Parameters
+        ----------
+        model : hesspipe.pilot.hess.PilotModel
+            The model whose boxes are taken.
         """
         out = dict(model.bounds())
         if "Kn" in out:
@@ -109,7 +114,13 @@ class Problem:
         return out
 
     def free_parameters(self, model) -> tuple[str, ...]:
-        """The configured free parameters plus every parameter of the model's effects."""
+        """The configured free parameters plus every parameter of the model's effects.
+
+        Parameters
+        ----------
+        model : hesspipe.pilot.hess.PilotModel
+            The model; a configured free parameter it lacks is an error.
+        """
         names = model.parameter_names()
         missing = [p for p in self.cfg.free if p not in names]
         if missing:
@@ -125,6 +136,15 @@ class Problem:
         `grid` parameters; then bounded least squares from the best start. A point is
         kept only if it lowers the sum of squares, so an augmented model is never worse
         than the model it extends.
+
+        Parameters
+        ----------
+        model : hesspipe.pilot.hess.PilotModel
+            The model to fit.
+        start : mapping
+            Starting values (the fit of the model it extends).
+        grid : sequence of str
+            Parameters gridded over their box before least squares (an added effect's).
         """
         names = model.parameter_names()
         bounds = self.bounds(model)

@@ -126,7 +126,13 @@ class Likelihood:
         self.psd_floor = float(np.max(self.measured[self.mask])) * 10.0 ** (-cfg.dynamic_range_db / 10.0)
 
     def log_residual(self, psd: np.ndarray) -> np.ndarray:
-        """``ln P_model - ln P_measured`` over the band's bins (floored, see module doc)."""
+        """``ln P_model - ln P_measured`` over the band's bins (floored, see module doc).
+
+        Parameters
+        ----------
+        psd : ndarray
+            A model's control PSD on all Welch bins, control units^2/Hz.
+        """
         return _log_residual(self.measured[self.mask], psd[self.mask], self.psd_floor)
 
     def random_variance(self, psd: np.ndarray, remnant: np.ndarray) -> np.ndarray:
@@ -140,6 +146,13 @@ class Likelihood:
         residual scatters by ``psi'(nu / 2)(1 - rho^2)``: the Welch scatter where the
         remnant dominates, nothing where it is absent. ``weighting = "uniform"`` gives
         zero (every bin alike, the model-error variance alone).
+
+        Parameters
+        ----------
+        psd : ndarray
+            A model's control PSD on all Welch bins, control units^2/Hz.
+        remnant : ndarray
+            Its remnant's share, control units^2/Hz.
         """
         if self.cfg.weighting == "uniform":
             return np.zeros(int(self.mask.sum()))
@@ -166,6 +179,15 @@ class Likelihood:
         variance normalises the first half of the vector to a constant sum). Every
         comparison between parameter sets uses the profiled form.
         Returns the vector and the ``s2`` used.
+
+        Parameters
+        ----------
+        psd : ndarray
+            A model's control PSD on all Welch bins, control units^2/Hz.
+        remnant : ndarray
+            Its remnant's share, control units^2/Hz.
+        s2 : float, optional
+            Model-error variance to use (None: profiled).
         """
         a = self.random_variance(psd, remnant)
         # The log of a Welch estimate is biased low by psi(nu/2) - ln(nu/2) where the bin
@@ -180,19 +202,48 @@ class Likelihood:
         return np.concatenate([first, np.sqrt(np.log(var / self.resolution))]), s2
 
     def variance(self, fit) -> float:
-        """Residual variance, floored at the resolution (see the module docstring)."""
+        """Residual variance, floored at the resolution (see the module docstring).
+
+        Parameters
+        ----------
+        fit : hesspipe.diagnose.fitting._Fit
+            A fit (its residual variance, ln-units^2).
+        """
         return max(fit.variance, self.resolution)
 
     def log_rms_db(self, psd: np.ndarray) -> float:
+        """RMS of the log-spectral residual over the band, dB.
+
+        Parameters
+        ----------
+        psd : ndarray
+            A model's control PSD on all Welch bins, control units^2/Hz.
+        """
         r = _log_residual(self.measured[self.mask], psd[self.mask], self.psd_floor)
         return _DB * math.sqrt(float(np.mean(r ** 2)))
 
     def bands(self, psd: np.ndarray, scatter: float) -> tuple[Band, ...]:
+        """Band-wise disagreement of a model's PSD with the measured one (see :func:`band_disagreement`).
+
+        Parameters
+        ----------
+        psd : ndarray
+            A model's control PSD on all Welch bins, control units^2/Hz.
+        scatter : float
+            Variance of a bin's log residual taken as chance, ln-units^2.
+        """
         return band_disagreement(self.freq, self.measured, psd, self.cfg.band_edges_hz,
                                  var_floor=scatter, enbw_bins=self.enbw, alpha=self.cfg.alpha,
                                  floor=self.psd_floor)
 
     def gap(self, psd: np.ndarray) -> float:
+        """The paper's Eq. 10 fitness of a model's PSD against the measured one, control^2/Hz.
+
+        Parameters
+        ----------
+        psd : ndarray
+            A model's control PSD on all Welch bins, control units^2/Hz.
+        """
         return _eq10(self.measured, psd, self.freq, self.cfg.band_hz)
 
 
