@@ -8,7 +8,7 @@ import sys
 import hesspipe
 
 REQUIRED = ("read_run", "read_plants", "fly", "fit_plants", "PilotModel", "simulate", "identify",
-            "compare_pilots", "DiagnoseConfig")
+            "compare_pilots", "diagnose", "DiagnoseConfig")
 
 
 def test_api_names_are_exported_and_documented():
@@ -21,6 +21,24 @@ def test_api_names_are_exported_and_documented():
             assert "Parameters" in doc, f"{name}: no numpydoc Parameters section"
     for name in hesspipe.__all__:
         getattr(hesspipe, name)  # every exported name resolves
+
+
+def test_diagnose_is_the_stage_package_and_its_function():
+    import hesspipe.diagnose.workflow as workflow  # importing a submodule keeps the package callable
+
+    assert hesspipe.diagnose is sys.modules["hesspipe.diagnose"]
+    assert hesspipe.diagnose.diagnose is workflow.diagnose
+    from hesspipe.diagnose.examples import hidden_effect_run, validation_plants
+    from hesspipe.diagnose.report import format_report
+    from hesspipe.diagnose.settings import DiagnoseConfig
+
+    plants = validation_plants()
+    run = hidden_effect_run(plants, None, seed=3, duration=30.0)
+    cfg = DiagnoseConfig(candidates=("remnant",), grid=3, starts=1)
+    a = hesspipe.diagnose(run, plants, config=cfg)
+    b = workflow.diagnose(run, plants, config=cfg)
+    assert a.named_effects == b.named_effects and a.gap_after == b.gap_after
+    assert format_report(a) == format_report(b)
 
 
 def test_every_package_export_resolves():

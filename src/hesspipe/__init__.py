@@ -20,7 +20,7 @@ from .core.lazy import attach
 #: The researcher's API: name -> module that defines it. Loaded on first use, so that
 #: ``import hesspipe`` (and the command line's start-up) stays light. Each stage is also a
 #: package of the same name (``hesspipe.flight``, ``hesspipe.plants``, ``hesspipe.pilots``,
-#: ``hesspipe.diagnose``: the diagnosis itself is ``hesspipe.diagnose.diagnose``).
+#: ``hesspipe.diagnose``); the ``diagnose`` package is callable as the stage's function.
 _API = {
     "read_run": "core.formats", "write_run": "core.formats", "read_plants": "core.formats",
     "write_plants": "core.formats", "Run": "core.formats", "Plants": "core.formats",
@@ -32,5 +32,22 @@ _API = {
     "DiagnoseConfig": "diagnose", "Diagnosis": "diagnose",
 }
 
-__getattr__, __dir__, _exported = attach(__name__, _API)
-__all__ = ["HesspipeError", "__version__", *_exported]
+#: The packages, each also an attribute of ``hesspipe`` (imported on first use).
+#: ``diagnose`` is callable: ``hesspipe.diagnose(run, plants)`` runs the diagnosis.
+PACKAGES = ("core", "pilot", "flight", "plants", "identification", "pilots", "diagnose", "pipeline",
+            "viz", "humanlike")
+
+_getattr, _dir, _exported = attach(__name__, _API)
+__all__ = ["HesspipeError", "__version__", *_exported, "diagnose"]
+
+
+def __getattr__(name: str):
+    if name in PACKAGES:
+        from importlib import import_module
+
+        return import_module(f".{name}", __name__)  # the import binds it here too
+    return _getattr(name)
+
+
+def __dir__():
+    return sorted(set(_dir()) | set(PACKAGES))
