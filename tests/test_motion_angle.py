@@ -69,3 +69,17 @@ def test_angle_draws_with_motion_are_feasible():
         return n
 
     assert drawn(("motion_feedback",)) >= 27   # 20 of 30 before the fix
+
+
+def test_interleaved_lines_all_found_when_disturbance_dominates(tmp_path):
+    """Target lines one bin above the disturbance's and ~7x weaker (the paper plant's wind):
+    the whole record is the analysis window and all 20 lines are found (the purity of the
+    sum had picked half records with 2-8 lines)."""
+    from hesspipe.identification.motion_test import analysis_window, forcing_lines
+
+    spec = draw_trial("paper", 3, task="both", pilot="hess", output="rate", disturbance="wind",
+                      fs=50.0, T_m=70.0, style="plain", name="w")
+    run = read_run(write_trial(tmp_path, simulate_trial(spec)))
+    start, length = analysis_window(run)
+    assert (start, length) == (0, len(run.control))
+    assert forcing_lines(run).size == 20
