@@ -52,25 +52,6 @@ def test_angle_target_static_twin_is_not_named_motion(twins):
     assert "motion_feedback" not in d.named_effects, d.motion_verdict
 
 
-def test_angle_draws_with_motion_are_feasible():
-    """Km/Ke is taken per crossover frequency on an angle display: the literature range of
-    km_ratio then draws a pilot for nearly every seed (a third of these failed before)."""
-    from hesspipe.core.errors import HesspipeError
-
-    def drawn(effects):
-        n = 0
-        for seed in range(30):
-            try:
-                draw_trial("roll", seed, task="both", pilot="hess", effects=effects, output="angle",
-                           fs=50.0, T_m=20.0)
-                n += 1
-            except HesspipeError:
-                pass
-        return n
-
-    assert drawn(("motion_feedback",)) >= 27   # 20 of 30 before the fix
-
-
 def test_interleaved_lines_all_found_when_disturbance_dominates(tmp_path):
     """Target lines one bin above the disturbance's and ~7x weaker (the paper plant's wind):
     the whole record is the analysis window and all 20 lines are found (the purity of the
