@@ -18,8 +18,13 @@ from hesspipe.humanlike.plants import ANGLE_MOTION
 
 
 def _trial(tmp_path, effects, seed=7):
+    # km_ratio 1.0: the strongest vestibular path of the generator's range (a share of the
+    # visual path at crossover as on a rate display). Weaker ones are often missed on an
+    # angle display (benchmarks/bench_diagnose.py): the canal path on the cab's rate acts
+    # on the target lines like the proprioceptive feedback, only the disturbance lines
+    # tell them apart.
     spec = draw_trial("roll", seed, task="both", pilot="hess", effects=effects, output="angle",
-                      fs=50.0, T_m=70.0, style="plain", name="pilot")
+                      fs=50.0, T_m=70.0, style="plain", name="pilot", km_ratio=1.0)
     path = write_trial(tmp_path, simulate_trial(spec))
     return spec, read_run(path), read_plants(tmp_path / "plants.json")
 
