@@ -9,7 +9,10 @@ Cases: hidden effect (none, motion_feedback with Km from weak to strong, extra_d
 0.04-0.1 s, an elevated remnant, dutch_roll, actuator_lag, and two at once:
 extra_delay + dutch_roll) x plants (``paper``: Table 4 rolling approximation with the
 paper's Eq. 16 wind path; ``roll``: Table 4 both paths, plant-input disturbance) x output
-(roll rate, roll angle) x task (disturbance only; disturbance and target). Every
+(roll rate, roll angle) x task (disturbance only; disturbance and target); ``--plants
+1/s,K/s2 --outputs angle --tasks both`` adds the single and double integrator with an
+angle display the cab turns with (plant-input disturbance, motion path s/(0.01 s + 1)):
+the stand-in for yaw-angle tracking with and without motion. Every
 generated baseline carries the generator's ordinary remnant (10-40 % of the control's
 variance), so ``remnant`` named on a baseline is not counted as a false pilot-side name;
 it is reported apart.
@@ -58,12 +61,13 @@ def run_case(folder, plant, output, task, effect, seed):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind") if plant == "paper" else {}
+    name = f"{plant}-{output}-{task}-{effect}-{seed}".replace("/", "_")   # "1/s", "K/s2"
     try:
         spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
-                          output=output, name=f"{plant}-{output}-{task}-{effect}-{seed}", **kw)
+                          output=output, name=name, **kw)
     except HesspipeError as exc:  # the generator found no pilot in its ranges: not diagnose's doing
         return None, str(exc)
-    path = write_trial(Path(folder) / f"{plant}-{output}-{task}-{effect}-{seed}", simulate_trial(spec))
+    path = write_trial(Path(folder) / name, simulate_trial(spec))
     run = read_run(path)
     plants = read_plants(path.parent / "plants.json")
     t = time.process_time()
