@@ -19,10 +19,11 @@ from hesspipe.humanlike.plants import ANGLE_MOTION
 
 def _trial(tmp_path, effects, seed=7):
     # km_ratio 1.0: the strongest vestibular path of the generator's range (a share of the
-    # visual path at crossover as on a rate display). Weaker ones are often missed on an
-    # angle display (benchmarks/bench_diagnose.py): the canal path on the cab's rate acts
-    # on the target lines like the proprioceptive feedback, only the disturbance lines
-    # tell them apart.
+    # visual path at crossover as on a rate display). This is one well-identified trial, a
+    # regression check, not a rate: on the benchmark's report seeds only 2 of 10 such roll
+    # angle+target runs are named (benchmarks/bench_diagnose.py --km-ratio 1.0,1.0): the
+    # canal path on the cab's rate acts on the target lines like the proprioceptive
+    # feedback, only the disturbance lines tell them apart.
     spec = draw_trial("roll", seed, task="both", pilot="hess", effects=effects, output="angle",
                       fs=50.0, T_m=70.0, style="plain", name="pilot", km_ratio=1.0)
     path = write_trial(tmp_path, simulate_trial(spec))
