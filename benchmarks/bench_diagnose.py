@@ -9,7 +9,10 @@ Cases: hidden effect (none, motion_feedback with Km from weak to strong, extra_d
 0.04-0.1 s, an elevated remnant, dutch_roll, actuator_lag, and two at once:
 extra_delay + dutch_roll) x plants (``paper``: Table 4 rolling approximation with the
 paper's Eq. 16 wind path; ``roll``: Table 4 both paths, plant-input disturbance) x output
-(roll rate, roll angle) x task (disturbance only; disturbance and target). Every
+(roll rate, roll angle) x task (disturbance only; disturbance and target); ``--plants
+1/s,K/s2 --outputs angle --tasks both`` adds the single and double integrator with an
+angle display the cab turns with (plant-input disturbance, motion path s/(0.01 s + 1)):
+the stand-in for yaw-angle tracking with and without motion. Every
 generated baseline carries the generator's ordinary remnant (10-40 % of the control's
 variance), so ``remnant`` named on a baseline is not counted as a false pilot-side name;
 it is reported apart.
@@ -28,7 +31,7 @@ Usage::
 
     python benchmarks/bench_diagnose.py [--seeds 10] [--seed-start 0] [--quiet] [--plants paper,roll]
                                         [--outputs rate,angle] [--tasks disturbance,both]
-                                        [--effects none,dutch_roll,...]
+                                        [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
 """
 
 from __future__ import annotations
@@ -54,16 +57,18 @@ EFFECTS = ("none", "motion_feedback", "extra_delay", "remnant", "dutch_roll", "a
 PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 
 
-def run_case(folder, plant, output, task, effect, seed):
+def run_case(folder, plant, output, task, effect, seed, **draw):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind") if plant == "paper" else {}
+    kw.update(draw)
+    name = f"{plant}-{output}-{task}-{effect}-{seed}".replace("/", "_")   # "1/s", "K/s2"
     try:
         spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
-                          output=output, name=f"{plant}-{output}-{task}-{effect}-{seed}", **kw)
+                          output=output, name=name, **kw)
     except HesspipeError as exc:  # the generator found no pilot in its ranges: not diagnose's doing
         return None, str(exc)
-    path = write_trial(Path(folder) / f"{plant}-{output}-{task}-{effect}-{seed}", simulate_trial(spec))
+    path = write_trial(Path(folder) / name, simulate_trial(spec))
     run = read_run(path)
     plants = read_plants(path.parent / "plants.json")
     t = time.process_time()
@@ -99,8 +104,11 @@ def main(argv=None) -> int:
     ap.add_argument("--outputs", default="rate,angle")
     ap.add_argument("--tasks", default="disturbance,both")
     ap.add_argument("--effects", default=",".join(EFFECTS))
+    ap.add_argument("--km-ratio", default=None,
+                    help="the generator's Km/Ke range 'lo,hi' (default its literature range)")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])
+    draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     rows, times, failures, skipped = {}, [], [], []
     motion = {True: [0, 0], False: [0, 0]}  # hidden motion? -> [runs naming it, runs]
@@ -111,7 +119,7 @@ def main(argv=None) -> int:
             firsts, both, false_pilot, remnant_named, aside = Counter(), 0, 0, 0, 0
             for seed in range(args.seed_start, args.seed_start + args.seeds):
                 try:
-                    d, cpu = run_case(tmp, plant, output, task, effect, seed)
+                    d, cpu = run_case(tmp, plant, output, task, effect, seed, **draw)
                 except HesspipeError as exc:
                     failures.append(f"{plant}/{output}/{task}/{effect}/{seed}: {exc}")
                     print("  REFUSED", failures[-1], flush=True)

@@ -12,6 +12,11 @@ contrast, the PSD-fitness improvement 1 - expanded/original of the paper's crite
 
     python benchmarks/bench_verdict.py [--n 8] [--seeds 1,2,3] [--plants roll,1/s]
                                        [--task disturbance] [--T 45] [--fs 60]
+                                       [--output rate|angle] [--km-ratio 0.2,1.0]
+
+``--output angle``: the display shows the angle and the cab turns at its rate (the
+generator's plants carry ``motion_path`` s/(0.01 s + 1)); with ``--task both`` this is the
+stand-in for yaw-angle tracking trials with and without motion.
 """
 
 from __future__ import annotations
@@ -30,7 +35,8 @@ from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.pilots.compare import compare_pilots
 
 
-def cohort(folder: Path, plant: str, n: int, seed: int, effects, task: str, T: float, fs: float) -> int:
+def cohort(folder: Path, plant: str, n: int, seed: int, effects, task: str, T: float, fs: float,
+           **draw) -> int:
     """Write `n` trials; a draw with no pilot meeting the generator's crossover/phase-margin
     ranges is redrawn with the next sub-seed. Returns the number of redraws."""
     redraws = 0
@@ -39,7 +45,7 @@ def cohort(folder: Path, plant: str, n: int, seed: int, effects, task: str, T: f
             s = derive_seed(seed, "bench_verdict", plant, task, ",".join(effects), str(i), str(attempt))
             try:
                 spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, T_m=T, fs=fs,
-                                  name=f"pilot{i + 1:02d}")
+                                  name=f"pilot{i + 1:02d}", **draw)
             except HesspipeError:
                 redraws += 1
                 continue
@@ -56,17 +62,22 @@ def main(argv=None) -> None:
     ap.add_argument("--task", default="disturbance")
     ap.add_argument("--T", type=float, default=45.0)
     ap.add_argument("--fs", type=float, default=60.0)
+    ap.add_argument("--output", default="rate", choices=("rate", "angle"))
+    ap.add_argument("--km-ratio", default=None, help="Km/Ke range 'lo,hi' (default the generator's)")
     args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
     print(f"SYNTHETIC data: independent generator hesspipe.humanlike, hess pilots, task "
-          f"{args.task}, {args.n} pilots per cohort, {args.T:g} s at {args.fs:g} Hz")
+          f"{args.task}, output {args.output}, {args.n} pilots per cohort, {args.T:g} s at {args.fs:g} Hz")
+    draw = {"output": args.output}
+    if args.km_ratio:
+        draw["km_ratio"] = tuple(float(x) for x in args.km_ratio.split(","))
     tally = {"motion": [0, 0], "none": [0, 0]}
     for plant in args.plants.split(","):
         for seed in seeds:
             for label, effects in (("motion", ("motion_feedback",)), ("none", ())):
                 with tempfile.TemporaryDirectory() as tmp:
                     folder = Path(tmp) / "runs"
-                    cohort(folder, plant, args.n, seed, effects, args.task, args.T, args.fs)
+                    cohort(folder, plant, args.n, seed, effects, args.task, args.T, args.fs, **draw)
                     t0 = time.perf_counter()
                     comp = compare_pilots(folder, read_plants(folder / "plants.json"), workers=1,
                                           seed=seed, progress=False)

@@ -94,7 +94,10 @@ def test_angle_task_motion_feedback_expressed_on_independent_data(tmp_path):
     from the independent generator: the FFT model with the generator's true pilot reproduces
     the recorded control only when it reads the plants file's motion_path."""
     spec = draw_trial("roll", 5, task="disturbance", pilot="hess", effects=("motion_feedback",),
-                      output="angle", T_m=30.0, fs=50.0, remnant_share=0.02, km_ratio=(0.5, 1.0),
+                      output="angle", T_m=30.0, fs=50.0, remnant_share=0.02,
+                      # the strongest vestibular share of the range (Km/Ke per crossover
+                      # frequency on an angle display since the generator's fix)
+                      km_ratio=1.0,
                       tau=(0.12, 0.2), style="plain")
     path = write_trial(tmp_path, simulate_trial(spec))
     plants, run = read_plants(tmp_path / "plants.json"), read_run(path)

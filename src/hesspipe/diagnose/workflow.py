@@ -199,6 +199,14 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     current = problem.fit(base, start, grid=problem.free_parameters(base))
     if not current.stable and ev is not None:  # the describing function's dynamics did not close
         current = problem.fit(base, base.defaults(k=cfg.k), grid=problem.free_parameters(base))
+    if not current.stable and k_df != cfg.k:
+        # The configured order cannot close the loop on these plants (k = 1 on a K/s^2-like
+        # plant: every double-integrator run was refused); Hess's rule's order can.
+        cfg = replace(cfg, k=k_df)
+        problem = _Problem(run, plants, cfg, seed)
+        start = {**base.defaults(k=k_df), **{n: v for n, v in (ev.dynamics if ev else {}).items()
+                                             if n in start and n not in cfg.free}}
+        current = problem.fit(base, start, grid=problem.free_parameters(base))
     if not current.stable:
         raise HesspipeError(f"{run.source or run.id}: no stable {base.name} pilot found for these data "
                             "and plants; cannot diagnose")

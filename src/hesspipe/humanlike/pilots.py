@@ -243,13 +243,20 @@ def draw_precision(rng, yc, sign: int, order: int, ranges: dict, extra_delay: fl
 
 
 def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, fixed: dict,
-              motion_tf=None, km_ratio: float = 0.0, tau_m: float = 0.0) -> dict | None:
+              motion_tf=None, km_ratio: float = 0.0, tau_m: float = 0.0,
+              angle: bool = False) -> dict | None:
     """Draw a hess pilot: sample its sensory and neuromuscular parameters, then solve.
 
     For a drawn crossover wc and phase margin PM, the proprioceptive gain
     K1*K2 is solved so the loop phase at wc is ``-180 + PM`` and Ke so that
     ``|L(j wc)| = 1``. ``Km = km_ratio * Ke`` (vestibular gain relative to the
-    visual one). Returns None when no draw in the budget fits.
+    visual one) when the display shows the rate the cab turns at; when it shows
+    an angle (`angle`), Ke is per rad and Km per rad/s, and ``Km = km_ratio * Ke / wc``
+    so that the vestibular path's share at crossover is the same as on a rate
+    display (without it km_ratio 0.2-1.0 made the vestibular rate feedback up to
+    4 times the visual path at crossover, whose lead no proprioceptive gain can
+    cancel: most angle draws with motion failed). Returns None when no draw in the
+    budget fits.
 
     Parameters
     ----------
@@ -272,6 +279,8 @@ def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, 
         Km / Ke.
     tau_m : float
         Vestibular delay, s.
+    angle : bool
+        The displayed output is an angle whose rate the cab turns at (see above).
     """
     k = 1 if order <= 1 else 2
     for _ in range(20):
@@ -290,9 +299,10 @@ def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, 
             nm = freqresp(*nm_tf(p["wn"], p["zn"]), x)[0]
             p.update(K1=1.0, K2=1.0)
             shape = freqresp(*pf_tf(p), x)[0]           # Y_PF with K1*K2 = 1
-            p.update(Ke=1.0, Km=km_ratio)
+            km_ke = km_ratio / wc if angle else km_ratio   # Km / Ke
+            p.update(Ke=1.0, Km=km_ke)
             outer = (np.exp(-1j * wc * p["tau"]) + (
-                km_ratio * freqresp(*SCC, x)[0] * freqresp(*motion_tf, x)[0]
+                km_ke * freqresp(*SCC, x)[0] * freqresp(*motion_tf, x)[0]
                 * np.exp(-1j * wc * tau_m) if km_ratio and motion_tf is not None else 0.0))
 
             def phase_err(logk):
@@ -315,7 +325,7 @@ def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, 
                 continue
             h = sum(parts(p, x, motion_tf))[0]
             p["Ke"] = float(sign / abs(h * ycw))
-            p["Km"] = float(km_ratio * p["Ke"])
+            p["Km"] = float(km_ke * p["Ke"])
             if _accept(p, yc, motion_tf, ranges, wc, pm) is not None:
                 return p
     return None

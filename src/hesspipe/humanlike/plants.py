@@ -212,7 +212,9 @@ def make_plant(plant, *, output: str = "rate", disturbance: str | None = None,
         Eq. 16 wind path); a dict ``{"num": [...], "den": [...]}`` or a SPEC
         plants dict; or a path to a ``plants.json``.
     output : {"rate", "angle"}
-        For ``"roll"``/``"paper"``: roll rate (rad/s) or roll angle (rad).
+        For ``"roll"``/``"paper"``: roll rate (rad/s) or roll angle (rad). For the
+        textbook plants "angle" makes the output an angle the cab turns with (default
+        motion path s/(0.01 s + 1)); "rate" leaves the paper's platform x washout.
     disturbance : {"input", "wind"}, optional
         Plant-input disturbance (default for everything but ``"paper"``) or the
         plant's own disturbance path (side wind, ft/s).
@@ -237,12 +239,15 @@ def make_plant(plant, *, output: str = "rate", disturbance: str | None = None,
     if output not in ("rate", "angle"):
         raise HesspipeError(f"output: expected 'rate' or 'angle', got {output!r}")
     g = float(gain)
+    # A textbook plant's output is whatever the display shows; "angle" says the cab turns
+    # at its rate (motion path s/(0.01 s + 1)), e.g. a yaw-angle task on K/s or K/s^2.
+    kind = {"output": "angle"} if output == "angle" else {}
     if plant == "1/s":
-        return _tf_plant(plant, ([g], [1.0, 0.0]), None, "input")
+        return _tf_plant(plant, ([g], [1.0, 0.0]), None, "input", **kind)
     if plant == "1/(s(s+1))":
-        return _tf_plant(plant, ([g], [1.0, 1.0, 0.0]), None, "input")
+        return _tf_plant(plant, ([g], [1.0, 1.0, 0.0]), None, "input", **kind)
     if plant == "K/s2":
-        return _tf_plant(plant, ([g], [1.0, 0.0, 0.0]), None, "input")
+        return _tf_plant(plant, ([g], [1.0, 0.0, 0.0]), None, "input", **kind)
     disturbance = disturbance or ("wind" if plant == "paper" else "input")
     if disturbance not in ("input", "wind"):
         raise HesspipeError(f"disturbance: expected 'input' or 'wind', got {disturbance!r}")

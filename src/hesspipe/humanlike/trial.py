@@ -171,7 +171,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     **overrides
         Ranges as a value or (low, high): ``tau`` (s), ``wn`` (rad/s), ``zn``,
         ``wc`` (rad/s), ``pm`` (deg), ``inv_T1``, ``inv_T2`` (1/s), ``K1``,
-        ``remnant_share``, ``remnant_tn`` (s), ``w_corner`` (rad/s), ``km_ratio``,
+        ``remnant_share``, ``remnant_tn`` (s), ``w_corner`` (rad/s), ``km_ratio`` (Km/Ke;
+        per crossover frequency for an angle output, see :func:`~hesspipe.humanlike.pilots.draw_hess`),
         ``extra_delay`` (s), ``actuator_tau`` (s), ``rate_limit_factor``.
         Options: ``fs`` (Hz, 60), ``T_m`` (s, 45; fs*T_m must be whole),
         ``run_in`` (s; 15, or 60 with motion feedback or Dutch roll, whose slow modes
@@ -249,7 +250,7 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         p = pilots.draw_precision(rng["pilot"], yc, sign, order, ranges, extra, fixed)
     else:
         p = pilots.draw_hess(rng["pilot"], yc, sign, order, ranges, extra, fixed,
-                             motion_tf, km_ratio, float(opts["tau_m"]))
+                             motion_tf, km_ratio, float(opts["tau_m"]), angle=plant.output == "angle")
     if p is None:
         raise HesspipeError(f"draw_trial: no {pilot} pilot for plant {plant.name!r} meets "
                             f"crossover {ranges['wc']} rad/s and phase margin {ranges['pm']} deg "
