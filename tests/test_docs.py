@@ -26,7 +26,7 @@ PACKAGE = Path(hesspipe.__file__).parent
 COVERED = ("core", "pilot", "flight", "plants", "identification", "pilots", "diagnose",
            "pipeline", "viz", "humanlike")
 #: Left out for now (being rewritten elsewhere); the lead extends COVERED to them later.
-EXCLUDED = ("diagnose/motion.py",)
+EXCLUDED = ()
 
 
 def _files() -> list[Path]:

@@ -70,3 +70,23 @@ def test_interleaved_lines_all_found_when_disturbance_dominates(tmp_path):
     start, length = analysis_window(run)
     assert (start, length) == (0, len(run.control))
     assert forcing_lines(run).size == 20
+
+
+def test_a_bare_differentiator_is_a_valid_angle_motion_path(twins, tmp_path):
+    """``"motion_path": {"num": [1, 0], "den": [1]}`` (the cab's rate is s times the angle) is
+    what a researcher writes for an angle display: read, not refused, and it gives the
+    diagnosis of the proper form s/(0.01 s + 1) on this record."""
+    import json
+
+    (_, run, plants), _ = twins
+    obj = {"control_to_output": {"num": list(plants.control_to_output.num[0][0]),
+                                 "den": list(plants.control_to_output.den[0][0])},
+           "disturbance_to_output": {"num": list(plants.disturbance_to_output.num[0][0]),
+                                     "den": list(plants.disturbance_to_output.den[0][0])},
+           "motion_path": {"num": [1, 0], "den": [1]}}
+    path = tmp_path / "bare.json"
+    path.write_text(json.dumps(obj, default=float))
+    bare = read_plants(path)
+    assert np.allclose(bare.motion_path.num[0][0], [1.0, 0.0])
+    d = diagnose(run, bare, seed=1)
+    assert "motion_feedback" in d.named_effects, d.motion_verdict

@@ -487,7 +487,7 @@ def tf_coefficients(sys: ct.TransferFunction) -> dict:
     return {"num": num.tolist(), "den": den.tolist()}
 
 
-def _read_tf(obj, path, key) -> ct.TransferFunction:
+def _read_tf(obj, path, key, *, excess: int = 0) -> ct.TransferFunction:
     if not isinstance(obj, Mapping):
         raise HesspipeError(f"{path}: field '{key}': expected an object with 'num' and 'den', got {obj!r}")
     dt = obj.get("dt")
@@ -511,9 +511,11 @@ def _read_tf(obj, path, key) -> ct.TransferFunction:
         raise HesspipeError(f"{path}: field '{key}.den': expected a non-zero polynomial")
     if num.size == 0:
         num = np.zeros(1)
-    if num.size > den.size:
+    if num.size > den.size + excess:
+        what = ("a proper transfer function" if not excess else
+                f"a numerator degree at most {excess} above the denominator's (s: the rate of an angle)")
         raise HesspipeError(f"{path}: field '{key}': not proper (numerator degree {num.size - 1} "
-                            f"> denominator degree {den.size - 1}); expected a proper transfer function")
+                            f"> denominator degree {den.size - 1}); expected {what}")
     return ct.tf(num, den)
 
 
@@ -558,7 +560,9 @@ def read_plants(path: str | Path) -> Plants:
     motion = obj.get("motion_path")
     return Plants(_read_tf(obj["control_to_output"], path, "control_to_output"),
                   _read_tf(obj["disturbance_to_output"], path, "disturbance_to_output"), meta,
-                  None if motion is None else _read_tf(motion, path, "motion_path"))
+                  # The cab's rate of an angle display is s times the angle: a bare
+                  # differentiator is a natural motion path (the pilot's loop stays proper).
+                  None if motion is None else _read_tf(motion, path, "motion_path", excess=1))
 
 
 def write_plants(path: str | Path, plants: Plants, **extra) -> Path:

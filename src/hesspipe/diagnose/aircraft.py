@@ -418,8 +418,6 @@ def corrected(run, plants, finding: PlantFinding):
         The corrected run and plants (new objects; the inputs are not modified).
     """
 
-
-
     def times(sys, block):
         (t,) = block.terms  # each factor is one rational term without delay
         return sys * ct.tf([t.gain * c for c in t.num], list(t.den))

@@ -90,7 +90,6 @@ def forced_response(sys, u: np.ndarray, dt: float, *, pad_factor: int = 4,
         Output samples, same length as `u`, in the output units of `sys`.
     """
 
-
     u = np.asarray(u, dtype=float)
     block = from_tf(sys)
     c = Contour.for_record(u.size, dt, pad_factor=pad_factor, decays=decays)

@@ -27,8 +27,15 @@ power between the lines (:func:`remnant_share`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
+
+import numpy as np
+import scipy.stats
+
+from ..identification.motion_test import analysis_window, forcing_lines, safe_motion_test
+from .results import Step
 
 
 @dataclass(frozen=True)
@@ -36,7 +43,23 @@ class MotionVerdict:
     """``named``: motion feedback explains the describing function; ``statistic`` (F),
     ``p_value``, ``gain`` (share of the describing-function misfit removed) of the test;
     ``Km`` fitted with its standard error ``Km_se``; ``n_lines`` used; ``note`` why no
-    verdict was possible (then the test fields are NaN)."""
+    verdict was possible (then the test fields are NaN).
+
+    Attributes
+    ----------
+    named : bool
+        Motion feedback explains the describing function (p < alpha).
+    statistic, p_value, gain : float
+        F statistic, its p-value (halved: Km >= 0) and the share of misfit removed.
+    Km, Km_se : float
+        Fitted vestibular gain and its standard error (control units per rad/s).
+    n_lines : int
+        Forcing lines used.
+    alpha : float
+        Significance level.
+    note : str
+        Why no verdict was possible, if none was.
+    """
 
     named: bool
     statistic: float = float("nan")
@@ -49,6 +72,7 @@ class MotionVerdict:
     note: str = ""
 
     def to_dict(self) -> dict:
+        """JSON-ready fields and the criterion that produced them."""
         return {"named": self.named, "statistic": self.statistic, "p_value": self.p_value,
                 "gain": self.gain, "Km": self.Km, "Km_se": self.Km_se, "n_lines": self.n_lines,
                 "alpha": self.alpha, "note": self.note,
@@ -68,7 +92,19 @@ class DFEvidence:
     ``motion`` (:class:`MotionVerdict`), ``delay`` (the extra-delay test as a dict),
     ``remnant`` (the control power between the lines, :func:`remnant_share`) and
     ``dynamics`` (the pilot's own delay, neuromuscular mode and lags, to start the
-    baseline from)."""
+    baseline from).
+
+    Attributes
+    ----------
+    motion : MotionVerdict
+        The motion test's verdict.
+    delay : dict
+        :func:`delay_test`'s result.
+    dynamics : dict
+        tau0 (s), wn (rad/s), zn, 1/T1, 1/T2 (rad/s) as the describing function gives them.
+    remnant : dict
+        Share of control power between the lines, its threshold and whether it is named.
+    """
 
     motion: MotionVerdict
     delay: dict
@@ -84,8 +120,16 @@ def delay_test(delay_s: float, se_s: float, max_pilot_delay_s: float, alpha: flo
     named only when the identified delay (s) is significantly beyond the longest a human
     pilot has, ``max_pilot_delay_s`` (s): ``z = (delay - max) / se``, named when
     ``P(N(0,1) > z) < alpha``; the extra delay is then ``delay - max`` (a lower bound).
+
+    Parameters
+    ----------
+    delay_s, se_s : float
+        Identified visual delay and its standard error, s.
+    max_pilot_delay_s : float
+        Longest delay a human pilot has, s.
+    alpha : float
+        Significance level.
     """
-    import scipy.stats
 
     z = (delay_s - max_pilot_delay_s) / se_s if se_s > 0 and math.isfinite(se_s) else \
         (math.inf if delay_s > max_pilot_delay_s else -math.inf)
@@ -105,12 +149,14 @@ def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float
     Every pilot model without a remnant answers a multisine with power at the forcing
     lines only, so the power between them is the remnant (the standard multisine estimate,
     SPEC "Describing functions"), measured over the window that puts the lines on bins.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run (multisine forcing).
+    band_hz : (float, float)
+        Band of the power sums, Hz.
     """
-    import dataclasses
-
-    import numpy as np
-
-    from ..identification.motion_test import analysis_window, forcing_lines
 
     start, length = analysis_window(run)
     cut = slice(start, start + length)
@@ -132,8 +178,21 @@ def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float
 
 def df_evidence(run, plants, start, *, k: int, cfg) -> DFEvidence | None:
     """Motion and delay verdicts and the pilot's dynamics from the describing function
-    (:func:`hesspipe.identification.motion_test.motion_test`), or None when the record has no forcing lines."""
-    from ..identification.motion_test import safe_motion_test
+    (:func:`hesspipe.identification.motion_test.motion_test`), or None when the record has no forcing lines.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run.
+    plants : hesspipe.core.formats.Plants
+        Yc, Yd and the optional motion path.
+    start : mapping
+        Starting parameters of the pilot model.
+    k : int
+        Hess's order (1 or 2).
+    cfg : DiagnoseConfig
+        ``motion_alpha``, ``alpha``, ``max_pilot_delay`` (s), ``remnant_share``.
+    """
 
     t = safe_motion_test(run, plants, start, k=k)
     if not t.get("available"):
@@ -157,8 +216,19 @@ def df_evidence(run, plants, start, *, k: int, cfg) -> DFEvidence | None:
 def motion_step(ev: DFEvidence, problem, current, cfg):
     """For :func:`hesspipe.diagnose.workflow.diagnose`: (step, fit) of the describing function's
     motion verdict. A named motion path is fitted into the model on the control spectrum
-    (Km started from the test's) so the later rounds extend it."""
-    from .results import Step
+    (Km started from the test's) so the later rounds extend it.
+
+    Parameters
+    ----------
+    ev : DFEvidence
+        What the describing function says.
+    problem : hesspipe.diagnose.fitting.Problem
+        The diagnosis's fits.
+    current : hesspipe.diagnose.fitting._Fit
+        The model fitted so far.
+    cfg : DiagnoseConfig
+        The diagnosis's settings.
+    """
 
     v = ev.motion
     aug = current.model.with_effect("motion_feedback")
@@ -182,8 +252,19 @@ def motion_step(ev: DFEvidence, problem, current, cfg):
 
 def delay_step(ev: DFEvidence, problem, current, cfg):
     """(step, fit) of the describing function's extra-delay verdict (see :func:`delay_test`);
-    a named delay enters the model as ``tau_x`` = the delay beyond a human's."""
-    from .results import Step
+    a named delay enters the model as ``tau_x`` = the delay beyond a human's.
+
+    Parameters
+    ----------
+    ev : DFEvidence
+        What the describing function says.
+    problem : hesspipe.diagnose.fitting.Problem
+        The diagnosis's fits.
+    current : hesspipe.diagnose.fitting._Fit
+        The model fitted so far.
+    cfg : DiagnoseConfig
+        The diagnosis's settings.
+    """
 
     d = ev.delay
     aug = current.model.with_effect("extra_delay")
@@ -203,8 +284,19 @@ def delay_step(ev: DFEvidence, problem, current, cfg):
 
 def remnant_step(ev: DFEvidence, problem, current, cfg):
     """(step, fit) of the remnant verdict: the power between the forcing lines (a model
-    without remnant has none there); a named remnant is fitted on the control spectrum."""
-    from .results import Step
+    without remnant has none there); a named remnant is fitted on the control spectrum.
+
+    Parameters
+    ----------
+    ev : DFEvidence
+        What the describing function says.
+    problem : hesspipe.diagnose.fitting.Problem
+        The diagnosis's fits.
+    current : hesspipe.diagnose.fitting._Fit
+        The model fitted so far.
+    cfg : DiagnoseConfig
+        The diagnosis's settings.
+    """
 
     r = ev.remnant
     aug = current.model.with_effect("remnant")

@@ -203,7 +203,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         # The configured order cannot close the loop on these plants (k = 1 on a K/s^2-like
         # plant: every double-integrator run was refused); Hess's rule's order can.
         cfg = replace(cfg, k=k_df)
-        problem = _Problem(run, plants, cfg, seed)
+        problem = Problem(run, plants, cfg, seed)
         start = {**base.defaults(k=k_df), **{n: v for n, v in (ev.dynamics if ev else {}).items()
                                              if n in start and n not in cfg.free}}
         current = problem.fit(base, start, grid=problem.free_parameters(base))

@@ -403,7 +403,6 @@ def multistart_fit(objective: _Base, names: Sequence[str], bounds: Mapping, star
         The best stable end point (or the best unstable one, flagged).
     """
 
-
     names = list(names)
     logm = np.array([n in LOG_PARAMETERS for n in names])
     lo = np.array([bounds[n][0] for n in names], dtype=float)

@@ -47,6 +47,10 @@ import numpy as np
 from scipy import optimize, stats
 
 from ..core.errors import HesspipeError
+from ..pilot.crossover import gain_scale
+from ..pilot.hess import PilotModel
+from ..pilot.motion import motion_block, with_motion_path
+from .frf import _lines, _window
 
 ALPHA = 0.05
 """Level at which a pilot's test is reported ``significant``."""
@@ -70,20 +74,8 @@ def analysis_window(run) -> tuple[int, int]:
     (int, int)
         First sample and number of samples of the window.
     """
-    from .frf import _purity, _window
-
     d = np.asarray(run.disturbance, dtype=float)
     r = np.asarray(run.reference, dtype=float)
-    # The record as written (or less its last sample) when each forcing on its own is a
-    # clean multisine there. Judged per signal: target lines sit one bin above the
-    # disturbance's (interleaved sets), so in their sum the low lines are neighbours, stand
-    # no LINE_RATIO above each other, and the sum's purity is low however exact the window
-    # (then the search below picked half records and lost most lines: 2-8 of 20 found).
-    n = d.size
-    forcings = [x for x in (d, r) if np.any(x)]
-    for length in (n, n - 1):
-        if forcings and min(_purity(x[n - length:])[0] for x in forcings) >= 0.999:
-            return n - length, length
     start, length, _ = _window(d, r if np.any(r) else None)
     return int(start), int(length)
 
@@ -105,7 +97,6 @@ def forcing_lines(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> np.ndarray:
         Sorted bin indices; empty if the forcing has no line structure (lines as in
         :mod:`hesspipe.identification.frf`: a bin standing far above its neighbours).
     """
-    from .frf import _lines
 
     n = len(run.control)
     f = np.fft.rfftfreq(n, run.dt)
@@ -120,18 +111,11 @@ def forcing_lines(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> np.ndarray:
     return np.array(sorted(lines), dtype=int)
 
 
-def _blocks(params, model, cab, s):
-    """NM, PF, visual, vestibular responses of `model` with `params` at `s`."""
-    from ..pilot.motion import with_motion_path
-
-    loop = with_motion_path(model.loop(params), cab)
-    return (loop.neuromuscular.response(s), loop.proprioceptive.response(s),
-            loop.visual.response(s), loop.vestibular.response(s))
-
-
 def _predict(params, model, cab, s, E, Y):
-    nm, pf, vis, ves = _blocks(params, model, cab, s)
-    return nm * (vis * E - ves * Y) / (1.0 + nm * pf)
+    # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y).
+    loop = with_motion_path(model.loop(params), cab)
+    nm = loop.neuromuscular.response(s)
+    return nm * (loop.visual.response(s) * E - loop.vestibular.response(s) * Y) / loop.return_difference(s, None)
 
 
 def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, w):
@@ -202,9 +186,6 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         parameters) and ``standard_errors_original`` (of the original's free
         parameters; diagnose reads the pilot's own delay from them).
     """
-    from ..pilot.crossover import gain_scale
-    from ..pilot.hess import PilotModel
-    from ..pilot.motion import motion_block
 
     start_, length = analysis_window(run)
     if length < len(run.control):

@@ -160,7 +160,6 @@ def draw_plants(folder: str | Path, fits: dict, *, synthetic: bool = False) -> l
         Label the figures SYNTHETIC.
     """
 
-
     folder = Path(folder)
     plot_validation(fits, folder / "plants_validation.png", synthetic=synthetic)
     plot_bode(fits, folder / "plants_bode.png", synthetic=synthetic, reference=ct.tf(*PAPER_EQ16))
