@@ -1,6 +1,6 @@
 """The comparison's text and files: the plain-text table and ``comparison.json``/``.md``.
 
-Duck-typed on :class:`hesspipe.pilots.compare.Comparison` (this module is below it).
+Duck-typed on :class:`hesspipe.pilots.results.Comparison` (this module is below it).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ def format_table(comparison) -> str:
     Parameters
     ----------
     comparison : Comparison
-        A :class:`hesspipe.pilots.compare.Comparison` (duck-typed: ``pilots``,
+        A :class:`hesspipe.pilots.results.Comparison` (duck-typed: ``pilots``,
         ``failures``, ``synthetic``, ``verdict()``, ``improvement_stats()``,
         ``km_fixed_value()``).
 
@@ -99,7 +99,7 @@ def write_comparison(comparison, out_dir: str | Path, *, draw: Callable | None =
     Parameters
     ----------
     comparison : Comparison
-        A :class:`hesspipe.pilots.compare.Comparison` (duck-typed: ``to_dict()``
+        A :class:`hesspipe.pilots.results.Comparison` (duck-typed: ``to_dict()``
         and ``table()``).
     out_dir : str or Path
         Existing folder the files are written into.

@@ -21,7 +21,7 @@ def plot_pilot(pilot, path: str | Path) -> Path:
 
     Parameters
     ----------
-    pilot : hesspipe.pilots.compare.PilotComparison
+    pilot : hesspipe.pilots.results.PilotComparison
     path : path
         Image file (format from the suffix); stamped "SYNTHETIC DATA" if the run is synthetic.
     """
@@ -43,7 +43,7 @@ def plot_df(pilot, path: str | Path) -> Path:
 
     Parameters
     ----------
-    pilot : hesspipe.pilots.compare.PilotComparison
+    pilot : hesspipe.pilots.results.PilotComparison
         With ``frf`` (the nonparametric describing function) and both identified models.
     path : str or Path
         PNG to write.
@@ -65,7 +65,7 @@ def draw_pilots(folder: str | Path, pilots) -> list[str]:
     ----------
     folder : str or Path
         Folder to draw into.
-    pilots : sequence of hesspipe.pilots.compare.PilotComparison
+    pilots : sequence of hesspipe.pilots.results.PilotComparison
         The compared pilots.
     """
     folder = Path(folder)
@@ -85,7 +85,7 @@ def draw_comparison(folder: str | Path, comparison) -> list[str]:
     ----------
     folder : str or Path
         The comparison's (staging) folder.
-    comparison : hesspipe.pilots.compare.Comparison
+    comparison : hesspipe.pilots.results.Comparison
         The compared pilots.
     """
     return [f"figures/{name}" for name in draw_pilots(Path(folder) / "figures", comparison.pilots)]
