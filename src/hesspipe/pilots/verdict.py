@@ -1,32 +1,9 @@
 """Does motion feedback improve the fit? A per-pilot test and a cohort verdict.
 
-Per pilot (:func:`hesspipe.identification.motion_test.motion_test`, shared with
-diagnose): a likelihood-ratio test on the pilot's
-**describing-function lines**. A multisine experiment forces the loop on a set
-of frequency lines (disturbance and/or target); at those lines the Fourier
-coefficients of control U, output Y and error E = R − Y are far above the
-remnant. The Hess loop (SPEC.md "Stage three", expanded model) holds at every
-frequency::
-
-    U (1 + NM PF) = NM (visual E − vestibular Y) + N        (N: remnant)
-
-so each model predicts U from the measured E and Y (an equation-error form:
-no closed-loop simulation, target and disturbance lines alike). The residual
-at a line is remnant filtered by ``1/(1 + NM PF)``; its variance is estimated
-from the same residual at the neighbouring, unforced bins. With residuals
-scaled by it (which fixes the misfit's frequency shape; its overall level is
-left to the data), the nested-model likelihood-ratio test for the one extra
-parameter Km (the expanded model is the original at Km = 0) is the F test
-
-    F = (RSS_original − RSS_expanded) / (RSS_expanded / (2 L − p_expanded))
-
-(L complex lines, 2 L real residuals). Km ≥ 0 sits on the boundary of its
-space, so under "no motion feedback" F is 0 half the time (Self & Liang 1987):
-``p = ½ P(F(1, 2L − p) > F)``. Both models are fitted by bounded least
-squares (Ke, K1, 1/T1, tau0, wn, zn, and 1/T2 for k = 2; K2 is held because
-only K1 K2 is identifiable), several starts each. The **gain** is
-``1 − RSS_expanded / RSS_original``: the share of the describing-function
-misfit that the motion path removes.
+Per pilot: :func:`hesspipe.identification.motion_test.motion_test` (shared with
+diagnose), the likelihood-ratio (F) test of Km on the pilot's describing-function lines;
+its module docstring gives the equation and the test. Its **gain** is the share of the
+describing-function misfit that the motion path removes.
 
 Across pilots (:func:`cohort_verdict`): under "no pilot uses motion" the
 per-pilot p-values are independent and (super-)uniform, so Fisher's
