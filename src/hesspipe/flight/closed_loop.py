@@ -43,6 +43,7 @@ touches), or the bank leaves +- ``max_bank_deg``; nothing is written then.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import tempfile
@@ -448,8 +449,6 @@ def _plants_aircraft(plants: Plants) -> str | None:
         folder = src.get("flight_dir")
         if isinstance(folder, str):
             try:
-                import json
-
                 man = json.loads((Path(folder) / "manifest.json").read_text(encoding="utf-8"))
                 return man.get("aircraft") if isinstance(man.get("aircraft"), str) else None
             except (OSError, ValueError):

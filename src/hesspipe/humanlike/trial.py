@@ -20,6 +20,7 @@ from .lti import discretise, ss_from_tf, zoh
 from .plants import Plant, make_plant
 from .simulate import Wiring, compile_loop, delay_steps
 from .truth import build_truth, outer_holds
+from .writer import draw_style
 
 EFFECTS = ("motion_feedback", "extra_delay", "remnant", "dutch_roll", "actuator_lag", "rate_limit")
 
@@ -282,7 +283,6 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         raise HesspipeError(f"remnant_at: expected 'control' or 'error', got {remnant['at']!r}")
     style = opts["style"]
     if style is None:
-        from .writer import draw_style
         style = draw_style(rng["style"])
     name = opts["name"] or f"trial-{seed}"
     options = {k: opts[k] for k in ("fs", "T_m", "run_in", "fade", "fine_ratio", "n_lines",
