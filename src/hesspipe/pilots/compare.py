@@ -96,6 +96,7 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
     model = model_from_name(model)
     complete = model.complete(params, k, strict=True)
     if criterion != "paper":
+        # Looked up at call time: tests intercept identification.fit.identify here.
         from ..identification.fit import identify
 
         res = identify(run, plants, model, free=(), fixed=complete, k=k, band=band,
@@ -227,6 +228,7 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
                   k=settings.k, restarts=settings.restarts, with_benchmark=settings.benchmark)
     frf = None
     if settings.criterion != "paper":
+        # Looked up at call time, like identify above.
         from ..identification.frf import estimate_frf
 
         # One nonparametric estimate serves every configuration's fit.
