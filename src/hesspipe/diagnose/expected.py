@@ -57,7 +57,6 @@ class ExpectedSpectrum:
         f = self.freq.copy()
         f[0] = f[1] * 1e-6
         self.s = 2j * np.pi * f
-        self.yc = from_tf(plants.control_to_output).response(self.s)
         # Expected remnant PSD (see :meth:`remnant_psd`): the density up to `_KERNEL_MARGIN`
         # bins past the highest reported frequency, folded through the window kernel. It
         # is sampled every 1/16 Welch bin below `_FINE_HZ`, where the narrow features are
