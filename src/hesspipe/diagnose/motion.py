@@ -236,18 +236,12 @@ def motion_step(ev: DFEvidence, problem, current, cfg):
     if v.named:
         km = v.Km if math.isfinite(v.Km) and v.Km > 0 else 1e-3
         fit = problem.fit(aug, {**current.parameters, "Km": km}, grid=("Km",))
-    fitted = bool(fit is not None and fit.stable)
-    gap = problem.likelihood.gap(fit.psd) if fitted else float("nan")
     # The describing function decides, not the control spectrum: before the remnant is
     # named the spectrum of a right vestibular path can fit worse than the baseline's.
-    step = Step(round=0, candidate="motion_feedback", model=aug.name, status="ok",
-                accepted=v.named, statistic=v.statistic, dof=1, p_value=v.p_value,
-                threshold=cfg.motion_alpha, delta_bic=float("nan"), gap=gap, gap_ok=True,
-                log_rms_db=problem.likelihood.log_rms_db(fit.psd) if fitted else float("nan"),
-                # Km as the describing function sees it: the control spectrum barely does.
-                parameters={"Km": v.Km, "Km_se": v.Km_se},
-                evaluations=fit.evaluations if fit is not None else 0)
-    return step, (fit if fitted else None)
+    # Km is reported as the describing function sees it: the control spectrum barely does.
+    return _df_step(problem, aug, fit, "motion_feedback", accepted=v.named, statistic=v.statistic,
+                    dof=1, p_value=v.p_value, threshold=cfg.motion_alpha,
+                    parameters={"Km": v.Km, "Km_se": v.Km_se})
 
 
 def delay_step(ev: DFEvidence, problem, current, cfg):
@@ -272,14 +266,8 @@ def delay_step(ev: DFEvidence, problem, current, cfg):
     if d["named"]:
         fit = problem.fit(aug, {**current.parameters, "tau0": d["max_pilot_delay_s"],
                                 "tau_x": d["extra_s"]})
-    fitted = bool(fit is not None and fit.stable)
-    step = Step(round=0, candidate="extra_delay", model=aug.name, status="ok", accepted=d["named"],
-                statistic=d["z"], dof=1, p_value=d["p_value"], threshold=d["alpha"],
-                delta_bic=float("nan"), gap=problem.likelihood.gap(fit.psd) if fitted else float("nan"),
-                gap_ok=True, log_rms_db=problem.likelihood.log_rms_db(fit.psd) if fitted else float("nan"),
-                parameters=fit.parameters if fitted else {"tau_x": d["extra_s"]},
-                evaluations=fit.evaluations if fit is not None else 0)
-    return step, (fit if fitted else None)
+    return _df_step(problem, aug, fit, "extra_delay", accepted=d["named"], statistic=d["z"], dof=1,
+                    p_value=d["p_value"], threshold=d["alpha"], unfitted={"tau_x": d["extra_s"]})
 
 
 def remnant_step(ev: DFEvidence, problem, current, cfg):
@@ -301,11 +289,23 @@ def remnant_step(ev: DFEvidence, problem, current, cfg):
     r = ev.remnant
     aug = current.model.with_effect("remnant")
     fit = problem.fit(aug, current.parameters, grid=("Kn", "Tn")) if r["named"] else None
+    return _df_step(problem, aug, fit, "remnant", accepted=r["named"], statistic=r["share"], dof=2,
+                    p_value=float("nan"), threshold=r["threshold"])
+
+
+def _df_step(problem, aug, fit, candidate: str, *, accepted: bool, statistic: float, dof: int,
+             p_value: float, threshold: float, parameters: dict | None = None,
+             unfitted: dict | None = None):
+    """(step, fit or None) of a describing-function verdict on `candidate`, with the gap and
+    log-RMS of its control-spectrum `fit` (NaN when none or unstable). The step's parameters
+    are `parameters` if given, else the fit's, else `unfitted`."""
     fitted = bool(fit is not None and fit.stable)
-    step = Step(round=0, candidate="remnant", model=aug.name, status="ok", accepted=r["named"],
-                statistic=r["share"], dof=2, p_value=float("nan"), threshold=r["threshold"],
-                delta_bic=float("nan"), gap=problem.likelihood.gap(fit.psd) if fitted else float("nan"),
-                gap_ok=True, log_rms_db=problem.likelihood.log_rms_db(fit.psd) if fitted else float("nan"),
-                parameters=fit.parameters if fitted else {},
-                evaluations=fit.evaluations if fit is not None else 0)
+    if parameters is None:
+        parameters = fit.parameters if fitted else dict(unfitted or {})
+    nan = float("nan")
+    step = Step(round=0, candidate=candidate, model=aug.name, status="ok", accepted=accepted,
+                statistic=statistic, dof=dof, p_value=p_value, threshold=threshold, delta_bic=nan,
+                gap=problem.likelihood.gap(fit.psd) if fitted else nan, gap_ok=True,
+                log_rms_db=problem.likelihood.log_rms_db(fit.psd) if fitted else nan,
+                parameters=parameters, evaluations=fit.evaluations if fit is not None else 0)
     return step, (fit if fitted else None)
