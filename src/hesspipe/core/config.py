@@ -401,8 +401,34 @@ class Settings:
         for name, value in self._checked(f).items():
             object.__setattr__(self, name, value)  # frozen: normalised once, here
 
+    #: The TOML table the settings come from, named in error messages (a subclass sets it).
+    TABLE = ""
+
     def _checked(self, f: Fields) -> dict:  # pragma: no cover - every subclass defines it
         raise NotImplementedError
+
+    @classmethod
+    def from_table(cls, table: Mapping | None, source: str | Path | None = None, prefix: str | None = None):
+        """Build from the stage's TOML table: it is only mapped onto the constructor, which
+        checks every value; unknown keys are refused.
+
+        Parameters
+        ----------
+        table : mapping or None
+            The table (None: all defaults).
+        source : str or Path, optional
+            The file it came from, named in error messages (default ``<TABLE defaults>``).
+        prefix : str, optional
+            The table's name in error messages (default :attr:`TABLE`).
+        """
+        prefix = cls.TABLE if prefix is None else prefix
+        f = Fields(table, f"<{prefix} defaults>" if source is None else source, prefix)
+        return cls._from_fields(f, **cls._table_values(f))
+
+    @classmethod
+    def _table_values(cls, f: Fields) -> dict:
+        """Fields built from sub-tables of `f` (none by default), passed over the table's keys."""
+        return {}
 
     @classmethod
     def _from_fields(cls, f: Fields, **values):

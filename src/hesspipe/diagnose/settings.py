@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Mapping
 
 from ..core.config import Fields, Settings
 
@@ -72,6 +71,8 @@ class DiagnoseConfig(Settings):
         (:mod:`hesspipe.diagnose.motion`).
     """
 
+    TABLE = "diagnose"
+
     candidates: tuple[str, ...] | None = None
     band_hz: tuple[float, float] = (0.0, 5.0)
     band_edges_hz: tuple[float, ...] = BAND_EDGES_HZ
@@ -136,21 +137,6 @@ class DiagnoseConfig(Settings):
                     max_pilot_delay=f.number("max_pilot_delay", min=0.0, max=2.0),
                     remnant_share=f.number("remnant_share", min=0.0, max=1.0))
 
-    @classmethod
-    def from_table(cls, table: Mapping | None, source: str = "<config>",
-                   prefix: str = "diagnose") -> "DiagnoseConfig":
-        """Build from a ``[diagnose]`` TOML table; unknown keys and bad values raise.
-
-        Parameters
-        ----------
-        table : mapping or None
-            The ``[diagnose]`` table (None: all defaults).
-        source : str
-            The file it came from, named in error messages.
-        prefix : str
-            The table's name in error messages.
-        """
-        return cls._from_fields(Fields(table, source, prefix))
 
 
 def _fractions(f: Fields, key: str, default) -> tuple[float, ...]:

@@ -56,7 +56,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable, Mapping
+from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -122,6 +122,8 @@ class FlightConfig(Settings):
         (``[flight.aileron_excitation]``).
     """
 
+    TABLE = "flight"
+
     duration_s: float = 70.0
     dt_s: float = 1.0 / 120.0
     record_every: int = 1
@@ -150,26 +152,13 @@ class FlightConfig(Settings):
         return out
 
     @classmethod
-    def from_table(cls, table: Mapping | None, source: str | Path = "<flight defaults>",
-                   prefix: str = "flight") -> "FlightConfig":
-        """Build from the ``[flight]`` table of a TOML file; unknown keys are errors.
-
-        Parameters
-        ----------
-        table : mapping or None
-            The ``[flight]`` table, with its sub-tables ``side_wind``,
-            ``wind_excitation`` and ``aileron_excitation`` (None: all defaults).
-        source : str or Path
-            The file it came from, named in error messages.
-        prefix : str
-            The table's name in error messages.
-        """
-        f = Fields(table, source, prefix)
+    def _table_values(cls, f: Fields) -> dict:
+        """The sub-tables ``side_wind``, ``wind_excitation`` and ``aileron_excitation``, built."""
         d = cls()
-        return cls._from_fields(
-            f, side_wind=SideWind.from_fields(f.table_("side_wind")),
-            wind_excitation=Excitation.from_fields(f.table_("wind_excitation"), d.wind_excitation),
-            aileron_excitation=Excitation.from_fields(f.table_("aileron_excitation"), d.aileron_excitation))
+        return dict(side_wind=SideWind.from_fields(f.table_("side_wind")),
+                    wind_excitation=Excitation.from_fields(f.table_("wind_excitation"), d.wind_excitation),
+                    aileron_excitation=Excitation.from_fields(f.table_("aileron_excitation"),
+                                                              d.aileron_excitation))
 
     def to_dict(self) -> dict:
         """Plain dict (for manifests); None values are left out."""

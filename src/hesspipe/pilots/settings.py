@@ -9,7 +9,6 @@ format and the batch, plus the identification settings by the same names
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Mapping
 
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.config import Fields, Settings
@@ -173,6 +172,8 @@ class PilotsConfig(Settings):
         (default; within the crossover-model limits, :mod:`hesspipe.pilots.cohort`) or "table1".
     """
 
+    TABLE = "pilots"
+
     data: str = ""
     n: int = 6
     seed: int | None = None
@@ -219,20 +220,6 @@ class PilotsConfig(Settings):
             raise f.fail("duration_s", str(exc)) from None
         return out
 
-    @classmethod
-    def from_table(cls, table: Mapping | None, source: str, prefix: str = "pilots") -> "PilotsConfig":
-        """Build from the ``[pilots]`` TOML table; unknown keys are rejected.
-
-        Parameters
-        ----------
-        table : mapping or None
-            The ``[pilots]`` table (None: all defaults).
-        source : str
-            The file it came from, named in error messages.
-        prefix : str
-            The table's name in error messages.
-        """
-        return cls._from_fields(Fields(table, source, prefix))
 
     def settings(self, seed: int = 0) -> CompareSettings:
         """The identification settings of this table; its ``seed``, else `seed` (the pipeline's).

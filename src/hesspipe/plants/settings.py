@@ -4,8 +4,6 @@ construction, built alike from TOML, the command line and Python."""
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from pathlib import Path
-from typing import Mapping
 
 from ..core.config import Fields, Settings
 from . import arx as _arx
@@ -97,6 +95,8 @@ class PlantsConfig(Settings):
         reflected into the left half plane. Both fits are reported.
     """
 
+    TABLE = "plants"
+
     decimate: int = 6
     criterion: str = "bic"
     focus: str = "simulation"
@@ -144,21 +144,6 @@ class PlantsConfig(Settings):
             raise f.error("check_band_hz", "[low, high] with 0 < low < high (Hz)", list(cfg["check_band_hz"]))
         return cfg
 
-    @classmethod
-    def from_table(cls, table: Mapping | None, source: str | Path = "<plants defaults>",
-                   prefix: str = "plants") -> "PlantsConfig":
-        """Build from the ``[plants]`` TOML table; unknown keys are rejected.
-
-        Parameters
-        ----------
-        table : mapping or None
-            The ``[plants]`` table (None: all defaults).
-        source : str or Path
-            The file it came from, named in error messages.
-        prefix : str
-            The table's name in error messages.
-        """
-        return cls._from_fields(Fields(table, source, prefix))
 
     def to_dict(self) -> dict:
         """The settings as JSON-ready values."""
@@ -184,6 +169,8 @@ class AnalyticConfig(Settings):
         rolling approximation does not have) or ``-(Lb/U) / (s - Lp)``.
     """
 
+    TABLE = "analytic"
+
     model: str = "roskam"
     control: str = "rolling"
     disturbance: str = "full"
@@ -192,18 +179,3 @@ class AnalyticConfig(Settings):
         return dict(model=f.string("model"), control=f.string("control", choices=("rolling", "full")),
                     disturbance=f.string("disturbance", choices=("full", "rolling")))
 
-    @classmethod
-    def from_table(cls, table: Mapping | None, source: str | Path = "<analytic defaults>",
-                   prefix: str = "analytic") -> "AnalyticConfig":
-        """Build from the ``[analytic]`` TOML table; unknown keys are rejected.
-
-        Parameters
-        ----------
-        table : mapping or None
-            The ``[analytic]`` table (None: all defaults).
-        source : str or Path
-            The file it came from, named in error messages.
-        prefix : str
-            The table's name in error messages.
-        """
-        return cls._from_fields(Fields(table, source, prefix))
