@@ -17,13 +17,9 @@ seeds, gave one false "yes" from a pilot whose original fit had stopped in a
 local optimum: hence the exchange of optima in :func:`motion_test`. See
 benchmarks/bench_verdict.py and the README for the numbers.)
 
-Records without separated multisine lines (random wind or gusts, as in the
-JSBSim pipeline's cohort) have no describing function to test: the pilot's
-test is "not available" and the verdict says so instead of guessing from
-spectra. (Tried and dropped: the same equation error over every forced bin of
-a broadband record. There the remnant drives E and Y too, the regression is
-biased by the closed loop, and on hesspipe's own cohort with Km = 2-8 it found
-motion in 0 of 4 pilots.)
+A pilot whose record has no separated multisine lines (gusts, as in the JSBSim
+pipeline's cohort) has no test ("not available", see the motion test), and the
+verdict says so instead of guessing from spectra.
 """
 
 from __future__ import annotations
