@@ -60,6 +60,17 @@ EVERY = 3  # 120 Hz -> 40 Hz records, as the pipeline's JSBSim cohort
 RESTARTS, PASSES = 2, 10  # the pipeline's APID budget (--restarts/--passes change it)
 CRITERION = "df"  # the pipeline's identification criterion (--criterion changes it)
 DRAW = "crossover_model"  # the pipeline's cohort draw (--cohort changes it)
+FORCING = "paper"  # --forcing: the paper's side wind + gusts, or the two-input multisines
+RUN_IN_S = 15.0
+
+
+def forcing_kwargs() -> dict:
+    """fly_pilot_record's forcing arguments for --forcing (two-input: an 85 s flight whose last
+    70 s, one whole period of the wind and target lines, are recorded)."""
+    if FORCING == "paper":
+        return {}
+    from hesspipe.flight.target import TWO_INPUT
+    return {"target": TWO_INPUT, "config": FlightConfig(duration_s=70.0 + TWO_INPUT.run_in_s)}
 
 
 def loop_gain(model, params, plants, w: float) -> float:
@@ -260,7 +271,7 @@ DIAG_CASES = {
 def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
     from hesspipe.diagnose.workflow import diagnose
 
-    print(f"\n== 4. diagnose (baseline 'original') on JSBSim-flown runs, {seeds} seeds per case, "
+    print(f"\n== 4. diagnose (baseline 'original') on JSBSim-flown runs ({FORCING} forcing), {seeds} seeds per case, "
           f"pilots of the '{how}' draw" + (" (tau0 = 0.1 s and 1/T1 = 0.01 as diagnose's baseline holds them: "
                                           "the hidden effect is the only pilot-side difference)" if how == "table1" else
                                           " (the pipeline's cohort: tau0 ~0.2 s, 1/T1 by Hess's rule, which "
@@ -282,25 +293,28 @@ def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
             try:
                 f = fly_pilot_record("737", plants, model, {**params, **hidden}, seed=pseed,
                                      workdir=work / "diag", record_every=EVERY,
-                                     remnant_share=truth["remnant_share"], run_id=pid)
+                                     remnant_share=truth["remnant_share"], run_id=pid, **forcing_kwargs())
             except HesspipeError as exc:
                 rows.append(f"  {pid}: flight failed ({exc})")
                 continue
-            lin = linear_run(plants, f.truth["model"], f.truth["parameters"], f.run, f.truth["seeds"]["remnant"])
+            lin = (linear_run(plants, f.truth["model"], f.truth["parameters"], f.run, f.truth["seeds"]["remnant"])
+                   if FORCING == "paper" else None)  # (the linear twin has no reference)
             try:
                 d = diagnose(f.run, plants, model="original", seed=pseed)
-                d_lin = diagnose(lin, plants, model="original", seed=pseed)
+                d_lin = diagnose(lin, plants, model="original", seed=pseed) if lin is not None else None
             except HesspipeError as exc:
                 rows.append(f"  {pid}: diagnose refused ({exc})")
                 continue
             named.append(tuple(d.named_effects))
-            named_lin.append(tuple(d_lin.named_effects))
+            if d_lin is not None:
+                named_lin.append(tuple(d_lin.named_effects))
             rows.append(f"  {pid}: hidden {hidden or '-'} -> jsbsim run: named {list(d.named_effects) or 'nothing'} "
-                        f"(plant check fit {d.plant_check.fit_percent:.0f} %); same pilot, linear fft run: "
-                        f"named {list(d_lin.named_effects) or 'nothing'}")
+                        f"(plant check fit {d.plant_check.fit_percent:.0f} %)"
+                        + (f"; same pilot, linear fft run: named {list(d_lin.named_effects) or 'nothing'}"
+                           if d_lin is not None else ""))
         print(f"{case}:")
         print("\n".join(rows))
-        for label, got in (("jsbsim", named), ("fft", named_lin)):
+        for label, got in (("jsbsim", named), ("fft", named_lin)) if named_lin else (("jsbsim", named),):
             if case == "baseline":
                 side = sum(any(e in ("motion_feedback", "extra_delay", "otoliths") for e in n) for n in got)
                 print(f"  -> {label}: baseline runs naming a pilot-side effect other than the remnant they "
@@ -321,10 +335,14 @@ def main(argv=None) -> int:
     ap.add_argument("--passes", type=int, default=10)
     ap.add_argument("--criterion", default="df", choices=("df", "paper", "output"))
     ap.add_argument("--cohort", default="crossover_model", choices=("crossover_model", "table1"))
+    ap.add_argument("--forcing", default="paper", choices=("paper", "two-input"),
+                    help="the paper's side wind and gusts, or hesspipe.flight.target.TWO_INPUT (wind and "
+                         "roll-rate target multisines, 15 s run-in not recorded) for the diagnose section")
     ap.add_argument("--diag-cohorts", default="table1,crossover_model",
                     help="cohort draws of the diagnose section's pilots (comma list)")
     args = ap.parse_args(argv)
-    globals().update(RESTARTS=args.restarts, PASSES=args.passes, CRITERION=args.criterion, DRAW=args.cohort)
+    globals().update(RESTARTS=args.restarts, PASSES=args.passes, CRITERION=args.criterion, DRAW=args.cohort,
+                     FORCING=args.forcing)
     skip = set(args.skip.split(","))
     print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737 (hesspipe.flight.closed_loop)")
     with tempfile.TemporaryDirectory() as tmp:

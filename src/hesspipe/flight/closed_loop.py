@@ -270,7 +270,9 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
         (default :data:`DEFAULT_REMNANT_SHARE`).
     target : hesspipe.flight.target.TargetForcing, optional
         Two-input forcing: its wind lines replace ``config.wind_excitation`` and its
-        target lines are the reference (then `reference` must not be given).
+        target lines are the reference (then `reference` must not be given); its run-in
+        is flown but not recorded (the record starts at ``run_in_s``); without
+        ``target.paper_side_wind`` the paper's turning side wind is left out.
 
     Raises
     ------
@@ -294,6 +296,8 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
         if reference is not None:
             raise HesspipeError("reference: expected either a reference or a target forcing, not both")
         wind, reference = target.signals(t, gust_seed)
+        if not target.paper_side_wind:  # its drift would hide the low wind lines
+            along, lateral = np.zeros(n), np.zeros(n)
         lateral = lateral + wind
     else:
         lateral = lateral + config.wind_excitation.signal(t, gust_seed)
@@ -331,6 +335,7 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
                            max_bank_deg, f"{ac.name} closed-loop pilot record (seed {seed})")
     finally:
         jsbsim.set_logger(previous)
+    first = int(round(target.run_in_s / dt)) if target is not None else 0
     trim = dict(trim, record_terrain_ft=terrain, record_h_agl_ft=trim["h_sl_ft"] - terrain)
     plants_aircraft = _plants_aircraft(plants)
     truth = {
@@ -357,11 +362,13 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
         "dt_s": dt * record_every,
         "simulation_dt_s": dt,
         "duration_s": config.duration_s,
-        "disturbance": {"side_wind": vars(config.side_wind),
+        "disturbance": {"side_wind": (vars(config.side_wind) if target is None or target.paper_side_wind
+                                      else "none (two-input forcing without the paper's side wind)"),
                         "excitation": (config.wind_excitation.describe("ft/s") if target is None
                                        else "interleaved multisine (see target)"),
                         "signal": "lateral wind relative to the actual heading, ft/s"},
         "target": None if target is None else target.describe(),
+        "record_start_s": float(t[first]),
         "envelope": {"speed_kts": [float(rec["vc_kts"].min()), float(rec["vc_kts"].max())],
                      "trim_speed_kts": trim["vc_kts"],
                      "min_agl_ft": float(rec["h_agl_ft"].min()),
@@ -376,7 +383,9 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
                 "signs: disturbance = lateral wind ft/s (+ towards the right wing), output = roll "
                 "rate rad/s, control = fcs/aileron-cmd-norm (pilot's command, + rolls right)",
                 "timing: row k = input over [t_k, t_k + dt], output at t_k + dt")
-    sl = slice(None, None, record_every)
+    # The run-in is flown but not recorded: the record is the forcing's last whole period,
+    # so the start-up transient stays out of it and the lines fall on its bins.
+    sl = slice(first, None, record_every)
     run = Run(time=rec["time"][sl], disturbance=rec["disturbance"][sl], output=rec["output"][sl],
               control=rec["control"][sl], reference=rec["reference"][sl], id=run_id, synthetic=True,
               comments=comments)

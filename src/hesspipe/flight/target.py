@@ -13,6 +13,13 @@ vestibular channel (:func:`hesspipe.identification.criteria.model_df_reference`)
 the disturbance lines and the roll-rate reference (rad/s) on the lines one bin
 above them, both periodic over the record so that each line falls on one DFT
 bin, with the bins between left free for the remnant.
+
+Two design choices decide whether the lines can be read (measured on flown runs,
+``benchmarks/bench_km_identifiability.py``): a run-in (``run_in_s``) before the analysed
+period, so that the loop's start-up transient (its slow proprioceptive and washout modes
+take 10-20 s to settle) does not leak into the lines, and no paper's turning side wind
+(``paper_side_wind``), whose ~17 ft/s drift leaks over the low wind lines and hides them.
+Both are off by default (the first two-input study's design); :data:`TWO_INPUT` has both on.
 """
 
 from __future__ import annotations
@@ -114,6 +121,12 @@ class TargetForcing:
     corner_hz : float
         The target's amplitudes rise like ``f / (f + corner_hz)`` (Hz): a roll-rate
         target whose bank angle stays small at the low lines.
+    run_in_s : float
+        Run-in, s: the signals are periodic with period = record length - `run_in_s`,
+        so the record's last period is one whole period of both and the start-up
+        transient falls in the run-in (the analysis window ends at the record's end).
+    paper_side_wind : bool
+        Keep the paper's turning side wind under the wind lines (False: the wind lines alone).
     """
 
     target_rms: float = 0.02
@@ -122,9 +135,13 @@ class TargetForcing:
     f_min_hz: float = 0.03
     f_max_hz: float = 2.0
     corner_hz: float = 0.3
+    run_in_s: float = 0.0
+    paper_side_wind: bool = True
 
     def __post_init__(self):
-        for name in ("target_rms", "wind_rms", "f_min_hz", "f_max_hz", "corner_hz"):
+        if not isinstance(self.paper_side_wind, bool):
+            raise HesspipeError(f"target: paper_side_wind: expected true or false, got {self.paper_side_wind!r}")
+        for name in ("target_rms", "wind_rms", "f_min_hz", "f_max_hz", "corner_hz", "run_in_s"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0):
                 raise HesspipeError(f"target: {name}: expected a finite number >= 0, got {v!r}")
@@ -143,7 +160,10 @@ class TargetForcing:
             Seed of both sets' phases (derived per set).
         """
         t = np.asarray(t, dtype=float)
-        period = (t[-1] - t[0]) + (t[1] - t[0])
+        period = (t[-1] - t[0]) + (t[1] - t[0]) - self.run_in_s
+        if not period > 0:
+            raise HesspipeError(f"target: run_in_s: expected shorter than the record "
+                                f"({(t[-1] - t[0]) + (t[1] - t[0]):g} s), got {self.run_in_s:g}")
         kd, kt = interleaved_lines(period, self.n_lines, self.f_min_hz, self.f_max_hz)
         wind = line_multisine(t, kd, period, self.wind_rms, derive_seed(seed, "target-wind"))
         ref = line_multisine(t, kt, period, self.target_rms, derive_seed(seed, "target"), self.corner_hz)
@@ -154,4 +174,11 @@ class TargetForcing:
         return {"kind": "multisine", "target_rms_rad_s": self.target_rms,
                 "wind_rms_ft_s": self.wind_rms, "lines_per_set": self.n_lines,
                 "band_hz": [self.f_min_hz, self.f_max_hz], "target_corner_hz": self.corner_hz,
-                "note": "disturbance and target on interleaved lines (target = disturbance line + 1)"}
+                "run_in_s": self.run_in_s, "paper_side_wind": self.paper_side_wind,
+                "note": "disturbance and target on interleaved lines (target = disturbance line + 1); "
+                        "periodic over the record less the run-in"}
+
+
+TWO_INPUT = TargetForcing(run_in_s=15.0, paper_side_wind=False)
+"""The two-input design that identification can read on flown runs: a 15 s run-in and the
+wind lines alone (fly 85 s for a 70 s analysed period)."""
