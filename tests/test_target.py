@@ -113,3 +113,47 @@ def test_a_flight_with_a_target_records_it_and_refuses_a_second_reference(tmp_pa
     with pytest.raises(HesspipeError, match="reference"):
         fly_pilot_record("737", eq_plants(), "expanded", {}, seed=3, workdir=tmp_path, config=cfg,
                          target=tg, reference=np.zeros(n))
+
+
+def test_run_in_keeps_the_start_transient_out_of_the_identified_period():
+    """Noise-free two-input run of the FFT generator, fitted by df: the record that starts with the
+    forcing (the first period, transient included) pulls Ke and Km down together; the same
+    forcing with a run-in, the last whole period analysed, gives the truth back."""
+    from hesspipe.identification.fit import identify
+
+    pl, dt, err = eq_plants(), 0.025, {}
+    for run_in in (0.0, 15.0):
+        n, first = int(round((70.0 + run_in) / dt)), int(round(run_in / dt))
+        tg = TargetForcing(target_rms=0.05, wind_rms=1.0, run_in_s=run_in)
+        wind, ref = tg.signals(np.arange(n) * dt, seed=7)
+        full = synthetic_run("expanded", PARAMS, pl, wind, dt, seed=7, reference=ref)
+        sl = slice(first, None)
+        run = Run(time=full.time[sl], disturbance=wind[sl], output=full.output[sl], control=full.control[sl],
+                  reference=ref[sl], id="two-input", synthetic=True)
+        q = identify(run, pl, "expanded", seed=7, criterion="df", with_benchmark=False,
+                     with_identifiability=False).parameters
+        err[run_in] = {k: q[k] / PARAMS[k] - 1 for k in ("Ke", "Km", "K1")}
+    assert all(abs(v) < 0.02 for v in err[15.0].values()), err
+    assert err[0.0]["Km"] < -0.1 and err[0.0]["Ke"] < -0.1, err
+
+
+def test_a_flight_with_a_run_in_records_the_last_whole_period_without_the_side_wind(tmp_path):
+    from hesspipe.flight.approach import FlightConfig
+    from hesspipe.flight.closed_loop import fly_pilot_record
+
+    cfg = FlightConfig(duration_s=25.0)
+    tg = TargetForcing(target_rms=0.02, n_lines=6, f_min_hz=0.1, run_in_s=5.0, paper_side_wind=False)
+    f = fly_pilot_record("737", eq_plants(), "expanded", {}, seed=3, workdir=tmp_path, config=cfg, target=tg,
+                         record_every=3)
+    run = f.run
+    assert run.time[0] == pytest.approx(5.0) and len(run) == 800 and f.truth["record_start_s"] == pytest.approx(5.0)
+    assert "none" in f.truth["disturbance"]["side_wind"] and f.truth["target"]["run_in_s"] == 5.0
+    # the recorded wind is the wind multisine alone (no turning side wind), seen from the heading flown
+    n = int(round(25.0 / cfg.dt_s))
+    wind, ref = tg.signals(np.arange(n) * cfg.dt_s, f.truth["seeds"]["gust"])
+    assert np.array_equal(run.reference, ref[600::3])
+    assert np.corrcoef(run.disturbance, wind[600::3])[0, 1] > 0.999
+    frf = estimate_frf(run)
+    assert frf.window == (0, 800) and frf.feedback.H.size == 6 and frf.reference.H.size == 6
+    with pytest.raises(HesspipeError, match="run_in_s"):
+        TargetForcing(run_in_s=30.0).signals(np.arange(n) * cfg.dt_s, 1)

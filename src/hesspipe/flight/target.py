@@ -67,7 +67,8 @@ def interleaved_lines(period_s: float, n_lines: int, f_min_hz: float, f_max_hz: 
     return k, k + 1
 
 
-def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: float = 0.0) -> np.ndarray:
+def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: float = 0.0,
+                   fall_hz: float = 0.0) -> np.ndarray:
     """Sum of sines on lines `k` (cycles per `period_s`), random phases, RMS `rms`.
 
     Amplitudes are flat, or with `corner_hz` > 0 proportional to ``f / (f + corner_hz)``:
@@ -89,6 +90,9 @@ def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: floa
         Seed of the random phases.
     corner_hz : float
         Amplitude corner, Hz (0: flat amplitudes).
+    fall_hz : float
+        With `fall_hz` > 0 the amplitudes are also multiplied by ``1 / (1 + f / fall_hz)``:
+        more power on the low lines.
 
     Returns
     -------
@@ -98,6 +102,8 @@ def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: floa
     t = np.asarray(t, dtype=float)
     f = np.asarray(k, dtype=float) / period_s
     a = f / (f + corner_hz) if corner_hz > 0 else np.ones_like(f)
+    if fall_hz > 0:
+        a = a / (1.0 + f / fall_hz)
     phases = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, len(k))
     x = np.sin(2.0 * np.pi * np.outer(t - t[0], f) + phases) @ a
     sd = float(np.std(x))
@@ -121,6 +127,9 @@ class TargetForcing:
     corner_hz : float
         The target's amplitudes rise like ``f / (f + corner_hz)`` (Hz): a roll-rate
         target whose bank angle stays small at the low lines.
+    wind_fall_hz : float
+        The wind's amplitudes fall like ``1 / (1 + f / wind_fall_hz)`` (Hz; 0: flat): more
+        wind on the low lines, where the pilot's high loop gain leaves little error.
     run_in_s : float
         Run-in, s: the signals are periodic with period = record length - `run_in_s`,
         so the record's last period is one whole period of both and the start-up
@@ -135,13 +144,15 @@ class TargetForcing:
     f_min_hz: float = 0.03
     f_max_hz: float = 2.0
     corner_hz: float = 0.3
+    wind_fall_hz: float = 0.0
     run_in_s: float = 0.0
     paper_side_wind: bool = True
 
     def __post_init__(self):
         if not isinstance(self.paper_side_wind, bool):
             raise HesspipeError(f"target: paper_side_wind: expected true or false, got {self.paper_side_wind!r}")
-        for name in ("target_rms", "wind_rms", "f_min_hz", "f_max_hz", "corner_hz", "run_in_s"):
+        for name in ("target_rms", "wind_rms", "f_min_hz", "f_max_hz", "corner_hz", "wind_fall_hz",
+                     "run_in_s"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0):
                 raise HesspipeError(f"target: {name}: expected a finite number >= 0, got {v!r}")
@@ -165,7 +176,8 @@ class TargetForcing:
             raise HesspipeError(f"target: run_in_s: expected shorter than the record "
                                 f"({(t[-1] - t[0]) + (t[1] - t[0]):g} s), got {self.run_in_s:g}")
         kd, kt = interleaved_lines(period, self.n_lines, self.f_min_hz, self.f_max_hz)
-        wind = line_multisine(t, kd, period, self.wind_rms, derive_seed(seed, "target-wind"))
+        wind = line_multisine(t, kd, period, self.wind_rms, derive_seed(seed, "target-wind"),
+                              fall_hz=self.wind_fall_hz)
         ref = line_multisine(t, kt, period, self.target_rms, derive_seed(seed, "target"), self.corner_hz)
         return wind, ref
 
@@ -174,6 +186,7 @@ class TargetForcing:
         return {"kind": "multisine", "target_rms_rad_s": self.target_rms,
                 "wind_rms_ft_s": self.wind_rms, "lines_per_set": self.n_lines,
                 "band_hz": [self.f_min_hz, self.f_max_hz], "target_corner_hz": self.corner_hz,
+                "wind_fall_hz": self.wind_fall_hz,
                 "run_in_s": self.run_in_s, "paper_side_wind": self.paper_side_wind,
                 "note": "disturbance and target on interleaved lines (target = disturbance line + 1); "
                         "periodic over the record less the run-in"}
