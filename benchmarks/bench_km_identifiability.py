@@ -4,15 +4,16 @@ Pilots of the pipeline's crossover-model cohort (expanded + remnant, cohort draw
 fly the JSBSim 737 (hesspipe.flight.closed_loop, 120 Hz, recorded at 40 Hz) and are
 identified with the fitted plants (expanded model, `df` criterion) with different sets of
 parameters held at their true values (or, for 1/T1, at Hess's rule), to find what Km trades
-with. Then a few pilots fly with an 8-line multisine on the reference (the visual path sees r,
-the vestibular one does not) and are identified with the `output` criterion, which uses the
-measured reference (8-25 s per identification).
+with. Then the same pilots fly the two-input task (hesspipe.flight.target: wind and roll-rate
+target multisines on interleaved lines), without a run-in, with TWO_INPUT's run-in, and with
+the run-in and the remnant, identified by df at both line sets. Last, a structural check on
+identification's own FFT generator.
 
 Prints, per pilot and set, the relative errors of Ke, Km and K1 K2, then the medians.
 
 Usage::
 
-    nice python benchmarks/bench_km_identifiability.py [--pilots 10] [--reference-pilots 3]
+    nice python benchmarks/bench_km_identifiability.py [--pilots 10] [--target-pilots 10] [--fft-pilots 4]
 """
 
 from __future__ import annotations
@@ -25,12 +26,12 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from scipy import signal
 
 sys.path.insert(0, str(Path(__file__).parent))
 import bench_fly_pilot as B  # noqa: E402  (the same plants, draws and helpers)
+from hesspipe.flight.approach import FlightConfig  # noqa: E402
 from hesspipe.flight.closed_loop import fly_pilot_record  # noqa: E402
-from hesspipe.flight.target import TargetForcing  # noqa: E402
+from hesspipe.flight.target import TWO_INPUT, TargetForcing  # noqa: E402
 from hesspipe.identification.fit import identify  # noqa: E402
 from hesspipe.identification.frf import estimate_frf  # noqa: E402
 from hesspipe.pilot.crossover import crossover  # noqa: E402
@@ -42,7 +43,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pilots", type=int, default=10)
     ap.add_argument("--target-pilots", type=int, default=10)
-    ap.add_argument("--target-rms", type=float, default=0.05, help="roll-rate target RMS, rad/s")
+    ap.add_argument("--target-rms", type=float, default=0.02, help="roll-rate target RMS, rad/s")
     ap.add_argument("--fft-pilots", type=int, default=4,
                     help="pilots of the noise-free structural check (FFT generator)")
     args = ap.parse_args(argv)
@@ -87,56 +88,58 @@ def main(argv=None) -> int:
     return 0
 
 
-def frf_prep(run):
-    """The run as estimate_frf needs it for two line sets (see the module docstring)."""
-    cols = {c: signal.detrend(np.asarray(getattr(run, c), dtype=float))
-            for c in ("disturbance", "output", "control", "reference")}
-    sd, sr = np.std(cols["disturbance"]), np.std(cols["reference"])
-    if sr > 0 and sd > 0:
-        cols["disturbance"] = cols["disturbance"] * (sr / sd)
-    return replace(run, **cols)
-
-
 def target_study(plants, corner, args, root):
+    """Two-input flights (hesspipe.flight.target) identified by df at both line sets.
+
+    Three designs of the same pilots: the forcing started with the record (no run-in: the
+    loop's start-up transient lies in the analysed period), TWO_INPUT (a 15 s run-in flown
+    and not recorded, no paper's side wind) without remnant, and TWO_INPUT with the cohort's
+    remnant.
+    """
     sets = {  # name: (free or None for the default set, fixed from the truth, fixed values)
         "default free set": (None, (), {}),
         "K1, K2, 1/T1 true": (("Ke", "Km", "tau0", "wn", "zn"), ("K1", "K2", "1/T1"), {}),
         "K1 at Table 1, 1/T1 by rule": (("Ke", "Km", "tau0", "wn", "zn"), ("K2",),
                                         {"1/T1": corner, "K1": table1(1)["K1"]}),
     }
-    cases = {"interleaved wind only": 0.0, f"+ target {args.target_rms:g} rad/s": args.target_rms}
-    keys = ("Ke", "Km", "Km/Ke", "LG")
+    design = replace(TWO_INPUT, target_rms=args.target_rms)
+    cases = {  # name: (forcing, flight duration s, with the remnant)
+        "no run-in, no remnant": (replace(design, run_in_s=0.0), 70.0, False),
+        "run-in 15 s, no remnant": (design, 70.0 + design.run_in_s, False),
+        "run-in 15 s, cohort remnant": (design, 70.0 + design.run_in_s, True),
+    }
+    keys = ("Ke", "Km", "Km/Ke", "K1K2", "LG")
     errs = {(c, n): {k: [] for k in keys} for c in cases for n in sets}
-    print(f"\ntwo-input task ({TargetForcing().n_lines} wind lines and, with the target, "
-          f"{TargetForcing().n_lines} target lines, 0.03-2 Hz); frf prep: detrended, disturbance "
-          "rescaled; df criterion")
+    print(f"\ntwo-input task ({design.n_lines} wind lines, {design.wind_rms:g} ft/s, and {design.n_lines} "
+          f"roll-rate target lines, {design.target_rms:g} rad/s, {design.f_min_hz:g}-{design.f_max_hz:g} Hz, "
+          "no paper's side wind); df criterion at both line sets")
     for i in range(args.target_pilots):
         pid = f"pilot{i + 1:02d}"
         pseed, truth, params = B.draw(plants, pid, 1, ("motion_feedback",))
-        for case, rms in cases.items():
-            tg = TargetForcing(target_rms=rms)
+        for case, (tg, duration, remnant) in cases.items():
+            model = truth["model"] if remnant else truth["model"].replace("+remnant", "")
             try:
-                f = fly_pilot_record("737", plants, truth["model"], params, seed=pseed, workdir=root / "w",
+                f = fly_pilot_record("737", plants, model, params, seed=pseed, workdir=root / "w",
                                      record_every=B.EVERY, remnant_share=truth["remnant_share"], run_id=pid,
-                                     target=tg)
+                                     target=tg, config=FlightConfig(duration_s=duration))
             except Exception as exc:  # a limit left: reported, not counted
                 print(f"{pid} {case}: {exc}")
                 continue
             tp = f.truth["parameters"]
             core = {k: v for k, v in tp.items() if k not in ("Kn", "Tn")}
             wc = crossover("expanded", core, plants, duration_s=70.0).frequency_rad_s
-            run = frf_prep(f.run)
-            frf = estimate_frf(run, plants, seed=pseed)
+            frf = estimate_frf(f.run, plants, seed=pseed)
             nref = 0 if frf.reference is None else frf.reference.H.size
             row = [f"{pid} {case} (lines {frf.feedback.H.size}+{nref}, bank {f.truth['envelope']['max_abs_bank_deg']:.1f} deg)"]
             for name, (free, from_truth, values) in sets.items():
                 fixed = {**{k: tp[k] for k in from_truth}, **values} or None
-                p = identify(run, plants, "expanded", free=free, fixed=fixed, seed=pseed, criterion="df",
+                p = identify(f.run, plants, "expanded", free=free, fixed=fixed, seed=pseed, criterion="df",
                              with_benchmark=False, with_identifiability=False).parameters
                 e = errs[(case, name)]
                 e["Ke"].append(B.rel(p["Ke"], tp["Ke"]))
                 e["Km"].append(B.rel(p["Km"], tp["Km"]))
                 e["Km/Ke"].append(B.rel(p["Km"] / p["Ke"], tp["Km"] / tp["Ke"]))
+                e["K1K2"].append(B.rel(p["K1"] * p["K2"], tp["K1"] * tp["K2"]))
                 e["LG"].append(abs(B.loop_gain("expanded", p, plants, wc) - 1.0))
                 row.append(f"{name}: " + " ".join(f"{k} {100 * e[k][-1]:.0f}%" for k in keys))
             print(" | ".join(row), flush=True)

@@ -157,3 +157,27 @@ def test_a_flight_with_a_run_in_records_the_last_whole_period_without_the_side_w
     assert frf.window == (0, 800) and frf.feedback.H.size == 6 and frf.reference.H.size == 6
     with pytest.raises(HesspipeError, match="run_in_s"):
         TargetForcing(run_in_s=30.0).signals(np.arange(n) * cfg.dt_s, 1)
+
+
+def test_pilots_forcing_two_input_flies_a_run_in_and_records_both_line_sets(tmp_path):
+    import json
+    from types import SimpleNamespace
+
+    from hesspipe.core.formats import read_run
+    from hesspipe.pilots.flown import fly_pipeline_cohort
+    from hesspipe.pilots.settings import PilotsConfig
+
+    table = {"n": 1, "duration_s": 30.0, "dt_s": 0.025, "forcing": "two_input", "cohort": "table1",
+             "effects": ["motion_feedback"]}
+    config = PilotsConfig.from_table(table, "x.toml")
+    ctx = SimpleNamespace(config={}, source="x.toml", seed=1, out_dir=tmp_path)
+    out = fly_pipeline_cohort(config, eq_plants(), ctx)
+    run = read_run(tmp_path / "cohort" / "pilot01.csv")
+    assert len(run) == 1200 and run.time[0] == pytest.approx(15.0)
+    cohort = json.loads((tmp_path / "cohort" / "cohort.json").read_text())
+    assert cohort["target"]["run_in_s"] == 15.0 and out.data == str(tmp_path / "cohort")
+    frf = estimate_frf(run)
+    assert frf.method == "multisine" and frf.feedback.H.size == 12 and frf.reference.H.size == 12
+    for bad, field in (({"forcing": "two_input", "simulator": "fft"}, "forcing"), ({"forcing": "gusts"}, "forcing")):
+        with pytest.raises(HesspipeError, match=field):
+            PilotsConfig.from_table(bad, "x.toml")

@@ -20,6 +20,7 @@ from ..core.provenance import versions
 from ..core.seeds import derive_seed
 from ..flight.approach import FlightConfig
 from ..flight.closed_loop import fly_pilot_record
+from ..flight.target import TWO_INPUT
 from .cohort import CohortSpec, _check_effects, cohort_spec, pilot_ids, synth_pilot
 
 
@@ -119,7 +120,7 @@ def fly_pipeline_cohort(config, plants: Plants, ctx):
     Parameters
     ----------
     config : hesspipe.pilots.compare.PilotsConfig
-        The ``[pilots]`` settings (n, effects, cohort draw, duration, record interval).
+        The ``[pilots]`` settings (n, effects, cohort draw, duration, record interval, forcing).
     plants : hesspipe.core.formats.Plants
         The fitted plants.
     ctx
@@ -129,9 +130,13 @@ def fly_pipeline_cohort(config, plants: Plants, ctx):
     table = dict(ctx.config.get("flight", {}))
     aircraft = table.pop("aircraft", "737")
     flight_config = FlightConfig.from_table(table, ctx.source)
-    flight_config = replace(flight_config, duration_s=config.duration_s)
+    # Two-input: the run-in is flown before the recorded duration_s (see flight.target).
+    target = TWO_INPUT if config.forcing == "two_input" else None
+    run_in = target.run_in_s if target is not None else 0.0
+    flight_config = replace(flight_config, duration_s=config.duration_s + run_in)
     seed = config.seed if config.seed is not None else int(ctx.seed)
     folder = Path(ctx.out_dir) / "cohort"
     fly_cohort(plants, config.n, seed, config.effects, folder, aircraft=aircraft, config=flight_config,
-               record_dt_s=config.dt_s, spec=cohort_spec(config.cohort, duration_s=config.duration_s))
+               record_dt_s=config.dt_s, spec=cohort_spec(config.cohort, duration_s=config.duration_s),
+               target=target)
     return replace(config, data=str(folder))

@@ -118,6 +118,10 @@ class CompareSettings(Settings):
 
 #: How the pipeline's synthetic cohort is simulated (``[pilots] simulator``).
 SIMULATORS = ("jsbsim", "fft")
+#: The JSBSim cohort's forcing (``[pilots] forcing``): the paper's turning side wind with the
+#: broadband gusts (no forcing lines), or :data:`hesspipe.flight.target.TWO_INPUT` (wind and
+#: roll-rate target multisines on interleaved lines, a run-in flown before the record).
+FORCINGS = ("paper", "two_input")
 
 
 @dataclass(frozen=True)
@@ -170,6 +174,10 @@ class PilotsConfig(Settings):
     cohort : str
         How the synthetic pilots are drawn (:data:`COHORT_DRAWS`): "crossover_model"
         (default; within the crossover-model limits, :mod:`hesspipe.pilots.cohort`) or "table1".
+    forcing : str
+        The JSBSim cohort's forcing (:data:`FORCINGS`): "paper" (default) or "two_input"
+        (:data:`hesspipe.flight.target.TWO_INPUT`: the flight is ``duration_s`` plus its
+        15 s run-in, the record the last ``duration_s``). Only with simulator "jsbsim".
     """
 
     TABLE = "pilots"
@@ -195,6 +203,7 @@ class PilotsConfig(Settings):
     simulator: str = "jsbsim"
     criterion: str = DEFAULT_CRITERION
     cohort: str = "crossover_model"
+    forcing: str = "paper"
 
     def _checked(self, f: Fields) -> dict:
         effects = f.strings("effects")
@@ -209,7 +218,11 @@ class PilotsConfig(Settings):
                    figures=f.boolean("figures"), columns=f.string("columns"),
                    resample=f.boolean("resample"), simulator=f.string("simulator", choices=SIMULATORS),
                    cohort=f.string("cohort", choices=COHORT_DRAWS),
+                   forcing=f.string("forcing", choices=FORCINGS),
                    **_identification(f, "band_hz"))
+        if out["forcing"] != "paper" and out["simulator"] != "jsbsim":
+            raise f.fail("forcing", f"a forcing other than 'paper' is flown only by simulator 'jsbsim'; "
+                                    f"got simulator {out['simulator']!r}")
         try:
             _parse_columns(out["columns"])
         except HesspipeError as exc:
