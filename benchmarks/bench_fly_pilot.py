@@ -57,11 +57,12 @@ from hesspipe.plants.fit import fit_plants
 from hesspipe.plants.settings import PlantsConfig
 
 EVERY = 3  # 120 Hz -> 40 Hz records, as the pipeline's JSBSim cohort
+CASES = None  # the diagnose section's cases (--diag-cases)
 RESTARTS, PASSES = 2, 10  # the pipeline's APID budget (--restarts/--passes change it)
 CRITERION = "df"  # the pipeline's identification criterion (--criterion changes it)
 DRAW = "crossover_model"  # the pipeline's cohort draw (--cohort changes it)
 FORCING = "paper"  # --forcing: the paper's side wind + gusts, or the two-input multisines
-RUN_IN_S = 15.0
+TARGET_RMS = None  # --target-rms: the two-input target's RMS (rad/s; None: TWO_INPUT's)
 
 
 def forcing_kwargs() -> dict:
@@ -69,8 +70,11 @@ def forcing_kwargs() -> dict:
     70 s, one whole period of the wind and target lines, are recorded)."""
     if FORCING == "paper":
         return {}
+    from dataclasses import replace
+
     from hesspipe.flight.target import TWO_INPUT
-    return {"target": TWO_INPUT, "config": FlightConfig(duration_s=70.0 + TWO_INPUT.run_in_s)}
+    tg = TWO_INPUT if TARGET_RMS is None else replace(TWO_INPUT, target_rms=TARGET_RMS)
+    return {"target": tg, "config": FlightConfig(duration_s=70.0 + tg.run_in_s)}
 
 
 def loop_gain(model, params, plants, w: float) -> float:
@@ -266,6 +270,9 @@ DIAG_CASES = {
     "motion_feedback": (("motion_feedback",), {"Km": (2.0, 8.0)}),   # x gain scale
     "extra_delay": (("extra_delay",), {"tau_x": (0.05, 0.2)}),
 }
+# --diag-cases adds this one: a simulator delay that takes the total beyond a human's 0.40 s
+# (diagnose's max_pilot_delay), the only extra delay a record can attribute to the simulator.
+EXTRA_CASES = {"extra_delay_long": (("extra_delay",), {"tau_x": (0.25, 0.4)})}
 
 
 def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
@@ -277,7 +284,7 @@ def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
                                           " (the pipeline's cohort: tau0 ~0.2 s, 1/T1 by Hess's rule, which "
                                           "diagnose's baseline holds at Table 1's 0.1 s and 0.01)"))
     g = gain_scale(plants)
-    for case, (effects, ranges) in DIAG_CASES.items():
+    for case, (effects, ranges) in CASES.items():
         named, named_lin, rows = [], [], []
         for s in range(seeds):
             pid = f"diag-{case}-{s}"
@@ -320,8 +327,8 @@ def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
                 print(f"  -> {label}: baseline runs naming a pilot-side effect other than the remnant they "
                       f"carry: {side}/{len(got)}")
             else:
-                hit = sum(case in n for n in got)
-                print(f"  -> {label}: {case} named in {hit}/{len(got)} ({100 * hit / max(len(got), 1):.0f} %)")
+                hit = sum(effects[0] in n for n in got)
+                print(f"  -> {label}: {effects[0]} named in {hit}/{len(got)} ({100 * hit / max(len(got), 1):.0f} %)")
 
 
 def main(argv=None) -> int:
@@ -338,11 +345,15 @@ def main(argv=None) -> int:
     ap.add_argument("--forcing", default="paper", choices=("paper", "two-input"),
                     help="the paper's side wind and gusts, or hesspipe.flight.target.TWO_INPUT (wind and "
                          "roll-rate target multisines, 15 s run-in not recorded) for the diagnose section")
+    ap.add_argument("--target-rms", type=float, default=None, help="two-input target RMS, rad/s")
+    ap.add_argument("--diag-cases", default=",".join(DIAG_CASES),
+                    help=f"comma list of {', '.join([*DIAG_CASES, *EXTRA_CASES])}")
     ap.add_argument("--diag-cohorts", default="table1,crossover_model",
                     help="cohort draws of the diagnose section's pilots (comma list)")
     args = ap.parse_args(argv)
     globals().update(RESTARTS=args.restarts, PASSES=args.passes, CRITERION=args.criterion, DRAW=args.cohort,
-                     FORCING=args.forcing)
+                     FORCING=args.forcing, TARGET_RMS=args.target_rms,
+                     CASES={c: {**DIAG_CASES, **EXTRA_CASES}[c] for c in args.diag_cases.split(",")})
     skip = set(args.skip.split(","))
     print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737 (hesspipe.flight.closed_loop)")
     with tempfile.TemporaryDirectory() as tmp:

@@ -176,6 +176,8 @@ def test_pilots_forcing_two_input_flies_a_run_in_and_records_both_line_sets(tmp_
     assert len(run) == 1200 and run.time[0] == pytest.approx(15.0)
     cohort = json.loads((tmp_path / "cohort" / "cohort.json").read_text())
     assert cohort["target"]["run_in_s"] == 15.0 and out.data == str(tmp_path / "cohort")
+    from hesspipe.pipeline.report import _simulator_note
+    assert "Forcing: two-input" in " ".join(_simulator_note(tmp_path))  # the report says which forcing
     frf = estimate_frf(run)
     assert frf.method == "multisine" and frf.feedback.H.size == 12 and frf.reference.H.size == 12
     for bad, field in (({"forcing": "two_input", "simulator": "fft"}, "forcing"), ({"forcing": "gusts"}, "forcing")):

@@ -185,6 +185,16 @@ def _pilots(folder: Path, root: Path) -> list[str]:
     return out
 
 
+def _forcing_note(target) -> str:
+    """What the JSBSim cohort flew through (`[pilots] forcing`), from cohort.json's ``target``."""
+    if not target:
+        return "Forcing: the paper's turning side wind with gusts (no forcing lines)."
+    return (f"Forcing: two-input — {target.get('lines_per_set')} lateral-wind lines "
+            f"({target.get('wind_rms_ft_s')} ft/s RMS) and {target.get('lines_per_set')} roll-rate target lines "
+            f"({target.get('target_rms_rad_s')} rad/s RMS) interleaved, a {target.get('run_in_s')} s run-in flown "
+            "before the record" + ("" if target.get("paper_side_wind") else ", no paper's side wind") + ".")
+
+
 def _simulator_note(pilots_folder: Path) -> list[str]:
     """Which simulator made the pipeline's synthetic cohort (from its cohort.json), if any."""
     cohort = _load(pilots_folder / "cohort" / "cohort.json")
@@ -195,7 +205,7 @@ def _simulator_note(pilots_folder: Path) -> list[str]:
                 f"{cohort.get('aircraft')} in closed loop at {1 / cohort.get('simulation_dt_s', 1 / 120):.0f} Hz "
                 f"(records at {1 / cohort.get('dt_s', 0.025):.0f} Hz); identification and diagnose fit "
                 "them with the linear plants of stage two, i.e. data from another simulator than the "
-                "fitted plants.", ""]
+                "fitted plants. " + _forcing_note(cohort.get("target")), ""]
     return ["Simulator of the cohort: the linear frequency-domain model around the fitted plants "
             "(`[pilots] simulator = \"fft\"`): identification and diagnose see the model's own output.", ""]
 
