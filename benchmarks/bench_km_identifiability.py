@@ -44,6 +44,8 @@ def main(argv=None) -> int:
     ap.add_argument("--pilots", type=int, default=10)
     ap.add_argument("--target-pilots", type=int, default=10)
     ap.add_argument("--target-rms", type=float, default=0.02, help="roll-rate target RMS, rad/s")
+    ap.add_argument("--remnant-scale", type=float, default=1.0,
+                    help="two-input study: fly only the run-in design with the cohort's remnant share x this")
     ap.add_argument("--fft-pilots", type=int, default=4,
                     help="pilots of the noise-free structural check (FFT generator)")
     args = ap.parse_args(argv)
@@ -108,6 +110,8 @@ def target_study(plants, corner, args, root):
         "run-in 15 s, no remnant": (design, 70.0 + design.run_in_s, False),
         "run-in 15 s, cohort remnant": (design, 70.0 + design.run_in_s, True),
     }
+    if args.remnant_scale != 1.0:
+        cases = {f"run-in 15 s, remnant x {args.remnant_scale:g}": (design, 70.0 + design.run_in_s, True)}
     keys = ("Ke", "Km", "Km/Ke", "K1K2", "LG")
     errs = {(c, n): {k: [] for k in keys} for c in cases for n in sets}
     print(f"\ntwo-input task ({design.n_lines} wind lines, {design.wind_rms:g} ft/s, and {design.n_lines} "
@@ -120,8 +124,9 @@ def target_study(plants, corner, args, root):
             model = truth["model"] if remnant else truth["model"].replace("+remnant", "")
             try:
                 f = fly_pilot_record("737", plants, model, params, seed=pseed, workdir=root / "w",
-                                     record_every=B.EVERY, remnant_share=truth["remnant_share"], run_id=pid,
-                                     target=tg, config=FlightConfig(duration_s=duration))
+                                     record_every=B.EVERY, run_id=pid, target=tg,
+                                     remnant_share=truth["remnant_share"] * args.remnant_scale,
+                                     config=FlightConfig(duration_s=duration))
             except Exception as exc:  # a limit left: reported, not counted
                 print(f"{pid} {case}: {exc}")
                 continue
@@ -141,6 +146,8 @@ def target_study(plants, corner, args, root):
                 e["Km/Ke"].append(B.rel(p["Km"] / p["Ke"], tp["Km"] / tp["Ke"]))
                 e["K1K2"].append(B.rel(p["K1"] * p["K2"], tp["K1"] * tp["K2"]))
                 e["LG"].append(abs(B.loop_gain("expanded", p, plants, wc) - 1.0))
+                if i == 0 and remnant and free is None:
+                    valley(plants, p, core, frf)
                 row.append(f"{name}: " + " ".join(f"{k} {100 * e[k][-1]:.0f}%" for k in keys))
             print(" | ".join(row), flush=True)
     print("median |relative error| (two-input study; LG = | |L_id(j wc_true)| - 1 |):")
@@ -148,6 +155,26 @@ def target_study(plants, corner, args, root):
         if e["Ke"]:
             print(f"  {case}, {name} ({len(e['Ke'])} pilots): "
                   + ", ".join(f"{k} {100 * statistics.median(v):.0f} %" for k, v in e.items()))
+
+
+def valley(plants, found, truth, frf):
+    """How far the identified describing function is from the truth's at the lines."""
+    from hesspipe.flight.closed_loop import pilot_loop
+    from hesspipe.identification.criteria import model_df, model_df_reference
+    from hesspipe.pilot.blocks import from_tf
+    from hesspipe.pilot.hess import model_from_name
+
+    m = model_from_name("expanded")
+    for name, resp, fn in (("wind", frf.feedback, model_df), ("target", frf.reference, model_df_reference)):
+        s = 1j * resp.freq_rad_s
+        args = () if fn is model_df else (from_tf(plants.control_to_output).response(s),)
+        h = [fn(pilot_loop(m, m.complete(p), plants), s, *args) for p in (found, truth)]
+        ratio = h[0] / h[1]
+        print(f"    identified / true describing function at the {name} lines "
+              f"({', '.join(f'{w:.2f}' for w in resp.freq_rad_s)} rad/s): |ratio| "
+              f"{', '.join(f'{abs(r):.2f}' for r in ratio)}; phase difference deg "
+              f"{', '.join(f'{np.degrees(np.angle(r)):.0f}' for r in ratio)}; line relative error "
+              f"{', '.join(f'{x:.2f}' for x in resp.sigma / np.abs(resp.H))}")
 
 
 def structure_check(plants, args):
