@@ -148,6 +148,7 @@ def test_a_flight_with_a_run_in_records_the_last_whole_period_without_the_side_w
     run = f.run
     assert run.time[0] == pytest.approx(5.0) and len(run) == 800 and f.truth["record_start_s"] == pytest.approx(5.0)
     assert "none" in f.truth["disturbance"]["side_wind"] and f.truth["target"]["run_in_s"] == 5.0
+    assert any("run-in" in c for c in run.comments)
     # the recorded wind is the wind multisine alone (no turning side wind), seen from the heading flown
     n = int(round(25.0 / cfg.dt_s))
     wind, ref = tg.signals(np.arange(n) * cfg.dt_s, f.truth["seeds"]["gust"])

@@ -383,6 +383,10 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
                 "signs: disturbance = lateral wind ft/s (+ towards the right wing), output = roll "
                 "rate rad/s, control = fcs/aileron-cmd-norm (pilot's command, + rolls right)",
                 "timing: row k = input over [t_k, t_k + dt], output at t_k + dt")
+    if target is not None:
+        comments += (f"forcing: two-input, wind and roll-rate target multisines on interleaved lines; "
+                     f"{target.run_in_s:g} s run-in flown before the record"
+                     + ("" if target.paper_side_wind else "; no paper's side wind"),)
     # The run-in is flown but not recorded: the record is the forcing's last whole period,
     # so the start-up transient stays out of it and the lines fall on its bins.
     sl = slice(first, None, record_every)
