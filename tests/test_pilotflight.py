@@ -190,6 +190,19 @@ def test_cli_writes_synthetic_run_truth_and_figure_reproducibly(tmp_path, plants
     assert "SYNTHETIC" in capsys.readouterr().out
 
 
+def test_cli_two_input_forcing_records_the_duration_after_the_run_in(tmp_path, plants_file):
+    from hesspipe.flight.target import TWO_INPUT
+
+    out = tmp_path / "two"
+    assert main(["fly-pilot", "--plants", str(plants_file), "--out", str(out), "--forcing", "two_input"]) == 0
+    run = read_run(out / "pilot.csv", rtol=1e-4)
+    truth = json.loads((out / "pilot.truth.json").read_text())
+    # the record is the default 70 s; the run-in before it is flown but not written
+    assert len(run) == 8400 and truth["record_start_s"] == pytest.approx(TWO_INPUT.run_in_s, abs=DT)
+    assert truth["target"]["run_in_s"] == TWO_INPUT.run_in_s and not truth["target"]["paper_side_wind"]
+    assert np.std(run.reference) > 0
+
+
 def test_limit_violation_is_one_line_and_writes_nothing(tmp_path, plants_file, capsys):
     out = tmp_path / "out"
     code = main(["fly-pilot", "--plants", str(plants_file), "--out", str(out), "--max-bank", "0.05"])

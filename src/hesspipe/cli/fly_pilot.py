@@ -43,6 +43,10 @@ def register(sub) -> None:
                    help="'off' removes the aircraft's yaw damper (default: %(default)s)")
     p.add_argument("--max-bank", type=float, default=15.0, metavar="DEG",
                    help="bank limit of the record, deg (default: %(default)s)")
+    p.add_argument("--forcing", choices=("paper", "two_input"), default="paper",
+                   help="paper: the side wind and gusts of the identification excitation; two_input: "
+                        "wind and roll-rate target multisines on interleaved lines, flown for a 15 s "
+                        "run-in plus the duration, no paper's side wind (default: %(default)s)")
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="TOML file whose [flight] table sets step, duration, limits and the wind")
     p.set_defaults(func=_run)
@@ -76,6 +80,7 @@ def _run(args) -> int:
     from ..core.formats import read_plants
     from ..flight.approach import FlightConfig
     from ..flight.closed_loop import AircraftEffects, fly_pilot
+    from ..flight.target import named_forcing
     from ..pilot.hess import model_from_name
     from ..viz.pilotflight import draw_pilot_flight
 
@@ -97,10 +102,11 @@ def _run(args) -> int:
     params = _params(args.params) if args.params is not None else {}
     flight = fly_pilot(args.aircraft, plants, args.out, model=model, params=params, seed=args.seed,
                        config=config, aircraft_effects=act, remnant_share=args.remnant_share,
-                       max_bank_deg=args.max_bank, run_id=args.id, draw=draw_pilot_flight)
+                       max_bank_deg=args.max_bank, run_id=args.id, draw=draw_pilot_flight,
+                       target=named_forcing(args.forcing))
     env = flight.truth["envelope"]
     print(f"SYNTHETIC DATA: {flight.truth['model']} pilot flew {flight.truth['aircraft']} for "
-          f"{flight.truth['duration_s']:g} s: airspeed {env['speed_kts'][0]:.1f}-{env['speed_kts'][1]:.1f} kt, "
+          f"{flight.truth['duration_s']:g} s (recorded from {flight.truth['record_start_s']:g} s): airspeed {env['speed_kts'][0]:.1f}-{env['speed_kts'][1]:.1f} kt, "
           f"min {env['min_agl_ft']:.0f} ft AGL, max |bank| {env['max_abs_bank_deg']:.1f} deg")
     print(f"wrote {args.id}.csv, {args.id}.truth.json, {args.id}.png to {args.out}")
     return 0

@@ -68,6 +68,7 @@ from ..pilot.remnant import remnant_gain_of_loops
 from ..pilot.simulation import Simulator
 from .aircraft import AircraftConfig, load_aircraft
 from .approach import FlightConfig, _check_seed, _jsbsim, _load, _quiet_logger, _sanitised_aircraft, _trim
+from .target import TargetForcing, record_flight
 from .wind import heading_to_ned, ned_to_heading
 
 #: Largest bank angle a record may reach, deg (a pilot nulling roll rate lets the bank wander).
@@ -475,7 +476,8 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
               params: Mapping[str, float] | None = None, seed: int = 0,
               config: FlightConfig = FlightConfig(), aircraft_effects: AircraftEffects = AircraftEffects(),
               remnant_share: float | None = None, max_bank_deg: float = MAX_BANK_DEG,
-              run_id: str = "pilot", draw: Callable | None = None) -> PilotFlight:
+              run_id: str = "pilot", draw: Callable | None = None,
+              target: TargetForcing | None = None) -> PilotFlight:
     """Fly one pilot in JSBSim and write ``<run_id>.csv``, ``.truth.json`` and the figures
     of `draw` (:func:`hesspipe.viz.pilotflight.draw_pilot_flight`: ``<run_id>.png``) to `out_dir`.
 
@@ -490,8 +492,9 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
         ``motion_path`` drives the pilot's vestibular channel.
     out_dir : path
         Output folder (new, empty, or a fly-pilot folder hesspipe wrote).
-    model, params, seed, config, aircraft_effects, remnant_share, max_bank_deg, run_id
-        As in :func:`fly_pilot_record`.
+    model, params, seed, config, aircraft_effects, remnant_share, max_bank_deg, run_id, target
+        As in :func:`fly_pilot_record` (with `target`, the flight lasts its run-in plus
+        ``config.duration_s``; the record is the last ``config.duration_s``).
     draw : callable, optional
         ``draw(folder, flight)`` writes figures into the staging folder
         `folder` and returns their file names (None: no figure).
@@ -503,12 +506,13 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
     """
     # Checked before the flight: a folder that cannot take the output loses no result.
     out_dir = check_output_dir(out_dir, "fly-pilot")
+    config = record_flight(config, target)
     with staged_output(out_dir, kind="fly-pilot") as stage:
         with tempfile.TemporaryDirectory(prefix=".jsbsim-", dir=stage) as work:
             flight = fly_pilot_record(aircraft, plants, model, params or {}, seed=seed, workdir=Path(work),
                                       config=config, aircraft_effects=aircraft_effects,
                                       remnant_share=remnant_share, max_bank_deg=max_bank_deg,
-                                      run_id=run_id)
+                                      run_id=run_id, target=target)
         write_run(stage / f"{run_id}.csv", flight.run)
         write_json(stage / f"{run_id}.truth.json", dict(
             flight.truth, trim=flight.trim, versions=versions(),

@@ -24,7 +24,7 @@ Both are off by default (the first two-input study's design); :data:`TWO_INPUT` 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -195,3 +195,45 @@ class TargetForcing:
 TWO_INPUT = TargetForcing(run_in_s=15.0, paper_side_wind=False)
 """The two-input design that identification can read on flown runs: a 15 s run-in and the
 wind lines alone (fly 85 s for a 70 s analysed period)."""
+
+FORCINGS = {"paper": None, "two_input": TWO_INPUT}
+"""Named forcings of a closed-loop flight: ``paper`` (the paper's turning side wind with its
+gusts, no forcing lines: None) or ``two_input`` (:data:`TWO_INPUT`)."""
+
+
+def named_forcing(name: str) -> TargetForcing | None:
+    """The forcing called `name` in :data:`FORCINGS` (None for the paper's).
+
+    Parameters
+    ----------
+    name : str
+        "paper" or "two_input".
+
+    Raises
+    ------
+    HesspipeError
+        For another name.
+    """
+    if name not in FORCINGS:
+        raise HesspipeError(f"forcing: expected one of {', '.join(FORCINGS)}, got {name!r}")
+    return FORCINGS[name]
+
+
+def record_flight(config, target: TargetForcing | None):
+    """The flight settings whose record, after `target`'s run-in, lasts ``config.duration_s``.
+
+    Parameters
+    ----------
+    config : hesspipe.flight.approach.FlightConfig
+        Settings whose ``duration_s`` (s) is the wanted record length.
+    target : TargetForcing or None
+        The forcing (None: no run-in, `config` unchanged).
+
+    Returns
+    -------
+    FlightConfig
+        With ``duration_s`` lengthened by the run-in (s).
+    """
+    if target is None or target.run_in_s == 0:
+        return config
+    return replace(config, duration_s=config.duration_s + target.run_in_s)

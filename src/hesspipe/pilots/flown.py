@@ -20,7 +20,7 @@ from ..core.provenance import versions
 from ..core.seeds import derive_seed
 from ..flight.approach import FlightConfig
 from ..flight.closed_loop import fly_pilot_record
-from ..flight.target import TWO_INPUT
+from ..flight.target import named_forcing, record_flight
 from .cohort import CohortSpec, _check_effects, cohort_spec, pilot_ids, synth_pilot
 
 
@@ -131,9 +131,8 @@ def fly_pipeline_cohort(config, plants: Plants, ctx):
     aircraft = table.pop("aircraft", "737")
     flight_config = FlightConfig.from_table(table, ctx.source)
     # Two-input: the run-in is flown before the recorded duration_s (see flight.target).
-    target = TWO_INPUT if config.forcing == "two_input" else None
-    run_in = target.run_in_s if target is not None else 0.0
-    flight_config = replace(flight_config, duration_s=config.duration_s + run_in)
+    target = named_forcing(config.forcing)
+    flight_config = record_flight(replace(flight_config, duration_s=config.duration_s), target)
     seed = config.seed if config.seed is not None else int(ctx.seed)
     folder = Path(ctx.out_dir) / "cohort"
     fly_cohort(plants, config.n, seed, config.effects, folder, aircraft=aircraft, config=flight_config,

@@ -16,6 +16,7 @@ from ..core.errors import HesspipeError
 from ..core.formats import _parse_columns, record_samples
 from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import MAX_SEED
+from ..flight.target import FORCINGS as _FORCINGS
 from ..pilot.effects import EFFECTS
 
 #: The model configurations every pilot is identified with (Table 5's rows).
@@ -121,7 +122,7 @@ SIMULATORS = ("jsbsim", "fft")
 #: The JSBSim cohort's forcing (``[pilots] forcing``): the paper's turning side wind with the
 #: broadband gusts (no forcing lines), or :data:`hesspipe.flight.target.TWO_INPUT` (wind and
 #: roll-rate target multisines on interleaved lines, a run-in flown before the record).
-FORCINGS = ("paper", "two_input")
+FORCINGS = tuple(_FORCINGS)
 
 
 @dataclass(frozen=True)
