@@ -23,13 +23,13 @@ instrument (unbiased by the remnant, which is uncorrelated with d), at the
 Welch bins where d explains e and u (coherence), with the coherence-based
 error ``sigma/|H| = sqrt((1 - g_du)/(2 n g_du) + (1 - g_de)/(2 n g_de))``.
 
-Crossover of ``L = H Yc``: started at the raw crossing (the highest pair of
-reliable lines where |L| falls through 1), then located by a local regression
-of the reliable lines around it, each weighted by its inverse variance and
-its distance in ln w (:mod:`.frf_crossover`), times the exact plant; its
-uncertainty is the spread over seeded draws of H from its error model. The
-raw crossing, interpolated between the two bracketing lines, is kept beside
-it. H at a line is ``U/E``: over one whole period this equals the
+Crossover of ``L = H Yc`` (:mod:`.frf_crossover`), times the exact plant:
+the headline is a smoothed estimate, a low-order describing function fitted
+to all lines at once, magnitude and phase jointly (:mod:`.frf_smooth`), when
+its residuals are consistent with the lines' variances; otherwise a local
+regression of the reliable lines around the raw crossing. Both, and the raw
+crossing interpolated between the two bracketing lines, are kept in the
+result, the headline's method stated in words. H at a line is ``U/E``: over one whole period this equals the
 instrumental-variable form ``(U/D) / (E/D)`` with the disturbance as
 instrument (D cancels bin by bin), so the remnant feedback adds scatter but
 no bias there; only averaging over periods or bins would tell them apart.
