@@ -10,8 +10,8 @@ by weighted complex least squares: each line's error ``H(j w_k) - H_k``
 divided by ``sqrt(sigma_k^2 + (REL_FLOOR |H_k|)^2)``, a Cauchy loss of scale
 F_SCALE (one noisy high line does not steer the fit), literature bounds
 (tau 0.05-0.5 s, wn 4-25 rad/s, zn 0.05-1, TL and TI 0.01-10 s) and weak
-priors worth one line each on the neuromuscular mode (the identification's
-``NM_PRIOR``) and on the delay (TAU_PRIOR). Its starts are screened on a grid
+priors worth one line each on the neuromuscular mode (NM_PRIOR, shared with
+the df criterion) and on the delay (TAU_PRIOR). Its starts are screened on a grid
 (the gain solved in closed form for each) and the best TOP refined. Magnitude
 and phase are fitted jointly, so the phase at the crossover draws on every
 line instead of the two or three within its octave.
@@ -43,6 +43,11 @@ NAMES = ("K", "tau", "TL", "TI", "wn", "zn")
 LOWER = np.array([-np.inf, 0.05, np.log(0.01), np.log(0.01), np.log(4.0), 0.05])
 UPPER = np.array([np.inf, 0.5, np.log(10.0), np.log(10.0), np.log(25.0), 1.0])
 """Bounds of the parameter vector (ln K, tau s, ln TL, ln TI, ln wn, zn)."""
+NM_PRIOR = {"zn": (0.3, np.log(3.0)), "wn": (10.0, np.log(2.0))}
+"""Weak prior on the neuromuscular mode (centre, width in ln units), worth one line's residual
+at one width: above the forcing's band the lines are swamped by remnant, and without it a
+search bends a lightly damped peak onto a noisy high line. Shared with the df criterion
+(:mod:`hesspipe.identification.criteria`)."""
 REL_FLOOR = 0.02
 """Relative error floor of a line (a noise-free line still has a model to fit within)."""
 F_SCALE = 2.0
@@ -72,8 +77,6 @@ def _shape(x, w, sign):
 
 
 def _residuals(x, w, H, scale, sign):
-    from .criteria import NM_PRIOR  # the identification's prior (imported late: criteria imports frf)
-
     r = (np.exp(x[0]) * _shape(x, w, sign) - H) / scale
     prior = [np.log(np.exp(x[4]) / NM_PRIOR["wn"][0]) / NM_PRIOR["wn"][1],
              np.log(x[5] / NM_PRIOR["zn"][0]) / NM_PRIOR["zn"][1],
@@ -241,3 +244,25 @@ def smooth_crossover(fit: SmoothFit, block, w_lines) -> tuple[float, float, floa
         grad[:, j] = ((a - b) / (2 * h), ((pa - pb + 180.0) % 360.0 - 180.0) / (2 * h))
     var = np.einsum("ij,jk,ik->i", grad, fit.cov, grad)
     return wc, pm, float(np.sqrt(max(var[0], 0.0))), float(np.sqrt(max(var[1], 0.0)))
+
+
+def describing_function(params: dict):
+    """The smoother's H(s) from its :attr:`SmoothFit.params` (e.g. a JSON's ``smooth_fit``).
+
+    Parameters
+    ----------
+    params : dict
+        ``K`` (signed), ``tau``, ``TL``, ``TI`` (s), ``wn`` (rad/s), ``zn``.
+
+    Returns
+    -------
+    callable
+        ``H(s)`` for complex `s` (1/s), control per unit error.
+    """
+    p = {k: float(params[k]) for k in NAMES}
+
+    def H(s):
+        s = np.asarray(s)
+        return (p["K"] * np.exp(-p["tau"] * s) * (1 + p["TL"] * s) / (1 + p["TI"] * s)
+                * p["wn"] ** 2 / (s * s + 2 * p["zn"] * p["wn"] * s + p["wn"] ** 2))
+    return H
