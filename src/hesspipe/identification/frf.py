@@ -12,6 +12,14 @@ feedback (error) response; reference lines give their own response (equal
 to it for a purely compensatory pilot). The remnant n is everything else in
 u: its share of the control power is the power at non-excited bins.
 
+A slow drift in a forcing (the paper's turning side wind) leaks into the low
+bins like 1/k: it can hide low lines, and in a closed loop its responses in e
+and u leak into the lines' bins with a ratio that is not H. Lines hidden so
+are found on the forcing less its straight-line trend, and every signal loses
+a quadratic trend fitted jointly with the sinusoids at the lines (Frisch-Waugh:
+the lines' bins zeroed before the trend's fit), which leaves the lines'
+amplitudes unbiased.
+
 Uncertainty per line: with ``U = H E + N`` near a line, ``U_j - H_k E_j`` at
 the non-excited neighbours j of line k samples the remnant, so
 ``sigma_k^2 = mean_j |U_j - H_k E_j|^2 / |E_k|^2`` is the variance of the
