@@ -16,7 +16,6 @@ def _generated(plant, seed, pilot, **overrides):
 
     from hesspipe.core.formats import Plants, Run
     from hesspipe.humanlike import draw_trial, plants_dict, simulate_trial
-    from hesspipe.identification.frf import estimate_frf
 
     spec = draw_trial(plant, seed, task="disturbance", pilot=pilot, **overrides)
     tr = simulate_trial(spec, fine_ratio=10)
