@@ -45,7 +45,8 @@ def format_table(frf) -> str:
     c = frf.crossover
     if math.isfinite(c.frequency_rad_s):
         lines.append(f"crossover (nonparametric)      {c.frequency_rad_s:.3f} +- {c.frequency_std:.3f} "
-                     f"rad/s, phase margin {c.phase_margin_deg:.1f} +- {c.phase_margin_std_deg:.1f} deg")
+                     f"rad/s, phase margin {c.phase_margin_deg:.1f} +- {c.phase_margin_std_deg:.1f} deg "
+                     f"({c.estimate} estimate; the other in the JSON)")
     else:
         lines.append(f"crossover (nonparametric)      not found: {c.note}")
     for n in frf.notes:

@@ -38,6 +38,7 @@ from ..pilot.hess import PilotModel
 from ..pilot.mcruer import fit_precision
 from ..pilot.simulation import UNSTABLE_FITNESS, Simulator, unstable_fitness
 from .frf import estimate_frf
+from .frf_smooth import NM_PRIOR  # one prior for the df search and the frf smoother
 from .problem import Identification, SpectralObjective, _resolve, default_free
 
 # scipy and the model modules are imported where they are used.
@@ -52,10 +53,6 @@ shape the pilot's lag/lead around crossover, which Table 1 cannot know for a giv
 LOG_PARAMETERS = ("Ke", "K1", "K2", "Km", "Ko", "Kn")
 REL_FLOOR = 0.02
 STABILITY_MARGIN = 0.01
-NM_PRIOR = {"zn": (0.3, np.log(3.0)), "wn": (10.0, np.log(2.0))}
-"""Weak prior of the df search on the neuromuscular mode (centre, width in ln units), worth
-one line's residual at one width: above the forcing's band the lines are swamped by remnant,
-and without it the search bends a lightly damped peak onto a noisy high line."""
 STABILITY_WEIGHT = 100.0
 FIT_RELIABLE = 3.0
 

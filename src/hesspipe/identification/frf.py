@@ -12,6 +12,14 @@ feedback (error) response; reference lines give their own response (equal
 to it for a purely compensatory pilot). The remnant n is everything else in
 u: its share of the control power is the power at non-excited bins.
 
+A slow drift in a forcing (the paper's turning side wind) leaks into the low
+bins like 1/k: it can hide low lines, and in a closed loop its responses in e
+and u leak into the lines' bins with a ratio that is not H. Lines hidden so
+are found on the forcing less its straight-line trend, and every signal loses
+a quadratic trend fitted jointly with the sinusoids at the lines (Frisch-Waugh:
+the lines' bins zeroed before the trend's fit), which leaves the lines'
+amplitudes unbiased.
+
 Uncertainty per line: with ``U = H E + N`` near a line, ``U_j - H_k E_j`` at
 the non-excited neighbours j of line k samples the remnant, so
 ``sigma_k^2 = mean_j |U_j - H_k E_j|^2 / |E_k|^2`` is the variance of the
@@ -23,13 +31,13 @@ instrument (unbiased by the remnant, which is uncorrelated with d), at the
 Welch bins where d explains e and u (coherence), with the coherence-based
 error ``sigma/|H| = sqrt((1 - g_du)/(2 n g_du) + (1 - g_de)/(2 n g_de))``.
 
-Crossover of ``L = H Yc``: started at the raw crossing (the highest pair of
-reliable lines where |L| falls through 1), then located by a local regression
-of the reliable lines around it, each weighted by its inverse variance and
-its distance in ln w (:mod:`.frf_crossover`), times the exact plant; its
-uncertainty is the spread over seeded draws of H from its error model. The
-raw crossing, interpolated between the two bracketing lines, is kept beside
-it. H at a line is ``U/E``: over one whole period this equals the
+Crossover of ``L = H Yc`` (:mod:`.frf_crossover`), times the exact plant:
+the headline is a smoothed estimate, a low-order describing function fitted
+to all lines at once, magnitude and phase jointly (:mod:`.frf_smooth`), when
+its residuals are consistent with the lines' variances; otherwise a local
+regression of the reliable lines around the raw crossing. Both, and the raw
+crossing interpolated between the two bracketing lines, are kept in the
+result, the headline's method stated in words. H at a line is ``U/E``: over one whole period this equals the
 instrumental-variable form ``(U/D) / (E/D)`` with the disturbance as
 instrument (D cancels bin by bin), so the remnant feedback adds scatter but
 no bias there; only averaging over periods or bins would tell them apart.
@@ -348,6 +356,41 @@ def _welch(d, e, u, dt, where) -> Response:
     return Response(2 * np.pi * f[keep], H[keep], rel * np.abs(H[keep]), np.nonzero(keep)[0]), share
 
 
+def _less_trend(x: np.ndarray, lines: np.ndarray, order: int = 2) -> np.ndarray:
+    """`x` less a polynomial trend of `order`, fitted jointly with sinusoids on the FFT bins
+    `lines` (so the lines' own amplitudes stay unbiased: a sinusoid over whole periods is not
+    orthogonal to a ramp)."""
+    n = x.size
+    poly = np.vander(np.arange(n) / n - 0.5, order + 1, increasing=True)
+
+    def off_lines(v):
+        # The sinusoids on the lines' bins are the FFT's own components there: projecting
+        # them out (Frisch-Waugh) is zeroing those bins, however many lines there are.
+        V = np.fft.rfft(v, axis=0)
+        V[lines] = 0.0
+        return np.fft.irfft(V, n, axis=0)
+
+    c = np.linalg.lstsq(off_lines(poly), off_lines(x), rcond=None)[0]
+    return x - poly @ c
+
+
+def _drift_lines(d: np.ndarray, r: np.ndarray | None, d_lines, r_lines):
+    """The line sets found on the forcings less their straight-line trends when that reveals
+    lines at bin 3 or above that the forcings as recorded hid (a drift's 1/k leakage raising
+    their neighbours); else None. Bins 1-2 are not judged here: a drift and a line one or two
+    periods long look alike once the trend is removed."""
+    found = []
+    for x, ref in ((d, d_lines), (r, r_lines)):
+        if x is None or not np.ptp(x) > 0:
+            found.append(ref)
+            continue
+        t = np.arange(x.size) - 0.5 * (x.size - 1)
+        flat = x - x.mean() - t * (t @ x) / (t @ t)
+        found.append(_lines(np.abs(np.fft.rfft(flat)) ** 2))
+    revealed = any(np.setdiff1d(a[a >= 3], b).size for a, b in zip(found, (d_lines, r_lines)))
+    return (found[0], found[1]) if revealed else None
+
+
 def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
     """The pilot's nonparametric describing function H = U/E from a run.
 
@@ -388,6 +431,19 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
     pd_, pr_ = np.abs(D) ** 2, np.abs(R) ** 2
     d_lines = _lines(pd_) if np.ptp(d) > 0 else np.zeros(0, int)
     r_lines = _lines(pr_) if has_r else np.zeros(0, int)
+    # A slow drift in a forcing (the paper's turning side wind) leaks into the low bins like
+    # 1/k: it can hide low lines below LINE_RATIO, and in a closed loop its responses in e and
+    # u leak into the lines' bins with a ratio that is not H there. So every signal loses a
+    # quadratic trend fitted jointly with the lines (the lines' amplitudes stay unbiased).
+    drift = _drift_lines(d[sl], r[sl] if has_r else None, d_lines, r_lines)
+    if drift is not None:
+        d_lines, r_lines = drift
+    u_w, e_w = u[sl], (r - y)[sl]
+    both_sets = np.union1d(d_lines, r_lines).astype(int)
+    if both_sets.size and both_sets.min() >= 1:
+        d_w, r_w, u_w, e_w = (_less_trend(x, both_sets) for x in (d[sl], r[sl], u_w, e_w))
+        D, R = np.fft.rfft(d_w - d_w.mean()), (np.fft.rfft(r_w - r_w.mean()) if has_r else np.zeros_like(D))
+        pd_, pr_ = np.abs(D) ** 2, np.abs(R) ** 2
     # Interleaved sets share no bin. A bin found in both (leakage of one signal's drift, or
     # sets that do overlap) goes to the signal in which it stands out more, judged on each
     # signal's own scale: the disturbance (ft/s, or the control's units) and the target (the
@@ -414,8 +470,8 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
         raise HesspipeError(f"{where}: the record ({length * dt:.4g} s analysed) holds fewer than two "
                             f"periods of its lowest excited line ({f0:.4g} Hz, period "
                             f"{1 / f0:.4g} s); expected at least {2 / f0:.4g} s")
-    U = np.fft.rfft(u[sl] - u[sl].mean())
-    E = np.fft.rfft(e[sl] - e[sl].mean())
+    U = np.fft.rfft(u_w - u_w.mean())
+    E = np.fft.rfft(e_w - e_w.mean())
     omega = 2 * np.pi * np.fft.rfftfreq(length, dt)
     all_lines = np.union1d(d_lines, r_lines)
     source = d_lines if d_lines.size else r_lines
@@ -434,5 +490,8 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
              FrfCrossover(*(float("nan"),) * 4, "no plants given"))
     if start:
         notes.append(f"first {start} sample(s) left out so that the window holds whole periods")
+    if drift is not None:
+        notes.append("a slow drift in the forcing hid lines: they were found on it less its "
+                     "straight-line trend")
     return Frf("multisine", fb, ref, share, cross, (start, length), dt,
                getattr(run, "id", ""), bool(getattr(run, "synthetic", False)), tuple(notes))

@@ -1,23 +1,33 @@
 """The nonparametric crossover of ``L = H Yc`` from a measured describing function.
 
-Started at the raw crossing (the highest pair of reliable lines where |L|
-falls through 1), the crossover is located by a local regression of the
-reliable lines around it, each weighted by its inverse variance and its
-distance in ln w (see :func:`_cross`), times the exact plant; its
-uncertainty is the spread over seeded draws of H from its error model. The
-raw crossing, interpolated between the two bracketing lines, is kept beside
-it. Split from :mod:`hesspipe.identification.frf`, which re-exports
+Two estimates, both times the exact plant:
+
+* the smoothed estimate (the headline when it holds): a global low-order
+  describing function fitted to all lines at once, magnitude and phase
+  jointly (:mod:`hesspipe.identification.frf_smooth`), crossed with 1; its
+  uncertainty from the fit's linearised covariance. It is used when the
+  fit's residuals are consistent with the lines' variances (chi-square
+  p >= 1e-4);
+* the local regression (the headline otherwise, and always kept beside it):
+  started at the raw crossing (the highest pair of reliable lines where |L|
+  falls through 1), the reliable lines around it, each weighted by its
+  inverse variance and its distance in ln w (see :func:`_cross`); its
+  uncertainty is the spread over seeded draws of H from its error model.
+
+The raw crossing, interpolated between the two bracketing lines, is kept
+too. Split from :mod:`hesspipe.identification.frf`, which re-exports
 :class:`FrfCrossover` and :func:`nonparametric_crossover`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..core.seeds import derive_seed
 from ..pilot.blocks import from_tf
+from .frf_smooth import consistent, fit_smooth, smooth_crossover
 
 DRAWS = 400
 RELIABLE = 0.5
@@ -39,19 +49,26 @@ class FrfCrossover:
     Attributes
     ----------
     frequency_rad_s : float
-        Crossover frequency of the local regression (rad/s).
+        The headline crossover frequency (rad/s): the smoothed estimate when `estimate` is
+        "smoothed", else the local regression's.
     phase_margin_deg : float
         ``180 + angle L(j wc)`` there (deg, wrapped into (-180, 180]).
     frequency_std : float
-        Standard deviation of `frequency_rad_s` over the draws (rad/s; inf when most
-        draws find no crossing).
+        Its standard deviation (rad/s; inf when most draws or a perturbed fit find no crossing).
     phase_margin_std_deg : float
-        Standard deviation of the phase margin over the draws (deg).
+        Standard deviation of the phase margin (deg).
     note : str
         Why the crossover is NaN or very uncertain; empty otherwise.
     raw_frequency_rad_s, raw_phase_margin_deg : float
         The raw crossing: |L| and its phase interpolated linearly in ln w between
         the two reliable lines where |L| last falls through 1 (rad/s, deg).
+    estimate : {"smoothed", "local"}
+        Which estimate the headline is.
+    local : tuple
+        The local regression's (frequency rad/s, phase margin deg, their stds).
+    smooth : dict
+        The smooth fit: ``parameters``, ``chi2``, ``dof``, ``p_value``, ``consistent`` and its
+        crossover (``frequency_rad_s``, ``phase_margin_deg`` and stds); empty without one.
     """
 
     frequency_rad_s: float
@@ -61,6 +78,9 @@ class FrfCrossover:
     note: str = ""
     raw_frequency_rad_s: float = float("nan")
     raw_phase_margin_deg: float = float("nan")
+    estimate: str = "local"
+    local: tuple = (float("nan"),) * 4
+    smooth: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """JSON-ready fields, with the method of each estimate in words.
@@ -69,21 +89,46 @@ class FrfCrossover:
         -------
         dict
         """
+        if self.estimate == "smoothed":
+            method = ("smoothed: K e^(-tau s) (1 + TL s)/(1 + TI s) wn^2/(s^2 + 2 zn wn s + wn^2) "
+                      "fitted to all lines at once (weighted complex least squares, weights "
+                      "1/sigma^2, Cauchy loss, literature bounds, weak priors on tau, wn, zn), its "
+                      "first fall of |L| through 1 with the exact plant; std from the fit's "
+                      "linearised covariance. Taken because the fit's residuals are consistent "
+                      f"with the lines' variances (chi-square p = {self.smooth.get('p_value', 0):.3g})")
+        else:
+            why = ("no smooth fit" if not self.smooth else
+                   "the smooth fit's residuals are not consistent with the lines' variances "
+                   f"(chi-square p = {self.smooth['p_value']:.3g})" if not self.smooth["consistent"]
+                   else "the smooth fit finds no crossing")
+            method = (f"local regression ({why}): " + LOCAL_METHOD)
+        lw, lp, lws, lps = self.local
         return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
                 "frequency_std_rad_s": self.frequency_std,
                 "phase_margin_std_deg": self.phase_margin_std_deg, "note": self.note,
-                "method": "local regression of the reliable lines around the crossing (ln|H| "
-                          "quadratic in ln w, phase c0 + c1 w + c2 ln w; weights: inverse "
-                          f"variance times a Gaussian kernel of width {KERNEL} in ln w) times the "
-                          f"exact plant; std over {DRAWS} seeded draws of H from its error model",
+                "estimate": self.estimate, "method": method,
+                "local_regression": {"frequency_rad_s": lw, "phase_margin_deg": lp,
+                                     "frequency_std_rad_s": lws, "phase_margin_std_deg": lps,
+                                     "method": LOCAL_METHOD},
+                "smooth_fit": dict(self.smooth),
                 "raw_interpolated_frequency_rad_s": self.raw_frequency_rad_s,
                 "raw_interpolated_phase_margin_deg": self.raw_phase_margin_deg,
                 "raw_method": "|L| and phase interpolated linearly in ln w between the two reliable "
                               "lines where |L| last falls through 1 (noisier; for reference)"}
 
 
+LOCAL_METHOD = ("the reliable lines around the crossing (ln|H| quadratic in ln w, phase c0 + c1 w "
+                "+ c2 ln w; weights: inverse variance times a Gaussian kernel of width "
+                f"{KERNEL} in ln w) times the exact plant; std over {DRAWS} seeded draws of H from "
+                "its error model")
+
+
 def nonparametric_crossover(resp, yc, *, seed: int = 0) -> FrfCrossover:
-    """Crossover of ``L = H Yc`` at the response's frequencies, with a draw-based std.
+    """Crossover of ``L = H Yc`` at the response's frequencies, with its uncertainty.
+
+    The smoothed estimate (:mod:`.frf_smooth`) when its fit is consistent with the
+    lines' variances and crosses; else the local regression (module doc). Both,
+    and the raw crossing, are kept in the result.
 
     Parameters
     ----------
@@ -91,13 +136,31 @@ def nonparametric_crossover(resp, yc, *, seed: int = 0) -> FrfCrossover:
     yc : control.TransferFunction or Block
         The control plant (input of Yc: the pilot's control).
     seed : int
-        Seed of the draws (the estimate itself does not depend on it).
+        Seed of the local regression's draws (neither estimate depends on it).
 
     Returns
     -------
     FrfCrossover
     """
     block = yc if hasattr(yc, "response") else from_tf(yc)
+    local = _local_crossover(resp, block, seed)
+    fit = fit_smooth(resp.freq_rad_s, resp.H, resp.sigma)
+    if fit is None:
+        return local
+    wc, pm, wc_std, pm_std = smooth_crossover(fit, block, resp.freq_rad_s)
+    ok = consistent(fit)
+    smooth = {"parameters": fit.params, "chi2": fit.chi2, "dof": fit.dof,
+              "p_value": fit.p_value, "consistent": ok, "frequency_rad_s": wc,
+              "phase_margin_deg": pm, "frequency_std_rad_s": wc_std, "phase_margin_std_deg": pm_std}
+    if ok and np.isfinite(wc):
+        note = "smoothed crossover very uncertain" if not np.isfinite(wc_std) else ""
+        return replace(local, frequency_rad_s=wc, phase_margin_deg=pm, frequency_std=wc_std,
+                       phase_margin_std_deg=pm_std, note=note, estimate="smoothed", smooth=smooth)
+    return replace(local, smooth=smooth)
+
+
+def _local_crossover(resp, block, seed: int) -> FrfCrossover:
+    """The local regression's crossover with its draw-based std (the module doc's second estimate)."""
     w = resp.freq_rad_s
     nan = float("nan")
     if w.size < 2:
@@ -137,9 +200,11 @@ def nonparametric_crossover(resp, yc, *, seed: int = 0) -> FrfCrossover:
     ok = np.isfinite(arr[:, 0])
     if ok.sum() < DRAWS // 2:
         return FrfCrossover(wc, pm, float("inf"), float("inf"),
-                            "crossover not found in most draws: very uncertain", *raw)
+                            "crossover not found in most draws: very uncertain", *raw,
+                            local=(wc, pm, float("inf"), float("inf")))
     dpm = (arr[ok, 1] - pm + 180.0) % 360.0 - 180.0
-    return FrfCrossover(wc, pm, float(np.std(arr[ok, 0])), float(np.std(dpm)), "", *raw)
+    sd = (float(np.std(arr[ok, 0])), float(np.std(dpm)))
+    return FrfCrossover(wc, pm, *sd, "", *raw, local=(wc, pm, *sd))
 
 
 def _wls(X, y, wt):

@@ -7,6 +7,7 @@ from typing import Mapping
 
 import numpy as np
 
+from ..identification.frf_smooth import describing_function
 from . import save_figure, subplots
 
 _COLORS = ("r", "g", "m", "c", "orange")
@@ -40,6 +41,10 @@ def frf_figure(path: str | Path, frf, models: Mapping[str, object] | None = None
                 label="reference lines")
         a2.plot(r.freq_rad_s, np.degrees(np.unwrap(np.angle(r.H))), "s", color="gray", ms=4)
     wf = np.logspace(np.log10(w.min() / 1.5), np.log10(w.max() * 1.5), 300)
+    if getattr(frf.crossover, "estimate", "") == "smoothed":
+        # the fit the headline crossover comes from, so a reader can judge it against the points
+        models = {"smoothed fit (crossover estimate)":
+                  describing_function(frf.crossover.smooth["parameters"]), **(models or {})}
     for i, (lab, fn) in enumerate((models or {}).items()):
         h = fn(1j * wf)
         p = np.degrees(np.unwrap(np.angle(h)))

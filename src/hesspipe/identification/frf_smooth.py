@@ -1,0 +1,268 @@
+"""A global smoother of a measured describing function, and the crossover it gives.
+
+All the measured lines (H_k with the standard deviation sigma_k of its complex
+error, see :mod:`hesspipe.identification.frf`) are fitted at once by a
+low-order describing function of McRuer's precision form::
+
+    H(s) = +-K e^(-tau s) (1 + TL s)/(1 + TI s) * wn^2/(s^2 + 2 zn wn s + wn^2)
+
+by weighted complex least squares: each line's error ``H(j w_k) - H_k``
+divided by ``sqrt(sigma_k^2 + (REL_FLOOR |H_k|)^2)``, a Cauchy loss of scale
+F_SCALE (one noisy high line does not steer the fit), literature bounds
+(tau 0.05-0.5 s, wn 4-25 rad/s, zn 0.05-1, TL and TI 0.01-10 s) and weak
+priors worth one line each on the neuromuscular mode (NM_PRIOR, shared with
+the df criterion) and on the delay (TAU_PRIOR). Its starts are screened on a grid
+(the gain solved in closed form for each) and the best TOP refined. Magnitude
+and phase are fitted jointly, so the phase at the crossover draws on every
+line instead of the two or three within its octave.
+
+The crossover of ``L = H Yc`` (exact plant) is the first fall of |L| through
+1 on a fine grid spanning the lines (the definition the generator's truth and
+SPEC's tracking crossover use); its standard deviation comes from the fit's
+linearised covariance (Gauss-Newton, inflated by the reduced chi-square when
+above 1) through finite-difference derivatives of (wc, PM), not from refits.
+Unlike :func:`hesspipe.pilot.mcruer.fit_precision`, which scores simulated
+loops for the benchmark, this fits the points directly and has no loop.
+
+The fit is a smoother, not an identification: it is used as the crossover
+estimate only when its residuals are consistent with the lines' variances
+(:func:`consistent`); :mod:`.frf_crossover` otherwise keeps the local
+regression.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import chi2 as chi2_dist
+
+NAMES = ("K", "tau", "TL", "TI", "wn", "zn")
+LOWER = np.array([-np.inf, 0.05, np.log(0.01), np.log(0.01), np.log(4.0), 0.05])
+UPPER = np.array([np.inf, 0.5, np.log(10.0), np.log(10.0), np.log(25.0), 1.0])
+"""Bounds of the parameter vector (ln K, tau s, ln TL, ln TI, ln wn, zn)."""
+NM_PRIOR = {"zn": (0.3, np.log(3.0)), "wn": (10.0, np.log(2.0))}
+"""Weak prior on the neuromuscular mode (centre, width in ln units), worth one line's residual
+at one width: above the forcing's band the lines are swamped by remnant, and without it a
+search bends a lightly damped peak onto a noisy high line. Shared with the df criterion
+(:mod:`hesspipe.identification.criteria`)."""
+REL_FLOOR = 0.02
+"""Relative error floor of a line (a noise-free line still has a model to fit within)."""
+F_SCALE = 2.0
+"""Cauchy loss scale: a line's error of two standard deviations."""
+TAU_PRIOR = (0.2, np.log(2.0))
+"""Weak prior on the delay (centre s, width in ln units), worth one line: the lines above the
+forcing's corner are swamped by remnant, and without it the phase slope near crossover trades
+the delay against the lead-lag on two or three lines."""
+TOP = 3
+P_CONSISTENT = 1e-4
+"""The smooth fit is taken when the chi-square of its residuals has p >= this."""
+GRID_POINTS = 600
+SPAN = 2.0
+"""The crossover is sought from the lowest line / SPAN to the highest line x SPAN."""
+_STARTS = tuple(itertools.product(
+    (1.0, -1.0), (0.12, 0.22, 0.35), (6.0, 10.0, 16.0), (0.2, 0.5),
+    ((0.02, 0.02), (0.02, 0.3), (0.02, 1.5), (0.3, 0.02), (1.5, 0.02), (1.0, 3.0), (3.0, 1.0))))
+"""Start grid: sign, tau (s), wn (rad/s), zn, (TL, TI) (s): none, lags, leads, lead-lags."""
+
+
+def _shape(x, w, sign):
+    """The model without its gain at `w` (rad/s); x = (ln K, tau, ln TL, ln TI, ln wn, zn)."""
+    s = 1j * w
+    wn = np.exp(x[4])
+    return (sign * np.exp(-x[1] * s) * (1 + np.exp(x[2]) * s) / (1 + np.exp(x[3]) * s)
+            * wn * wn / (s * s + 2 * x[5] * wn * s + wn * wn))
+
+
+def _residuals(x, w, H, scale, sign):
+    r = (np.exp(x[0]) * _shape(x, w, sign) - H) / scale
+    prior = [np.log(np.exp(x[4]) / NM_PRIOR["wn"][0]) / NM_PRIOR["wn"][1],
+             np.log(x[5] / NM_PRIOR["zn"][0]) / NM_PRIOR["zn"][1],
+             np.log(x[1] / TAU_PRIOR[0]) / TAU_PRIOR[1]]
+    return np.concatenate((r.real, r.imag, prior))
+
+
+@dataclass(frozen=True)
+class SmoothFit:
+    """The fitted describing function (see the module doc).
+
+    Attributes
+    ----------
+    x : ndarray
+        (ln K, tau s, ln TL, ln TI, ln wn rad/s, zn).
+    sign : float
+        +1 or -1 (the sign of the pilot's gain).
+    chi2 : float
+        Sum over lines of ``|H(j w_k) - H_k|^2 / (scale_k^2 / 2)`` (each of the two components of
+        a line's error has variance scale^2 / 2), without the priors.
+    dof : int
+        Two per line less six parameters.
+    cov : ndarray
+        Linearised covariance of `x` (6 x 6), inflated by ``max(1, chi2 / dof)``.
+    """
+
+    x: np.ndarray
+    sign: float
+    chi2: float
+    dof: int
+    cov: np.ndarray
+
+    @property
+    def params(self) -> dict:
+        """K (control per error unit, signed), tau (s), TL, TI (s), wn (rad/s), zn."""
+        v = dict(zip(NAMES, (self.sign * np.exp(self.x[0]), self.x[1], np.exp(self.x[2]),
+                             np.exp(self.x[3]), np.exp(self.x[4]), self.x[5])))
+        return {k: float(val) for k, val in v.items()}
+
+    @property
+    def p_value(self) -> float:
+        """Chance of a chi-square at least this large if the model held within the lines' errors."""
+        return float(chi2_dist.sf(self.chi2, self.dof)) if self.dof > 0 else float("nan")
+
+    def response(self, w) -> np.ndarray:
+        """The fitted H(j w) at `w` (rad/s), complex.
+
+        Parameters
+        ----------
+        w : array
+            Angular frequencies, rad/s.
+        """
+        return np.exp(self.x[0]) * _shape(self.x, np.asarray(w, dtype=float), self.sign)
+
+
+def fit_smooth(w, H, sigma) -> SmoothFit | None:
+    """Fit the smoother to measured lines (None with fewer than four lines).
+
+    Parameters
+    ----------
+    w : array
+        Line frequencies, rad/s.
+    H : array of complex
+        Measured describing function (control per unit error).
+    sigma : array
+        Standard deviation of each line's complex error (``E|dH|^2``), same units as H.
+
+    Returns
+    -------
+    SmoothFit or None
+    """
+    w, H, sigma = (np.asarray(a) for a in (w, H, sigma))
+    if w.size < 4:
+        return None
+    scale = np.sqrt(sigma ** 2 + (REL_FLOOR * np.abs(H)) ** 2)
+    wt = 1.0 / scale ** 2
+    cands = []
+    for sign, tau, wn, zn, (tl, ti) in _STARTS:
+        x = np.array([0.0, tau, np.log(tl), np.log(ti), np.log(wn), zn])
+        S = _shape(x, w, sign)
+        k = np.sum(wt * (np.conj(S) * H).real) / np.sum(wt * np.abs(S) ** 2)
+        if k > 0:  # the best real gain for this shape; a negative one is the other sign's start
+            x[0] = np.log(k)
+            cands.append((float(np.sum(wt * np.abs(k * S - H) ** 2)), sign, x))
+    if not cands:
+        return None
+    cands.sort(key=lambda c: c[0])
+    best = None
+    for _, sign, x0 in cands[:TOP]:
+        r = least_squares(_residuals, x0, bounds=(LOWER, UPPER), args=(w, H, scale, sign),
+                          method="trf", loss="cauchy", f_scale=F_SCALE)
+        if best is None or r.cost < best[0].cost:
+            best = (r, sign)
+    r, sign = best
+    err = np.exp(r.x[0]) * _shape(r.x, w, sign) - H
+    chi2 = float(2 * np.sum(np.abs(err) ** 2 / scale ** 2))
+    dof = 2 * w.size - len(NAMES)
+    J = r.jac
+    cov = np.linalg.pinv(J.T @ J) * max(1.0, chi2 / dof if dof > 0 else 1.0)
+    return SmoothFit(r.x, float(sign), chi2, dof, cov)
+
+
+def consistent(fit: SmoothFit | None) -> bool:
+    """Whether the fit's residuals are consistent with the lines' variances (p >= P_CONSISTENT).
+
+    Parameters
+    ----------
+    fit : SmoothFit or None
+    """
+    return fit is not None and fit.dof > 0 and fit.p_value >= P_CONSISTENT
+
+
+def _first_fall(x, sign, grid, yc_grid, yc_at):
+    L = np.exp(x[0]) * _shape(x, grid, sign) * yc_grid
+    m = np.log(np.abs(L))
+    down = np.nonzero((m[:-1] >= 0) & (m[1:] < 0))[0]
+    if not down.size:
+        return float("nan"), float("nan")
+    i = down[0]
+    t = m[i] / (m[i] - m[i + 1])
+    wc = float(np.exp(np.log(grid[i]) + t * (np.log(grid[i + 1]) - np.log(grid[i]))))
+    wcv = np.array([wc])
+    pm = 180.0 + np.degrees(np.angle(np.exp(x[0]) * _shape(x, wcv, sign)[0] * yc_at(wcv)[0]))
+    pm = (pm + 180.0) % 360.0 - 180.0
+    return wc, (180.0 if pm == -180.0 else float(pm))
+
+
+def smooth_crossover(fit: SmoothFit, block, w_lines) -> tuple[float, float, float, float]:
+    """Crossover of ``L = H_fit Yc`` and its linearised standard deviations.
+
+    Parameters
+    ----------
+    fit : SmoothFit
+    block : hesspipe.pilot.blocks.Block
+        The control plant.
+    w_lines : array
+        The fitted lines' frequencies (rad/s): the search spans them (times SPAN each side).
+
+    Returns
+    -------
+    wc, pm, wc_std, pm_std : float
+        rad/s and deg; NaN when |L| does not fall through 1 in the span (std inf when a
+        perturbed fit loses the crossing).
+    """
+    grid = np.logspace(np.log10(np.min(w_lines) / SPAN), np.log10(np.max(w_lines) * SPAN),
+                       GRID_POINTS)
+    yc_grid = block.response(1j * grid)
+
+    def yc_at(v):
+        return block.response(1j * v)
+
+    wc, pm = _first_fall(fit.x, fit.sign, grid, yc_grid, yc_at)
+    nan = float("nan")
+    if not np.isfinite(wc):
+        return nan, nan, nan, nan
+    grad = np.zeros((2, fit.x.size))
+    for j in range(fit.x.size):
+        h = 1e-4 * max(1.0, abs(fit.x[j]))
+        xp, xm = fit.x.copy(), fit.x.copy()
+        xp[j] += h
+        xm[j] -= h
+        (a, pa), (b, pb) = (_first_fall(x, fit.sign, grid, yc_grid, yc_at) for x in (xp, xm))
+        if not (np.isfinite(a) and np.isfinite(b)):
+            return wc, pm, float("inf"), float("inf")
+        grad[:, j] = ((a - b) / (2 * h), ((pa - pb + 180.0) % 360.0 - 180.0) / (2 * h))
+    var = np.einsum("ij,jk,ik->i", grad, fit.cov, grad)
+    return wc, pm, float(np.sqrt(max(var[0], 0.0))), float(np.sqrt(max(var[1], 0.0)))
+
+
+def describing_function(params: dict):
+    """The smoother's H(s) from its :attr:`SmoothFit.params` (e.g. a JSON's ``smooth_fit``).
+
+    Parameters
+    ----------
+    params : dict
+        ``K`` (signed), ``tau``, ``TL``, ``TI`` (s), ``wn`` (rad/s), ``zn``.
+
+    Returns
+    -------
+    callable
+        ``H(s)`` for complex `s` (1/s), control per unit error.
+    """
+    p = {k: float(params[k]) for k in NAMES}
+
+    def H(s):
+        s = np.asarray(s)
+        return (p["K"] * np.exp(-p["tau"] * s) * (1 + p["TL"] * s) / (1 + p["TI"] * s)
+                * p["wn"] ** 2 / (s * s + 2 * p["zn"] * p["wn"] * s + p["wn"] ** 2))
+    return H

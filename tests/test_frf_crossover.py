@@ -1,0 +1,105 @@
+"""The nonparametric crossover's smoothed estimate (hesspipe.identification.frf_smooth).
+
+Trials come from hesspipe.humanlike, the independent fine-step generator (SYNTHETIC); its
+truth is computed from the drawn pilot and plant, never from the estimate under test. The
+unit checks of the smoother use points of a known describing function built here.
+"""
+
+import numpy as np
+import pytest
+
+from hesspipe.identification.frf_smooth import consistent, fit_smooth
+
+
+def _generated(plant, seed, pilot, **overrides):
+    import control as ct
+
+    from hesspipe.core.formats import Plants, Run
+    from hesspipe.humanlike import draw_trial, plants_dict, simulate_trial
+
+    spec = draw_trial(plant, seed, task="disturbance", pilot=pilot, **overrides)
+    tr = simulate_trial(spec, fine_ratio=10)
+    run = Run(time=tr.time, disturbance=tr.disturbance, output=tr.output, control=tr.control,
+              reference=tr.reference, id=spec.name, synthetic=True)
+    pd = plants_dict(spec)
+    plants = Plants(*(ct.tf(pd[k]["num"], pd[k]["den"])
+                      for k in ("control_to_output", "disturbance_to_output")))
+    return run, plants, tr.truth["crossover"]
+
+
+def _estimate(run, plants, seed=0):
+    from hesspipe.identification.frf import estimate_frf
+
+    return estimate_frf(run, plants, seed=seed).crossover
+
+
+@pytest.mark.parametrize("plant,seed,pilot,estimate", [
+    ("1/s", 1, "precision", "smoothed"),      # the smoother's own form: it must take it
+    ("roll", 2, "hess", None),
+    ("1/(s(s+1))", 1, "hess", None),          # a shape the smoother only approximates
+])
+def test_noise_free_trial_crosses_where_the_truth_does(plant, seed, pilot, estimate):
+    run, plants, truth = _generated(plant, seed, pilot, remnant_share=0.0)
+    c = _estimate(run, plants)
+    assert c.frequency_rad_s == pytest.approx(truth["frequency_rad_s"], rel=0.03)
+    assert c.phase_margin_deg == pytest.approx(truth["phase_margin_deg"], abs=2.0)
+    if estimate is not None:
+        assert c.estimate == estimate
+
+
+def test_noisy_trials_truth_within_three_std_and_smoother_beats_local():
+    # Default generator ranges (remnant 10-40 % of control power).
+    errs_s, errs_l = [], []
+    for i, (plant, pilot) in enumerate((("1/s", "precision"), ("1/s", "hess"),
+                                        ("roll", "precision"), ("K/s2", "hess"),
+                                        ("1/(s(s+1))", "precision"), ("roll", "hess"))):
+        run, plants, truth = _generated(plant, 300 + i, pilot)
+        c = _estimate(run, plants)
+        assert np.isfinite(c.frequency_std) and c.frequency_std > 0
+        assert abs(c.frequency_rad_s - truth["frequency_rad_s"]) <= 3 * c.frequency_std, plant
+        assert abs(c.phase_margin_deg - truth["phase_margin_deg"]) <= 3 * c.phase_margin_std_deg, plant
+        errs_s.append(c.phase_margin_deg - truth["phase_margin_deg"])
+        errs_l.append(c.local[1] - truth["phase_margin_deg"])
+    assert np.all(np.isfinite(errs_s)) and np.all(np.isfinite(errs_l))
+    assert np.sqrt(np.mean(np.square(errs_s))) < np.sqrt(np.mean(np.square(errs_l)))
+
+
+def test_deterministic_and_independent_of_the_draw_seed():
+    run, plants, _ = _generated("1/(s(s+1))", 210, "precision")
+    a, b, c = _estimate(run, plants, 0), _estimate(run, plants, 0), _estimate(run, plants, 7)
+    assert a == b
+    assert a.estimate == "smoothed"
+    assert (c.frequency_rad_s, c.phase_margin_deg) == (a.frequency_rad_s, a.phase_margin_deg)
+    d = a.to_dict()
+    assert d["estimate"] == "smoothed" and d["method"].startswith("smoothed")
+    assert d["local_regression"]["frequency_rad_s"] == a.local[0]
+    assert d["smooth_fit"]["consistent"] is True
+
+
+def _points(H, w, rel, seed):
+    rng = np.random.default_rng(seed)
+    h = H(1j * w)
+    sig = rel * np.abs(h)
+    noise = (rng.standard_normal(w.size) + 1j * rng.standard_normal(w.size)) / np.sqrt(2)
+    return h + sig * noise, sig
+
+
+def test_smoother_fits_its_form_and_rejects_what_it_cannot_follow():
+    w = np.geomspace(0.3, 20, 12)
+
+    def lag(s):
+        return 4.0 * np.exp(-0.2 * s) / (1 + 0.8 * s) * 144 / (s * s + 2 * 0.3 * 12 * s + 144)
+
+    H, sig = _points(lag, w, 0.05, 1)
+    fit = fit_smooth(w, H, sig)
+    assert consistent(fit)
+    p = fit.params
+    assert p["tau"] == pytest.approx(0.2, abs=0.03) and p["K"] == pytest.approx(4.0, rel=0.1)
+    assert np.max(np.abs(fit.response(w) - lag(1j * w)) / np.abs(lag(1j * w))) < 0.06
+
+    def notch(s):  # a deep notch at 3 rad/s: no lead-lag-delay-NM follows it
+        return lag(s) * (s * s + 0.3 * s + 9) / (s * s + 6 * s + 9)
+
+    H, sig = _points(notch, w, 0.02, 2)
+    assert not consistent(fit_smooth(w, H, sig))
+    assert fit_smooth(w[:3], H[:3], sig[:3]) is None
