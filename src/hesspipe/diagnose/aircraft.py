@@ -190,8 +190,7 @@ class _Paths:
         y = self.cols["output"][self.sl] - a[self.sl]
         b = b[:, None] if b.ndim == 1 else b
         A = np.concatenate([b[self.sl], self.basis(poles)], axis=1)
-        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-        return y - A @ coef
+        return y - A @ _linear_fit(A, y)
 
     def fit_of(self, r: np.ndarray) -> float:
         y = self.cols["output"][self.sl]
@@ -248,6 +247,18 @@ def evidence_p(r_small: np.ndarray, r_big: np.ndarray, dof: int, dt: float,
         return 1.0
     stat = ((ss_small - ss_big) / dof) / (ss_big / (n_eff - dof))
     return float(scipy.stats.f.sf(stat, dof, n_eff - dof))
+
+
+def _linear_fit(A: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least-squares coefficients of ``A x = y`` through the normal equations of the
+    column-normalised `A` (a few columns, thousands of rows: 60 times cheaper than an SVD
+    of `A`, which the Gauss-Newton refits call hundreds of times); the small Gram matrix is
+    solved by SVD, so dependent columns do no harm."""
+    norm = np.sqrt(np.sum(A * A, axis=0))
+    norm[norm == 0] = 1.0
+    An = A / norm
+    x = np.linalg.lstsq(An.T @ An, An.T @ y, rcond=1e-12)[0]
+    return x / norm
 
 
 def _rate_limited(u: np.ndarray, rate: float, dt: float) -> np.ndarray:
@@ -328,7 +339,7 @@ def _aircraft_candidates(p: _Paths, plants, residuals: dict | None = None) -> li
     w, z = math.exp(x[0]), math.exp(x[1])
     _, cols, poles = dr_parts(x)
     A = np.concatenate([cols[p.sl], p.basis(poles)], axis=1)
-    c = np.linalg.lstsq(A, p.cols["output"][p.sl], rcond=None)[0][:6] / w ** np.tile(np.arange(3), 2)
+    c = _linear_fit(A, p.cols["output"][p.sl])[:6] / w ** np.tile(np.arange(3), 2)
     residuals["dutch_roll"] = dr(x)
     out.append(Explanation("dutch_roll", "aircraft", p.fit_of(residuals["dutch_roll"]),
                            {"w_dr": w, "z_dr": z,
