@@ -24,8 +24,8 @@ carries; no pilot-side name on baselines; both of two hidden effects named in >=
 then the whole matrix, how often motion_feedback is named with and without a hidden
 motion feedback (>= 70 % / <= 10 %) and the median CPU time per diagnosis
 (``time.process_time``: one core's work, independent of how loaded the shared machine is).
-The method was developed on seeds 100-104 (``--seed-start 100``); the README reports seeds
-0-9.
+The method was developed on seeds 100-104 (``--seed-start 100``; the aircraft-side
+evidence test and the Dutch-roll refit on 100-111); the README reports seeds 0-9.
 
 Usage::
 
