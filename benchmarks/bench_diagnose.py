@@ -24,8 +24,8 @@ carries; no pilot-side name on baselines; both of two hidden effects named in >=
 then the whole matrix, how often motion_feedback is named with and without a hidden
 motion feedback (>= 70 % / <= 10 %) and the median CPU time per diagnosis
 (``time.process_time``: one core's work, independent of how loaded the shared machine is).
-The method was developed on seeds 100-104 (``--seed-start 100``); the README reports seeds
-0-9.
+The method was developed on seeds 100-104 (``--seed-start 100``; the aircraft-side
+evidence test and the Dutch-roll refit on 100-111); the README reports seeds 0-9.
 
 Usage::
 
@@ -112,6 +112,8 @@ def main(argv=None) -> int:
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     rows, times, failures, skipped = {}, [], [], []
     motion = {True: [0, 0], False: [0, 0]}  # hidden motion? -> [runs naming it, runs]
+    # (hidden motion?, one forcing function?) -> [named, "cannot tell", runs]
+    words = {(h, o): [0, 0, 0] for h in (True, False) for o in (True, False)}
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         for plant, output, task, effect in itertools.product(split(args.plants), split(args.outputs),
@@ -137,6 +139,12 @@ def main(argv=None) -> int:
                 hidden_motion = "motion_feedback" in effect
                 motion[hidden_motion][0] += "motion_feedback" in named
                 motion[hidden_motion][1] += 1
+                mv = d.motion_verdict or {}
+                if mv.get("forcing"):
+                    cell = words[(hidden_motion, not mv.get("separable", True))]
+                    cell[0] += bool(mv.get("named"))
+                    cell[1] += mv.get("verdict", "").startswith("cannot tell")
+                    cell[2] += 1
                 rest = [e for e in named if e != "remnant"] if effect != "remnant" else named
                 aside += bool(rest) and rest[0] == effect.split("+")[0]
                 if "+" in effect:
@@ -163,6 +171,11 @@ def main(argv=None) -> int:
             print(f"motion_feedback named in {k}/{m} = {100 * k / m:.0f} % of runs "
                   f"{'with' if hidden else 'without'} hidden motion feedback "
                   f"(target {'>= 70' if hidden else '<= 10'} %)")
+    for (hidden, one), (k, c, m) in words.items():
+        if m:
+            print(f"  {'with' if hidden else 'without'} hidden motion, "
+                  f"{'one forcing function' if one else 'target and disturbance'}: named {k}/{m}, "
+                  f"'cannot tell' {c}/{m}, 'no evidence' {m - k - c}/{m}")
     med = float(np.median(times)) if times else float("nan")
     print(f"\nmedian CPU time per diagnosis: {med:.2f} s (target < 3 s; {len(times)} diagnoses, "
           f"max {max(times, default=float('nan')):.1f} s); wall time {time.perf_counter() - t0:.0f} s")

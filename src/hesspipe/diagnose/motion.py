@@ -59,6 +59,17 @@ class MotionVerdict:
         Significance level.
     note : str
         Why no verdict was possible, if none was.
+    forcing : str
+        "disturbance and target", "disturbance only" or "target only": which line sets
+        the record has.
+    separable : bool
+        True when both line sets are there: at disturbance lines e = -y, at target lines
+        y = Yc u, so the two sets' disagreement separates the vestibular from the visual
+        path. With one set there is one describing function, and the two paths act on
+        one signal: only the model's shapes of the paths tell them apart.
+    verdict : str
+        The verdict in words (what the report prints): named, no evidence, or, with one
+        forcing function and no significant test, that the data cannot tell.
     """
 
     named: bool
@@ -70,12 +81,16 @@ class MotionVerdict:
     n_lines: int = 0
     alpha: float = float("nan")
     note: str = ""
+    forcing: str = ""
+    separable: bool = True
+    verdict: str = ""
 
     def to_dict(self) -> dict:
         """JSON-ready fields and the criterion that produced them."""
         return {"named": self.named, "statistic": self.statistic, "p_value": self.p_value,
                 "gain": self.gain, "Km": self.Km, "Km_se": self.Km_se, "n_lines": self.n_lines,
-                "alpha": self.alpha, "note": self.note,
+                "alpha": self.alpha, "note": self.note, "forcing": self.forcing,
+                "separable": self.separable, "verdict": self.verdict,
                 "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
                              "lines (equation error, per-line remnant variance from the unforced "
                              "neighbours), p halved for Km >= 0"}
@@ -110,6 +125,50 @@ class DFEvidence:
     delay: dict
     dynamics: dict
     remnant: dict
+
+
+def forcing_sets(run) -> str:
+    """Which multisine line sets a record has: "disturbance and target", "disturbance
+    only", "target only" or "none".
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run (disturbance and reference are the forcing signals).
+    """
+    start, length = analysis_window(run)
+    cut = slice(start, start + length)
+    has = []
+    for name in ("disturbance", "reference"):
+        sig = np.asarray(getattr(run, name), dtype=float)[cut]
+        one = dataclasses.replace(run, time=run.time[cut], disturbance=sig if name == "disturbance" else
+                                  np.zeros(length), reference=sig if name == "reference" else np.zeros(length),
+                                  output=run.output[cut], control=run.control[cut])
+        has.append(forcing_lines(one).size > 0)
+    return {(True, True): "disturbance and target", (True, False): "disturbance only",
+            (False, True): "target only", (False, False): "none"}[tuple(has)]
+
+
+def motion_words(named: bool, forcing: str) -> str:
+    """The motion verdict in words, saying what the record's forcing lets it rest on.
+
+    Parameters
+    ----------
+    named : bool
+        Whether the motion test is significant.
+    forcing : str
+        :func:`forcing_sets` of the record.
+    """
+    if forcing == "disturbance and target":
+        return ("motion feedback named: the target and disturbance lines disagree as a vestibular "
+                "path predicts" if named else
+                "no evidence of motion feedback: the target and disturbance lines agree without it")
+    why = ("one forcing function (%s): one describing function, in which the visual and "
+           "vestibular paths act on the same signal" % forcing)
+    if named:
+        return f"motion feedback named on the model's shapes of the two paths alone ({why})"
+    return (f"cannot tell whether the pilot uses motion: {why}, so the data cannot separate them "
+            "(neither named nor ruled out; a target on its own lines would)")
 
 
 def delay_test(delay_s: float, se_s: float, max_pilot_delay_s: float, alpha: float) -> dict:
@@ -197,9 +256,12 @@ def df_evidence(run, plants, start, *, k: int, cfg) -> DFEvidence | None:
     t = safe_motion_test(run, plants, start, k=k)
     if not t.get("available"):
         return None
-    mv = MotionVerdict(bool(t["p_value"] < cfg.motion_alpha), float(t["lr"]), float(t["p_value"]),
-                       float(t["gain"]), float(t["Km"]), float(t["Km_se"]), int(t["n_lines"]),
-                       cfg.motion_alpha)
+    named = bool(t["p_value"] < cfg.motion_alpha)
+    forcing = forcing_sets(run)
+    mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
+                       float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
+                       separable=forcing == "disturbance and target",
+                       verdict=motion_words(named, forcing))
     # The delay of the model that the motion verdict keeps: a vestibular lead shifts it.
     pars = t["parameters_expanded"] if mv.named else t["parameters_original"]
     se = t["standard_errors_original"].get("tau0", math.nan)

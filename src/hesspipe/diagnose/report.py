@@ -50,6 +50,8 @@ def format_report(d: Diagnosis) -> str:
                    f"{100 * mv['gain']:.0f} % with Km={mv['Km']:.3g}): F={mv['statistic']:.1f}, "
                    f"p={mv['p_value']:.2g} (needs < {d.config.motion_alpha:g}) -> "
                    f"{'NAMED' if mv['named'] else 'not named'}")
+        if mv.get("verdict"):
+            out.append(f"  -> {mv['verdict']}")
     ce = d.control_error_before
     if ce is not None:
         out.append(f"Control error of the baseline model (time domain): "

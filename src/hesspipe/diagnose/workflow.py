@@ -174,7 +174,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     # A failed plant check is a finding, never a refusal: the aircraft-side candidate that
     # closes it (or the file error it proves) is named and the pilot identified around it.
 
-    finding = plant_finding(run, plants, check, fit_ok=cfg.plant_fit_ok)
+    finding = plant_finding(run, plants, check, fit_ok=cfg.plant_fit_ok, alpha=cfg.alpha)
     before = None
     if finding.verdict == "aircraft":
         # "Before" is the pilot identified around the plants as given (same measured
