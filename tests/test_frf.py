@@ -11,6 +11,7 @@ import pytest
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Run
 from hesspipe.identification.frf import estimate_frf
+from humanlike_trials import generated
 
 FS, T = 50.0, 40.0
 N = int(FS * T)
@@ -220,19 +221,8 @@ def test_cli_frf_one_line_errors_and_json(tmp_path, capsys):
 # drawn pilot and plant, never from the estimate under test.
 
 def _generated(plant, seed, pilot, **overrides):
-    import control as ct
-
-    from hesspipe.core.formats import Plants
-    from hesspipe.humanlike import draw_trial, plants_dict, simulate_trial
-
-    spec = draw_trial(plant, seed, task="disturbance", pilot=pilot, **overrides)
-    tr = simulate_trial(spec, fine_ratio=10)
-    run = Run(time=tr.time, disturbance=tr.disturbance, output=tr.output, control=tr.control,
-              reference=tr.reference, id=spec.name, synthetic=True)
-    pd = plants_dict(spec)
-    plants = Plants(*(ct.tf(pd[k]["num"], pd[k]["den"])
-                      for k in ("control_to_output", "disturbance_to_output")))
-    return estimate_frf(run, plants).crossover, tr.truth["crossover"]
+    run, plants, truth = generated(plant, seed, pilot, **overrides)
+    return estimate_frf(run, plants).crossover, truth
 
 
 def test_generated_low_remnant_trials_cross_where_the_truth_does():

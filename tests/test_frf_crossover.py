@@ -9,22 +9,7 @@ import numpy as np
 import pytest
 
 from hesspipe.identification.frf_smooth import consistent, fit_smooth
-
-
-def _generated(plant, seed, pilot, **overrides):
-    import control as ct
-
-    from hesspipe.core.formats import Plants, Run
-    from hesspipe.humanlike import draw_trial, plants_dict, simulate_trial
-
-    spec = draw_trial(plant, seed, task="disturbance", pilot=pilot, **overrides)
-    tr = simulate_trial(spec, fine_ratio=10)
-    run = Run(time=tr.time, disturbance=tr.disturbance, output=tr.output, control=tr.control,
-              reference=tr.reference, id=spec.name, synthetic=True)
-    pd = plants_dict(spec)
-    plants = Plants(*(ct.tf(pd[k]["num"], pd[k]["den"])
-                      for k in ("control_to_output", "disturbance_to_output")))
-    return run, plants, tr.truth["crossover"]
+from humanlike_trials import generated as _generated
 
 
 def _estimate(run, plants, seed=0):
