@@ -106,3 +106,18 @@ def test_report_carries_the_verdict_at_the_top(tmp_path):
     md = build_report({"pilots": tmp_path / "pilots"}, tmp_path, config_file="x.toml", seed=0)
     head = md.split("## ")[0]
     assert "Does the pilot need motion?" in head and "1 of 1 pilots" in head
+
+
+def test_undetermined_verdict_on_the_papers_task_says_how_to_answer(tmp_path):
+    from hesspipe.pipeline.report import build_report
+
+    v = cohort_verdict({"a": {"available": False}})
+    (tmp_path / "pilots" / "cohort").mkdir(parents=True)
+    (tmp_path / "pilots" / "comparison.json").write_text(json.dumps(
+        {"motion_verdict": v, "synthetic": True, "pilots": [], "failures": []}))
+    for target, hint in ((None, True), ({"kind": "multisine", "run_in_s": 15.0}, False)):
+        (tmp_path / "pilots" / "cohort" / "cohort.json").write_text(json.dumps({"target": target}))
+        head = build_report({"pilots": tmp_path / "pilots"}, tmp_path, config_file="x.toml",
+                            seed=0).split("## ")[0]
+        assert head.startswith("# hesspipe report") and "Undetermined" in head
+        assert ('forcing = "two_input"' in head) is hint

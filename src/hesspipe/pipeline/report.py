@@ -247,8 +247,15 @@ def _answer(folder: Path) -> list[str]:
     if not v:
         return []
     note = " (SYNTHETIC DATA)" if comp.get("synthetic") else ""
-    return [f"**Does the pilot need motion?{note}** {v['sentence'][0].upper()}{v['sentence'][1:]}.",
-            "", f"Method: {v['method']}.", ""]
+    out = [f"**Does the pilot need motion?{note}** {v['sentence'][0].upper()}{v['sentence'][1:]}.", ""]
+    cohort = _load(folder / "cohort" / "cohort.json")
+    if v.get("answer") == "undetermined" and cohort is not None and not cohort.get("target"):
+        out += ["The cohort flew the paper's task: one forcing function (the side wind with its "
+                "gusts), in whose records the visual and vestibular paths act on the same signal. "
+                "`[pilots] forcing = \"two_input\"` flies it through wind and roll-rate target "
+                "multisines on interleaved lines, from which the describing-function test can "
+                "answer (README, \"The JSBSim cohort's forcing\").", ""]
+    return out + [f"Method: {v['method']}.", ""]
 
 
 def build_report(folders: Mapping[str, Path], root: Path, *, config_file: str, seed: int) -> str:
