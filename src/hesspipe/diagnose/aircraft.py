@@ -192,8 +192,12 @@ class _Paths:
             cols.append(e * np.cos(q.imag * t))
             if abs(q.imag) > 1e-9:
                 cols.append(e * np.sin(q.imag * t))
-        cols += list(self.drift(t.size).T)
         return np.stack(cols, axis=1) if cols else np.zeros((t.size, 0))
+
+    def free(self, poles) -> np.ndarray:
+        """The nuisance columns of every refit: :meth:`basis` of `poles` and :meth:`drift`."""
+        b = self.basis(poles)
+        return np.concatenate([b, self.drift(b.shape[0])], axis=1)
 
     def drift(self, m: int) -> np.ndarray:
         """Slow drift columns (Legendre polynomials of degree 0..``DRIFT_DEGREE`` over the
@@ -220,7 +224,7 @@ class _Paths:
         path's gain ``g`` and the initial conditions fitted by linear least squares."""
         y = self.cols["output"][self.sl] - a[self.sl]
         b = b[:, None] if b.ndim == 1 else b
-        A = np.concatenate([b[self.sl], self.basis(poles)], axis=1)
+        A = np.concatenate([b[self.sl], self.free(poles)], axis=1)
         return y - A @ _linear_fit(A, y)
 
     def fit_of(self, r: np.ndarray) -> float:
@@ -369,7 +373,7 @@ def _aircraft_candidates(p: _Paths, plants, residuals: dict | None = None) -> li
     x, _ = _lsq(dr, ranked, lo, hi)
     w, z = math.exp(x[0]), math.exp(x[1])
     _, cols, poles = dr_parts(x)
-    A = np.concatenate([cols[p.sl], p.basis(poles)], axis=1)
+    A = np.concatenate([cols[p.sl], p.free(poles)], axis=1)
     c = _linear_fit(A, p.cols["output"][p.sl])[:6] / w ** np.tile(np.arange(3), 2)
     residuals["dutch_roll"] = dr(x)
     out.append(Explanation("dutch_roll", "aircraft", p.fit_of(residuals["dutch_roll"]),
@@ -428,7 +432,7 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
     out: list[Explanation] = []
     roles = ("control", "disturbance", "output")
 
-    free = p.basis(_poles(plants.control_to_output, plants.disturbance_to_output))
+    free = p.free(_poles(plants.control_to_output, plants.disturbance_to_output))
     for perm in itertools.permutations(roles):
         u_k, w_k, y_k = perm
         a_c = p.time(p.yc * p.spec[u_k])
