@@ -206,10 +206,12 @@ class _Paths:
         A logger samples the control, it does not average it: the control's content above
         the logging Nyquist folds down, and a plant with integrators turns the folded part
         into a slow drift of the simulated output (a double integrator fed the logged
-        control of the independent generator drifts by 5-40 % of the output, 94-98 % of
-        that residual's power below 0.1 Hz; the control's part above the Nyquist is
-        0.1-0.5 % of its power). Without these columns the evidence test took the drift
-        for a slow pair or a rate limit. Fitted only behind at least ``DRIFT_INTEGRATORS``
+        control of the independent generator is off by 12-38 % of the output's standard
+        deviation, 94-98 % of that residual's power below 0.1 Hz, though the control's part
+        above the Nyquist is 0.3-0.5 % of its power; fed the same control low-passed at
+        the Nyquist before sampling it fits at 99.9 %: benchmarks/bench_drift_cause.py).
+        Without these columns the evidence test took the drift for a slow pair or a rate
+        limit. Fitted only behind at least ``DRIFT_INTEGRATORS``
         integrators of the control path: elsewhere the folded part stays as small as it is
         in the control, and the polynomial would absorb the slow part of a real aircraft
         effect (degree 8 on every plant lost 9 of 48 Dutch-roll and 8 of 48 actuator-lag
