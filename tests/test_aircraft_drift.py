@@ -35,7 +35,7 @@ def test_drift_behind_a_double_integrator_is_no_aircraft_effect(tmp_path, effect
     f = plant_finding(run, plants, plant_check(run, plants))
     assert f.verdict == "match", f.message
     nominal = {e.id: e for e in f.explanations}["nominal"]
-    assert nominal.fit_percent >= 90.0
+    assert nominal.fit_percent >= 90.0 and "slow drift" in f.message
 
 
 def test_drift_columns_only_behind_a_double_integrator(tmp_path):

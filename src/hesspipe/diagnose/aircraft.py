@@ -490,11 +490,13 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
     ref = Explanation("nominal", "reference",
                       p.fit_of(p.residual(p.time(p.yc * p.spec["control"]), p.time(p.yd * p.spec["disturbance"]),
                                           _poles(plants.control_to_output, plants.disturbance_to_output))),
-                      {}, "the plants as given, disturbance gain and initial state refitted")
+                      {}, "the plants as given, disturbance gain and initial state refitted"
+                      + (" with a slow drift" * bool(p.drift(1).shape[1])))
     if ref.fit_percent >= fit_ok:
+        drift = " and a slow drift (the logged control's folded content, integrated)" * bool(p.drift(1).shape[1])
         return PlantFinding("match", f0, explanations=(ref,),
                             message=f"plants reproduce the output: fit {ref.fit_percent:.1f} % with the "
-                                    f"initial state refitted ({f0:.1f} % from rest)")
+                                    f"initial state{drift} refitted ({f0:.1f} % from rest)")
     res: dict = {}
     tried = [e for e in _aircraft_candidates(p, plants, res) if e.id != "nominal"]
     # An aircraft-side name rests on evidence, the bar of every other candidate: an
