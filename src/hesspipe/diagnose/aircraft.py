@@ -64,9 +64,10 @@ EVIDENCE_BAND_HZ = 5.0
 _SMOOTH_BINS = 8
 #: A path gain beyond this factor (either way) is a units error, not an aircraft change.
 SCALE_RATIO = 3.0
-#: Degree of the slow-drift polynomial fitted with every refit (:meth:`_Paths.drift`; -1:
-#: none).
-DRIFT_DEGREE = 8
+#: Upper frequency of the slow drift fitted with every refit, Hz (:meth:`_Paths.drift`; 0:
+#: none): its polynomial has degree ``2 T DRIFT_HZ`` on a record of T s (8 on 70 s, the
+#: degree chosen on the benchmark's 70 s records), so it spans the same band at any length.
+DRIFT_HZ = 4.0 / 70.0
 #: Integrators of the control path from which on the slow drift is fitted.
 DRIFT_INTEGRATORS = 2
 
@@ -171,6 +172,7 @@ class _Paths:
         t_rec = self.n * run.dt
         self.integrators = sum(abs(complex(q)) < 0.1 / t_rec
                                for q in np.atleast_1d(plants.control_to_output.poles()))
+        self.drift_degree = max(2, int(round(2.0 * t_rec * DRIFT_HZ))) if DRIFT_HZ > 0 else -1
 
     def fft(self, x: np.ndarray) -> np.ndarray:
         return self.contour.spectrum(x)
@@ -200,8 +202,8 @@ class _Paths:
         return np.concatenate([b, self.drift(b.shape[0])], axis=1)
 
     def drift(self, m: int) -> np.ndarray:
-        """Slow drift columns (Legendre polynomials of degree 0..``DRIFT_DEGREE`` over the
-        `m` fitted samples), a nuisance shared by the nominal refit and every candidate.
+        """Slow drift columns (Legendre polynomials of degree 0..``drift_degree`` over the
+        `m` fitted samples; see :data:`DRIFT_HZ`), a nuisance shared by the nominal refit and every candidate.
 
         A logger samples the control, it does not average it: the control's content above
         the logging Nyquist folds down, and a plant with integrators turns the folded part
@@ -216,10 +218,10 @@ class _Paths:
         in the control, and the polynomial would absorb the slow part of a real aircraft
         effect (degree 8 on every plant lost 9 of 48 Dutch-roll and 8 of 48 actuator-lag
         names on development seeds 100-105)."""
-        if DRIFT_DEGREE < 0 or self.integrators < DRIFT_INTEGRATORS:
+        if self.drift_degree < 0 or self.integrators < DRIFT_INTEGRATORS:
             return np.zeros((m, 0))
         x = np.linspace(-1.0, 1.0, m)
-        return np.polynomial.legendre.legvander(x, DRIFT_DEGREE)
+        return np.polynomial.legendre.legvander(x, self.drift_degree)
 
     def residual(self, a: np.ndarray, b: np.ndarray, poles) -> np.ndarray:
         """Output error of ``a + g b`` plus free responses of `poles`, with the disturbance
