@@ -12,8 +12,14 @@ frequency::
 
 so each model predicts U from the measured E and Y (an equation-error form:
 no closed-loop simulation, target and disturbance lines alike). The residual
-at a line is remnant filtered by ``1/(1 + NM PF)``; its variance is estimated
-from the same residual at the neighbouring, unforced bins. With residuals
+at a line is remnant filtered by ``1/(1 + NM PF)``; its variance is measured
+at the neighbouring, unforced bins, where the loop runs on remnant alone with
+e = −y, so the true pilot's residual there is ``U − H E`` with H the describing
+function measured at the nearest disturbance line (:func:`line_variances`, the
+same neighbour residual as :mod:`.frf`'s sigma; no model fit enters). (Before,
+the residual of a first fit of the original model set it: in closed loop that
+fit under-stated the remnant at the low lines, 1.5-7 times on angle tasks, and
+several times more on the double integrator.) With residuals
 scaled by it (which fixes the misfit's frequency shape; its overall level is
 left to the data), the nested-model likelihood-ratio test for the one extra
 parameter Km (the expanded model is the original at Km = 0) is the F test
@@ -50,7 +56,7 @@ from ..core.errors import HesspipeError
 from ..pilot.crossover import gain_scale
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block, with_motion_path
-from .frf import _lines, _neighbour_residual_power, _window
+from .frf import NEIGHBOURS, _lines, _neighbour_residual_power, _window
 
 ALPHA = 0.05
 """Level at which a pilot's test is reported ``significant``."""
@@ -145,7 +151,12 @@ def line_variances(run, lines) -> np.ndarray:
         src = np.asarray(lines, dtype=int)
     H_src = U[src] / E[src]
     H = H_src[np.argmin(np.abs(np.asarray(lines)[:, None] - src[None, :]), axis=1)]
-    return _neighbour_residual_power(U, E, H, lines, np.union1d(d_lines, r_lines).astype(int))
+    # Only bins within NEIGHBOURS of the line: frf's walk further out reaches, at the lowest
+    # lines, bins several times the line's frequency, where the remnant is weaker; the
+    # over-weighted low lines then named motion in 3 of 11 static double-integrator runs
+    # (bench_motion_calibration, development seeds 100-111; 0 of 11 with this reach).
+    return _neighbour_residual_power(U, E, H, lines, np.union1d(d_lines, r_lines).astype(int),
+                                     within=NEIGHBOURS)
 
 
 def _predict(params, model, cab, s, E, Y):
