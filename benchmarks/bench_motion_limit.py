@@ -101,9 +101,8 @@ def oracle(run, clean, plants, k):
     # to rounding (the generator's pilot is in its class), which gives the true pilot.
     _, rss_true, q_true = fits(U0, E0, Y0, np.ones(lines.size), (p_o, p_e), (p_e,))
     # The true remnant level at each line: the true pilot's equation error at the logged
-    # run's unforced neighbours (motion_test estimates it with its first fit of the
-    # original model, which in closed loop can fit the remnant-driven bins better than
-    # the truth does and so under-states the level at the low lines).
+    # run's unforced neighbours (motion_test measures it model-free, with the describing
+    # function at the nearest disturbance line; the ratio of the two is printed).
     forced = np.zeros(omega.size, bool)
     forced[lines] = True
     forced[0] = True
