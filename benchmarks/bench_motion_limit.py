@@ -42,7 +42,15 @@ from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.identification.criteria import choose_k
-from hesspipe.identification.motion_test import NEIGHBOURS, _fit, _predict, analysis_window, forcing_lines, motion_test
+from hesspipe.identification.frf import NEIGHBOURS
+from hesspipe.identification.motion_test import (
+    _fit,
+    _predict,
+    analysis_window,
+    forcing_lines,
+    line_variances,
+    motion_test,
+)
 from hesspipe.pilot.hess import PilotModel
 from hesspipe.pilot.motion import motion_block
 
@@ -100,9 +108,8 @@ def oracle(run, clean, plants, k):
     # to rounding (the generator's pilot is in its class), which gives the true pilot.
     _, rss_true, q_true = fits(U0, E0, Y0, np.ones(lines.size), (p_o, p_e), (p_e,))
     # The true remnant level at each line: the true pilot's equation error at the logged
-    # run's unforced neighbours (motion_test estimates it with its first fit of the
-    # original model, which in closed loop can fit the remnant-driven bins better than
-    # the truth does and so under-states the level at the low lines).
+    # run's unforced neighbours (motion_test measures it model-free, with the describing
+    # function at the nearest disturbance line; the ratio of the two is printed).
     forced = np.zeros(omega.size, bool)
     forced[lines] = True
     forced[0] = True
@@ -112,13 +119,15 @@ def oracle(run, clean, plants, k):
     res = U[near] - _predict(q_true, expanded, cab, s[near], E[near], Y[near])
     var = np.array([np.mean(np.abs(res[np.abs(near - b) <= NEIGHBOURS]) ** 2) for b in lines])
     w = 1.0 / np.sqrt(var)
+    # The test's own (measured) remnant level over the true one, at the three lowest lines.
+    ratio = line_variances(window, lines)[:3] / var[:3]
     rss_o0, rss_e0, _ = fits(U0, E0, Y0, w, (p_o, p_e), (q_true, p_e))
     # Weighted complex residuals of unit variance: 1/2 per real value.
     nc = (rss_o0 - rss_e0) / 0.5
     rss_o1, rss_e1, _ = fits(U, E, Y, w, (p_o, p_e), (q_true, p_e))
     dof = t["degrees_of_freedom"]
     f_true_w = (rss_o1 - rss_e1) / (rss_e1 / dof) if rss_e1 > 0 else 0.0
-    return nc, dof, t["lr"], t["p_value"], f_true_w, rss_true
+    return nc, dof, t["lr"], t["p_value"], f_true_w, rss_true, ratio
 
 
 def main(argv=None) -> int:
@@ -148,13 +157,14 @@ def main(argv=None) -> int:
                 r = oracle(read_run(path), read_run(path0), plants, choose_k(plants)[0])
                 if r is None:
                     continue
-                nc, dof, f, p, f2, rss_true = r
+                nc, dof, f, p, f2, rss_true, ratio = r
                 crit = stats.f.isf(2 * ALPHA, 1, dof)
                 power = float(stats.ncf.sf(crit, 1, dof, max(nc, 1e-9)))
                 rows.append((nc, power, p < ALPHA))
                 print(f"  {plant}/{output} seed {seed}: oracle nc {nc:7.1f} (power {power:4.2f}); "
                       f"measured F {f:6.1f}, p {p:.2g} (with the true remnant weights: F {f2:.1f}; noise-free "
-                      f"expanded misfit {rss_true:.1g})", flush=True)
+                      f"expanded misfit {rss_true:.1g}); test/true remnant variance at the 3 lowest lines "
+                      f"{', '.join(f'{x:.2f}' for x in ratio)}", flush=True)
             if rows:
                 nc, power, named = map(np.array, zip(*rows))
                 print(f"{plant}/{output}/both motion_feedback: {len(rows)} runs; oracle nc median "

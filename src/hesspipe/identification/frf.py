@@ -304,23 +304,50 @@ def _window(d: np.ndarray, r: np.ndarray | None):
     return best[1], best[2], best[0]
 
 
-def _response(U, E, lines, all_lines, omega) -> Response:
-    H = U[lines] / E[lines]
+def _neighbour_residual_power(U, E, H, lines, all_lines, within: int | None = None) -> np.ndarray:
+    """Mean ``|U_j - H_k E_j|^2`` over the NEIGHBOURS non-excited bins j each side of every
+    line k (the nearest ones, skipping every excited bin): the remnant's power in U near the
+    line, with ``H_k`` (one complex value per line) the response that relates U to E there.
+
+    Parameters
+    ----------
+    U, E : ndarray, complex
+        Fourier coefficients of control and displayed error over the analysis window.
+    H : ndarray, complex
+        One describing-function value per line (control units per error unit).
+    lines, all_lines : ndarray of int
+        Bins of the lines to evaluate; every excited bin (excluded as a neighbour).
+    within : int, optional
+        Only bins at most this many bins from the line (fewer neighbours where lines are
+        dense, none from far above a low line); default: walk out until 2 NEIGHBOURS.
+
+    Returns
+    -------
+    ndarray
+        One power per line, squared control units (per Fourier coefficient).
+    """
     excited = np.zeros(U.size, dtype=bool)
     excited[all_lines] = True
     excited[0] = True
-    sig = np.empty(lines.size)
+    power = np.empty(len(lines))
     for i, k in enumerate(lines):
         nb = []
         step = 1
-        while len(nb) < 2 * NEIGHBOURS and step < 4 * NEIGHBOURS + 20:
+        reach = 4 * NEIGHBOURS + 20 if within is None else within + 1
+        while len(nb) < 2 * NEIGHBOURS and step < reach:
             for j in (k - step, k + step):
                 if 0 < j < U.size and not excited[j]:
                     nb.append(j)
             step += 1
         nb = np.array(nb[: 2 * NEIGHBOURS], dtype=int)
-        resid = U[nb] - H[i] * E[nb]
-        sig[i] = np.sqrt(np.mean(np.abs(resid) ** 2)) / max(abs(E[k]), 1e-300)
+        power[i] = np.mean(np.abs(U[nb] - H[i] * E[nb]) ** 2) if nb.size else np.nan
+    return power
+
+
+def _response(U, E, lines, all_lines, omega) -> Response:
+    H = U[lines] / E[lines]
+    power = _neighbour_residual_power(U, E, H, lines, all_lines)
+    sig = np.sqrt(power) / np.maximum(np.abs(E[lines]), 1e-300)
     return Response(omega[lines], H, sig, np.asarray(lines))
 
 

@@ -1,0 +1,98 @@
+"""Calibration and power of the describing-function motion test (SYNTHETIC DATA).
+
+Every run is drawn by the independent generator :mod:`hesspipe.humanlike` exactly as
+``benchmarks/bench_diagnose.py`` draws it (same cases, same seeds, 70 s at 50 Hz), and
+only :func:`hesspipe.identification.motion_test.motion_test` is run on it (from the
+model's default parameters, as ``bench_motion_limit.py`` does), which is much faster than
+a whole diagnosis.
+
+Under "no motion feedback" the test's p-value is 1 with probability 1/2 (Km >= 0 on the
+boundary) and uniform on (0, 1/2) otherwise, so P(p < a) = a for a < 1/2: a calibrated
+test names motion in about 1 % of the runs without it at diagnose's level 0.01. The
+script prints, per case and effect, how often p < 0.01 and p < 0.05, and the totals; for
+runs without hidden motion also a Kolmogorov-Smirnov test of the p-values below 1/2
+against uniform on (0, 1/2).
+
+Usage::
+
+    python benchmarks/bench_motion_calibration.py [--seeds 10] [--seed-start 0]
+        [--cases paper:rate:disturbance,...] [--effects none,motion_feedback]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy import stats
+
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_plants, read_run
+from hesspipe.core.seeds import derive_seed
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.identification.criteria import choose_k
+from hesspipe.identification.motion_test import motion_test
+from hesspipe.pilot.hess import PilotModel
+
+CASES = ",".join([f"{p}:{o}:{t}" for p in ("paper", "roll") for o in ("rate", "angle")
+                  for t in ("disturbance", "both")] + ["1/s:angle:both", "K/s2:angle:both"])
+
+
+def p_value(folder, plant, output, task, effect, seed):
+    """The motion test's p-value on one generated run, or None (not generated / no lines)."""
+    effects = () if effect == "none" else tuple(effect.split("+"))
+    s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
+    kw = dict(disturbance="wind") if plant == "paper" else {}
+    name = f"{plant}-{output}-{task}-{effect}-{seed}".replace("/", "_")
+    try:
+        spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
+                          output=output, name=name, **kw)
+    except HesspipeError:
+        return None
+    path = write_trial(Path(folder) / name, simulate_trial(spec))
+    plants = read_plants(path.parent / "plants.json")
+    k = choose_k(plants)[0]
+    t = motion_test(read_run(path), plants, PilotModel().complete({}, k), k=k)
+    return t["p_value"] if t.get("available") else None
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--seed-start", type=int, default=0)
+    ap.add_argument("--cases", default=CASES, help="plant:output:task, comma-separated")
+    ap.add_argument("--effects", default="none,motion_feedback")
+    args = ap.parse_args(argv)
+    print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
+    total = {}
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        for case in args.cases.split(","):
+            plant, output, task = case.split(":")
+            for effect in args.effects.split(","):
+                ps = [p for p in (p_value(tmp, plant, output, task, effect, seed)
+                                  for seed in range(args.seed_start, args.seed_start + args.seeds))
+                      if p is not None]
+                total.setdefault(effect, []).extend(ps)
+                ps = np.array(ps)
+                print(f"  {case:<24} {effect:<16} {ps.size:3d} runs: p<0.01 {int(np.sum(ps < 0.01)):3d}, "
+                      f"p<0.05 {int(np.sum(ps < 0.05)):3d}", flush=True)
+    for effect, ps in total.items():
+        ps = np.array(ps)
+        line = (f"{effect}: {ps.size} runs, p < 0.01 in {int(np.sum(ps < 0.01))} "
+                f"({100 * np.mean(ps < 0.01):.1f} %), p < 0.05 in {int(np.sum(ps < 0.05))} "
+                f"({100 * np.mean(ps < 0.05):.1f} %), p < 0.5 in {int(np.sum(ps < 0.5))}")
+        if "motion" not in effect and np.sum(ps < 0.5) >= 5:
+            ks = stats.kstest(2 * ps[ps < 0.5], "uniform")
+            line += f"; KS of the p < 1/2 against uniform(0, 1/2): p = {ks.pvalue:.2g}"
+        print(line)
+    print(f"wall time {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
