@@ -7,7 +7,7 @@ back and diagnosed with the original model and every registered candidate, 70 s 
 
 Cases: hidden effect (none, motion_feedback with Km from weak to strong, extra_delay
 0.04-0.1 s, an elevated remnant, dutch_roll, actuator_lag, and two at once:
-extra_delay + dutch_roll) x plants (``paper``: Table 4 rolling approximation with the
+extra_delay + dutch_roll, motion_feedback + dutch_roll) x plants (``paper``: Table 4 rolling approximation with the
 paper's Eq. 16 wind path; ``roll``: Table 4 both paths, plant-input disturbance) x output
 (roll rate, roll angle) x task (disturbance only; disturbance and target); ``--plants
 1/s,K/s2 --outputs angle --tasks both`` adds the single and double integrator with an
@@ -53,7 +53,7 @@ from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 
 EFFECTS = ("none", "motion_feedback", "extra_delay", "remnant", "dutch_roll", "actuator_lag",
-           "extra_delay+dutch_roll")
+           "extra_delay+dutch_roll", "motion_feedback+dutch_roll")
 PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 
 
