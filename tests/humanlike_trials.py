@@ -22,3 +22,19 @@ def generated(plant, seed, pilot, **overrides):
     plants = Plants(*(ct.tf(pd[k]["num"], pd[k]["den"])
                       for k in ("control_to_output", "disturbance_to_output")))
     return run, plants, tr.truth["crossover"]
+
+
+def bench_diagnose_trial(folder, plant, output, task, effect, seed):
+    """(run, plants) of the trial benchmarks/bench_diagnose.py draws for this case and seed,
+    written as a logger writes it and read back."""
+    from hesspipe.core.formats import read_plants, read_run
+    from hesspipe.core.seeds import derive_seed
+    from hesspipe.humanlike import write_trial
+
+    effects = () if effect == "none" else tuple(effect.split("+"))
+    s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
+    kw = dict(disturbance="wind") if plant == "paper" else {}
+    spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
+                      output=output, **kw)
+    path = write_trial(folder / "trial", simulate_trial(spec))
+    return read_run(path), read_plants(folder / "trial" / "plants.json")

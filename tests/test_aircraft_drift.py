@@ -9,22 +9,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from hesspipe.core.formats import read_plants, read_run
-from hesspipe.core.seeds import derive_seed
 from hesspipe.diagnose.aircraft import DRIFT_HZ, _Paths, plant_finding
 from hesspipe.diagnose.checks import plant_check
-from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
-
-
-def _bench_trial(folder, plant, output, task, effect, seed):
-    """The run bench_diagnose draws for this case and seed."""
-    effects = () if effect == "none" else (effect,)
-    s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
-    kw = dict(disturbance="wind") if plant == "paper" else {}
-    spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
-                      output=output, **kw)
-    path = write_trial(folder / "trial", simulate_trial(spec))
-    return read_run(path), read_plants(folder / "trial" / "plants.json")
+from humanlike_trials import bench_diagnose_trial as _bench_trial
 
 
 @pytest.mark.parametrize("effect,seed,old", [("none", 9, "rate_limit"),

@@ -8,22 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hesspipe.core.formats import read_plants, read_run
-from hesspipe.core.seeds import derive_seed
 from hesspipe.diagnose.aircraft import _Paths, plant_finding
 from hesspipe.diagnose.checks import plant_check
-from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
-
-
-def _bench_trial(tmp_path, plant, output, task, effect, seed):
-    """The run bench_diagnose draws for this case and seed (its development seeds)."""
-    effects = () if effect == "none" else (effect,)
-    s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
-    kw = dict(disturbance="wind") if plant == "paper" else {}
-    spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
-                      output=output, **kw)
-    path = write_trial(tmp_path / "trial", simulate_trial(spec))
-    return read_run(path), read_plants(tmp_path / "trial" / "plants.json")
+from humanlike_trials import bench_diagnose_trial as _bench_trial
 
 
 def test_dutch_roll_with_a_target_is_named_dutch_roll(tmp_path):
