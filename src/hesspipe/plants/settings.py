@@ -7,18 +7,6 @@ from dataclasses import asdict, dataclass
 
 from ..core.config import Fields, Settings
 from . import arx as _arx
-from .report import (  # noqa: F401
-    PAPER_EQ16,
-    UNITS,
-    _analytic_markdown,
-    _analytic_report,
-    _channel_report,
-    _eq16_report,
-    _markdown,
-    describe_tf,
-    format_tf,
-    roots_table,
-)
 
 
 @dataclass(frozen=True)
