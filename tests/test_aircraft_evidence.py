@@ -60,3 +60,15 @@ def test_evidence_counts_the_bins_a_residual_lives_in():
     assert p_drift > 0.01
     # No improvement is never evidence.
     assert evidence_p(white, 1.01 * white, 1, dt) == pytest.approx(1.0)
+
+
+def test_a_constant_control_gets_a_finding_not_a_crash(tmp_path):
+    # A rate limit on a control that never moves changes nothing: the candidate keeps the
+    # plants' own residual (no evidence), instead of a missing residual (KeyError before).
+    import dataclasses
+
+    run, plants = _bench_trial(tmp_path, "roll", "rate", "disturbance", "none", 3)
+    run = dataclasses.replace(run, control=np.full(len(run), 0.1))
+    f = plant_finding(run, plants, plant_check(run, plants))
+    rate = {e.id: e for e in f.explanations}["rate_limit"]
+    assert rate.p_value == 1.0 and rate.fit_percent == -np.inf

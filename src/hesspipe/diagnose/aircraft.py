@@ -337,12 +337,14 @@ def _poles(*systems) -> list[complex]:
     return out
 
 
-def _aircraft_candidates(p: _Paths, plants, residuals: dict | None = None) -> list[Explanation]:
-    """Each candidate's output error with its factor in the path(s) it changes; the
-    disturbance path's gain and the slow modes' initial conditions are refitted linearly
-    (:meth:`_Paths.residual`) for every candidate alike. `residuals` (if given) receives
-    each candidate's output error by id, for :func:`_evidence`."""
-    residuals = {} if residuals is None else residuals
+def _aircraft_candidates(p: _Paths, plants, nominal_residual: np.ndarray
+                         ) -> tuple[list[Explanation], dict]:
+    """Each candidate's fit and output error (by id, for :func:`evidence_p`) with its factor
+    in the path(s) it changes; the disturbance path's gain and the slow modes' initial
+    conditions are refitted linearly (:meth:`_Paths.residual`) for every candidate alike.
+    `nominal_residual` is the plants' own refit (a rate limit on a constant control is no
+    change: it keeps that residual)."""
+    residuals = {}
 
     U, W = p.spec["control"], p.spec["disturbance"]
     yu, yw = p.yc * U, p.yd * W
@@ -413,22 +415,20 @@ def _aircraft_candidates(p: _Paths, plants, residuals: dict | None = None) -> li
     u = p.cols["control"]
     top = float(np.max(np.abs(np.diff(u)))) / p.dt
     best = (-math.inf, top)
+    residuals["rate_limit"] = nominal_residual
     if top > 0:
         # One parameter: a bounded scalar search on the log of the limit is enough.
-        def rl_fit(lr):
-            uu = _rate_limited(u, math.exp(lr), p.dt)
-            return p.fit_of(res(1.0, u_spec=p.fft(uu)))
+        def rl_res(lr):
+            return res(1.0, u_spec=p.fft(_rate_limited(u, math.exp(lr), p.dt)))
 
-        sol = scipy.optimize.minimize_scalar(lambda lr: -rl_fit(lr), bounds=(math.log(top * 0.02), math.log(top)),
+        sol = scipy.optimize.minimize_scalar(lambda lr: -p.fit_of(rl_res(lr)),
+                                             bounds=(math.log(top * 0.02), math.log(top)),
                                              method="bounded", options={"maxiter": 25, "xatol": 0.02})
-        best = (rl_fit(sol.x), math.exp(sol.x))
-        residuals["rate_limit"] = res(1.0, u_spec=p.fft(_rate_limited(u, best[1], p.dt)))
+        residuals["rate_limit"] = rl_res(sol.x)
+        best = (p.fit_of(residuals["rate_limit"]), math.exp(sol.x))
     out.append(Explanation("rate_limit", "aircraft", best[0], {"rate": best[1]},
                            "the surface follows the control at a bounded rate (units/s)"))
-    residuals["nominal"] = res(1.0)
-    out.append(Explanation("nominal", "reference", p.fit_of(residuals["nominal"]), {},
-                           "the plants as given, disturbance gain and initial state refitted"))
-    return out
+    return out, residuals
 
 
 def _file_candidates(p: _Paths, plants) -> list[Explanation]:
@@ -489,21 +489,21 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
     # The plants as given, with the record's initial state (it starts mid-flight) and the
     # disturbance path's gain refitted: a record whose slow modes start away from rest
     # fails the zero-state check though its plants are right.
-    ref = Explanation("nominal", "reference",
-                      p.fit_of(p.residual(p.time(p.yc * p.spec["control"]), p.time(p.yd * p.spec["disturbance"]),
-                                          _poles(plants.control_to_output, plants.disturbance_to_output))),
-                      {}, "the plants as given, disturbance gain and initial state refitted"
-                      + (" with a slow drift" * bool(p.drift(1).shape[1])))
+    nominal = p.residual(p.time(p.yc * p.spec["control"]), p.time(p.yd * p.spec["disturbance"]),
+                         _poles(plants.control_to_output, plants.disturbance_to_output))
+    drifted = p.drift(1).shape[1] > 0
+    ref = Explanation("nominal", "reference", p.fit_of(nominal), {},
+                      "the plants as given, disturbance gain and initial state refitted"
+                      + (" with a slow drift" * drifted))
     if ref.fit_percent >= fit_ok:
-        drift = " and a slow drift (the logged control's folded content, integrated)" * bool(p.drift(1).shape[1])
+        drift = " and a slow drift (the logged control's folded content, integrated)" * drifted
         return PlantFinding("match", f0, explanations=(ref,),
                             message=f"plants reproduce the output: fit {ref.fit_percent:.1f} % with the "
                                     f"initial state{drift} refitted ({f0:.1f} % from rest)")
-    res: dict = {}
-    tried = [e for e in _aircraft_candidates(p, plants, res) if e.id != "nominal"]
+    tried, res = _aircraft_candidates(p, plants, nominal)
     # An aircraft-side name rests on evidence, the bar of every other candidate: an
     # improvement significant after a Bonferroni correction (evidence_p).
-    tried = [replace(e, p_value=evidence_p(res["nominal"], res[e.id], _N_PARAMETERS[e.id], p.dt))
+    tried = [replace(e, p_value=evidence_p(nominal, res[e.id], _N_PARAMETERS[e.id], p.dt))
              for e in tried] + [ref]
     air = [e for e in tried if e.kind == "aircraft"]
     level = alpha / max(len(air), 1)
