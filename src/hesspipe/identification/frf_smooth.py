@@ -68,16 +68,15 @@ _STARTS = tuple(itertools.product(
 """Start grid: sign, tau (s), wn (rad/s), zn, (TL, TI) (s): none, lags, leads, lead-lags."""
 
 
-def _shape(x, w, sign):
-    """The model without its gain at `w` (rad/s); x = (ln K, tau, ln TL, ln TI, ln wn, zn)."""
-    s = 1j * w
+def _shape(x, s, sign):
+    """The model without its gain at complex `s` (1/s); x = (ln K, tau, ln TL, ln TI, ln wn, zn)."""
     wn = np.exp(x[4])
     return (sign * np.exp(-x[1] * s) * (1 + np.exp(x[2]) * s) / (1 + np.exp(x[3]) * s)
             * wn * wn / (s * s + 2 * x[5] * wn * s + wn * wn))
 
 
 def _residuals(x, w, H, scale, sign):
-    r = (np.exp(x[0]) * _shape(x, w, sign) - H) / scale
+    r = (np.exp(x[0]) * _shape(x, 1j * w, sign) - H) / scale
     prior = [np.log(np.exp(x[4]) / NM_PRIOR["wn"][0]) / NM_PRIOR["wn"][1],
              np.log(x[5] / NM_PRIOR["zn"][0]) / NM_PRIOR["zn"][1],
              np.log(x[1] / TAU_PRIOR[0]) / TAU_PRIOR[1]]
@@ -129,7 +128,7 @@ class SmoothFit:
         w : array
             Angular frequencies, rad/s.
         """
-        return np.exp(self.x[0]) * _shape(self.x, np.asarray(w, dtype=float), self.sign)
+        return np.exp(self.x[0]) * _shape(self.x, 1j * np.asarray(w, dtype=float), self.sign)
 
 
 def fit_smooth(w, H, sigma) -> SmoothFit | None:
@@ -156,7 +155,7 @@ def fit_smooth(w, H, sigma) -> SmoothFit | None:
     cands = []
     for sign, tau, wn, zn, (tl, ti) in _STARTS:
         x = np.array([0.0, tau, np.log(tl), np.log(ti), np.log(wn), zn])
-        S = _shape(x, w, sign)
+        S = _shape(x, 1j * w, sign)
         k = np.sum(wt * (np.conj(S) * H).real) / np.sum(wt * np.abs(S) ** 2)
         if k > 0:  # the best real gain for this shape; a negative one is the other sign's start
             x[0] = np.log(k)
@@ -171,7 +170,7 @@ def fit_smooth(w, H, sigma) -> SmoothFit | None:
         if best is None or r.cost < best[0].cost:
             best = (r, sign)
     r, sign = best
-    err = np.exp(r.x[0]) * _shape(r.x, w, sign) - H
+    err = np.exp(r.x[0]) * _shape(r.x, 1j * w, sign) - H
     chi2 = float(2 * np.sum(np.abs(err) ** 2 / scale ** 2))
     dof = 2 * w.size - len(NAMES)
     J = r.jac
@@ -190,7 +189,7 @@ def consistent(fit: SmoothFit | None) -> bool:
 
 
 def _first_fall(x, sign, grid, yc_grid, yc_at):
-    L = np.exp(x[0]) * _shape(x, grid, sign) * yc_grid
+    L = np.exp(x[0]) * _shape(x, 1j * grid, sign) * yc_grid
     m = np.log(np.abs(L))
     down = np.nonzero((m[:-1] >= 0) & (m[1:] < 0))[0]
     if not down.size:
@@ -199,7 +198,7 @@ def _first_fall(x, sign, grid, yc_grid, yc_at):
     t = m[i] / (m[i] - m[i + 1])
     wc = float(np.exp(np.log(grid[i]) + t * (np.log(grid[i + 1]) - np.log(grid[i]))))
     wcv = np.array([wc])
-    pm = 180.0 + np.degrees(np.angle(np.exp(x[0]) * _shape(x, wcv, sign)[0] * yc_at(wcv)[0]))
+    pm = 180.0 + np.degrees(np.angle(np.exp(x[0]) * _shape(x, 1j * wcv, sign)[0] * yc_at(wcv)[0]))
     pm = (pm + 180.0) % 360.0 - 180.0
     return wc, (180.0 if pm == -180.0 else float(pm))
 
@@ -260,9 +259,10 @@ def describing_function(params: dict):
         ``H(s)`` for complex `s` (1/s), control per unit error.
     """
     p = {k: float(params[k]) for k in NAMES}
+    x = np.array([np.log(abs(p["K"])), p["tau"], np.log(p["TL"]), np.log(p["TI"]),
+                  np.log(p["wn"]), p["zn"]])
+    sign = 1.0 if p["K"] >= 0 else -1.0
 
     def H(s):
-        s = np.asarray(s)
-        return (p["K"] * np.exp(-p["tau"] * s) * (1 + p["TL"] * s) / (1 + p["TI"] * s)
-                * p["wn"] ** 2 / (s * s + 2 * p["zn"] * p["wn"] * s + p["wn"] ** 2))
+        return np.exp(x[0]) * _shape(x, np.asarray(s), sign)
     return H

@@ -41,7 +41,7 @@ def frf_figure(path: str | Path, frf, models: Mapping[str, object] | None = None
                 label="reference lines")
         a2.plot(r.freq_rad_s, np.degrees(np.unwrap(np.angle(r.H))), "s", color="gray", ms=4)
     wf = np.logspace(np.log10(w.min() / 1.5), np.log10(w.max() * 1.5), 300)
-    if getattr(frf.crossover, "estimate", "") == "smoothed":
+    if frf.crossover.estimate == "smoothed":
         # the fit the headline crossover comes from, so a reader can judge it against the points
         models = {"smoothed fit (crossover estimate)":
                   describing_function(frf.crossover.smooth["parameters"]), **(models or {})}
