@@ -109,6 +109,23 @@ def test_from_stage_regenerates_the_wind_model(reference, capsys):
     assert _outputs(out) == files
 
 
+def test_staging_left_in_a_fresh_stage_is_removed(reference, capsys):
+    """A run killed after a stage's manifest landed but before its emptied staging folder
+    was removed: the next run finds that stage fresh and must still clear the leftover."""
+    from hesspipe.core.io import STAGING_PREFIX
+
+    cfg, out, files = reference
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()  # its process id now belongs to no one: the "killed run"
+    left = out / "plants" / f"{STAGING_PREFIX}{proc.pid}-abc"
+    left.mkdir()
+    capsys.readouterr()
+    assert main(["run", "--config", str(cfg), "--out", str(out)]) == 0
+    assert _ran(capsys) == []
+    assert not left.exists()
+    assert _outputs(out) == files
+
+
 def test_killed_run_resumes_to_the_same_outputs(reference, tmp_path):
     cfg, out, files = reference
     work = out.parent / "out-killed"

@@ -33,7 +33,7 @@ from typing import Callable, Mapping, Sequence
 from .. import __version__
 from ..core.config import Fields, load_toml
 from ..core.errors import HesspipeError
-from ..core.io import STAGING_PREFIX, check_output_dir, mark_output_dir, staged_output, write_json
+from ..core.io import STAGING_PREFIX, check_output_dir, mark_output_dir, remove_leftovers, staged_output, write_json
 from ..core.provenance import file_hash, versions
 
 MANIFEST = "manifest.json"
@@ -358,6 +358,7 @@ class Pipeline:
         if from_stage is not None:
             forced |= set(self.downstream(from_stage))
         check_output_dir(self.out_root, ROOT_KIND, write=False)
+        self._tidy()
         outcomes = []
         claimed = False
         for stage in self.stages:
@@ -383,6 +384,19 @@ class Pipeline:
             if progress:
                 progress(f"{stage.name}: done in {wall:.1f} s")
         return outcomes
+
+    def _tidy(self) -> None:
+        """Remove what a killed run left in the output folders (dead processes' staging).
+
+        A run killed between publishing a stage's manifest and removing its emptied
+        staging folder leaves that folder behind in a stage that is now fresh and will
+        not run again, so leftovers are cleared here, not only when a stage runs.
+        """
+        for folder in {self.out_root, *(self.output_folder(s.name) for s in self.stages)}:
+            try:
+                remove_leftovers(folder)
+            except OSError:  # a read-only output is still readable; nothing to tidy then
+                pass
 
     def _claim(self) -> None:
         """Check every folder the stages write before the first one runs, and mark the root.
