@@ -32,6 +32,7 @@ Usage::
     python benchmarks/bench_diagnose.py [--seeds 10] [--seed-start 0] [--quiet] [--plants paper,roll]
                                         [--outputs rate,angle] [--tasks disturbance,both]
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
+                                        [--tau-m 0.15]
 """
 
 from __future__ import annotations
@@ -68,7 +69,11 @@ def run_case(folder, plant, output, task, effect, seed, **draw):
                           output=output, name=name, **kw)
     except HesspipeError as exc:  # the generator found no pilot in its ranges: not diagnose's doing
         return None, str(exc)
-    path = write_trial(Path(folder) / name, simulate_trial(spec))
+    try:
+        trial = simulate_trial(spec)
+    except HesspipeError as exc:  # a drawn loop that diverges (seen with a vestibular delay)
+        return None, str(exc)
+    path = write_trial(Path(folder) / name, trial)
     run = read_run(path)
     plants = read_plants(path.parent / "plants.json")
     t = time.process_time()
@@ -106,9 +111,13 @@ def main(argv=None) -> int:
     ap.add_argument("--effects", default=",".join(EFFECTS))
     ap.add_argument("--km-ratio", default=None,
                     help="the generator's Km/Ke range 'lo,hi' (default its literature range)")
+    ap.add_argument("--tau-m", type=float, default=None,
+                    help="the generator's vestibular delay, s (default its own, 0)")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])
     draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}
+    if args.tau_m is not None:
+        draw["tau_m"] = args.tau_m
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     rows, times, failures, skipped = {}, [], [], []
     motion = {True: [0, 0], False: [0, 0]}  # hidden motion? -> [runs naming it, runs]

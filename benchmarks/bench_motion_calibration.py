@@ -6,17 +6,17 @@ only :func:`hesspipe.identification.motion_test.motion_test` is run on it (from 
 model's default parameters, as ``bench_motion_limit.py`` does), which is much faster than
 a whole diagnosis.
 
-Under "no motion feedback" the test's p-value is 1 with probability 1/2 (Km >= 0 on the
-boundary) and uniform on (0, 1/2) otherwise, so P(p < a) = a for a < 1/2: a calibrated
-test names motion in about 1 % of the runs without it at diagnose's level 0.01. The
-script prints, per case and effect, how often p < 0.01 and p < 0.05, and the totals; for
-runs without hidden motion also a Kolmogorov-Smirnov test of the p-values below 1/2
-against uniform on (0, 1/2).
+Under "no motion feedback" Km sits on its boundary and the test's vestibular delay is not
+identified; the F(2, dof) reference is conservative for that case, so a calibrated test
+names motion in at most about 1 % of the runs without it at diagnose's level 0.01. The
+script prints, per case and effect, how often p < 0.01 and p < 0.05, and the totals.
+``--tau-m`` sets the generator's vestibular delay (s; the literature's 0.1-0.2 s, SPEC.md
+"Describing functions"); the generator's default is 0.
 
 Usage::
 
     python benchmarks/bench_motion_calibration.py [--seeds 10] [--seed-start 0]
-        [--cases paper:rate:disturbance,...] [--effects none,motion_feedback]
+        [--cases paper:rate:disturbance,...] [--effects none,motion_feedback] [--tau-m 0.15]
 """
 
 from __future__ import annotations
@@ -28,7 +28,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
 
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
@@ -42,7 +41,7 @@ CASES = ",".join([f"{p}:{o}:{t}" for p in ("paper", "roll") for o in ("rate", "a
                   for t in ("disturbance", "both")] + ["1/s:angle:both", "K/s2:angle:both"])
 
 
-def p_value(folder, plant, output, task, effect, seed):
+def p_value(folder, plant, output, task, effect, seed, tau_m=0.0):
     """The motion test's p-value on one generated run, or None (not generated / no lines)."""
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
@@ -50,10 +49,15 @@ def p_value(folder, plant, output, task, effect, seed):
     name = f"{plant}-{output}-{task}-{effect}-{seed}".replace("/", "_")
     try:
         spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
-                          output=output, name=name, **kw)
+                          output=output, name=name, tau_m=tau_m, **kw)
     except HesspipeError:
         return None
-    path = write_trial(Path(folder) / name, simulate_trial(spec))
+    try:
+        trial = simulate_trial(spec)
+    except HesspipeError as exc:   # a drawn pilot whose loop diverges (seen with tau_m > 0)
+        print(f"  not generated: {exc}")
+        return None
+    path = write_trial(Path(folder) / name, trial)
     plants = read_plants(path.parent / "plants.json")
     k = choose_k(plants)[0]
     t = motion_test(read_run(path), plants, PilotModel().complete({}, k), k=k)
@@ -66,6 +70,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed-start", type=int, default=0)
     ap.add_argument("--cases", default=CASES, help="plant:output:task, comma-separated")
     ap.add_argument("--effects", default="none,motion_feedback")
+    ap.add_argument("--tau-m", type=float, default=0.0, help="generator's vestibular delay, s")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     total = {}
@@ -74,7 +79,7 @@ def main(argv=None) -> int:
         for case in args.cases.split(","):
             plant, output, task = case.split(":")
             for effect in args.effects.split(","):
-                ps = [p for p in (p_value(tmp, plant, output, task, effect, seed)
+                ps = [p for p in (p_value(tmp, plant, output, task, effect, seed, args.tau_m)
                                   for seed in range(args.seed_start, args.seed_start + args.seeds))
                       if p is not None]
                 total.setdefault(effect, []).extend(ps)
@@ -85,10 +90,7 @@ def main(argv=None) -> int:
         ps = np.array(ps)
         line = (f"{effect}: {ps.size} runs, p < 0.01 in {int(np.sum(ps < 0.01))} "
                 f"({100 * np.mean(ps < 0.01):.1f} %), p < 0.05 in {int(np.sum(ps < 0.05))} "
-                f"({100 * np.mean(ps < 0.05):.1f} %), p < 0.5 in {int(np.sum(ps < 0.5))}")
-        if "motion" not in effect and np.sum(ps < 0.5) >= 5:
-            ks = stats.kstest(2 * ps[ps < 0.5], "uniform")
-            line += f"; KS of the p < 1/2 against uniform(0, 1/2): p = {ks.pvalue:.2g}"
+                f"({100 * np.mean(ps < 0.05):.1f} %)")
         print(line)
     print(f"wall time {time.perf_counter() - t0:.0f} s")
     return 0

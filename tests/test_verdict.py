@@ -76,8 +76,11 @@ def test_tracking_target_lines_drive_the_motion_test(tmp_path):
     run = read_run(paths[0])
     start = PilotModel().complete({}, 1, gain=gain_scale(plants, 1))
     blind = motion_test(dataclasses.replace(run, reference=np.zeros_like(run.reference)), plants, start)
-    # Without the reference (e = -y, wrong at the target lines) the motion path is not found.
-    assert blind["p_value"] > 0.05 and not 0.5 * truth < blind["Km"] < 2.0 * truth
+    # Without the reference only the disturbance's lines are tested, and their Km is wrong.
+    # (Whether that one set is significant depends on the model's shapes alone: with the
+    # generator's output-equivalent disturbance it can be, so p is not asserted.)
+    assert blind["n_lines"] < t["n_lines"]
+    assert not 0.5 * truth < blind["Km"] < 2.0 * truth
 
 
 def test_identify_uses_the_reference_of_a_tracking_trial(tmp_path):

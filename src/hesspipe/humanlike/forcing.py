@@ -90,7 +90,7 @@ def line_sets(T_m: float, n_lines: int, w_lo: float = 0.1, w_hi: float = 20.0):
 
 
 def design(k, T_m: float, rms: float, rng: np.random.Generator, *, w_corner: float,
-           t_a: float = 0.1) -> Multisine:
+           t_a: float = 0.1, through=None) -> Multisine:
     """Multisine on lines `k` with low-passed amplitudes and random phases.
 
     Amplitudes follow ``|(1 + t_a jw)^2 / (1 + jw/w_corner)^2|`` (flat below
@@ -111,11 +111,18 @@ def design(k, T_m: float, rms: float, rng: np.random.Generator, *, w_corner: flo
         Corner of the amplitude shape, rad/s.
     t_a : float
         Lead time constant of the shape, s.
+    through : callable, optional
+        ``through(w)``: the complex response (rad/s in) of the path the signal drives.
+        Given, the shaped amplitudes are divided by its magnitude, so that the signal's
+        effect *after* that path has the shape and RMS `rms` (an output-equivalent
+        disturbance: `rms` is then in the path's output units).
     """
     k = np.asarray(k, dtype=int)
     w = k * 2 * np.pi / T_m
     shape = np.abs((1 + 1j * w * t_a) ** 2 / (1 + 1j * w / w_corner) ** 2)
     a = shape * rms / np.sqrt(np.sum(shape ** 2) / 2.0)
+    if through is not None:
+        a = a / np.abs(np.asarray(through(w), dtype=complex))
     phase = rng.uniform(0.0, 2 * np.pi, k.size)
     return Multisine(k, w, a, phase)
 

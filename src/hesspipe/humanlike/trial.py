@@ -16,7 +16,7 @@ import numpy as np
 from ..core.errors import HesspipeError
 from ..core.seeds import derive_seed
 from . import forcing, pilots
-from .lti import discretise, ss_from_tf, zoh
+from .lti import discretise, freqresp, ss_from_tf, zoh
 from .plants import Plant, make_plant
 from .simulate import Wiring, compile_loop, delay_steps
 from .truth import build_truth, outer_holds
@@ -30,7 +30,7 @@ RANGES = dict(tau=(0.15, 0.35), wn=(7.0, 15.0), zn=(0.1, 0.5), wc=(1.5, 4.0), pm
               inv_T1=(0.1, 1.0), inv_T2=(0.2, 2.0), K1=(1.0, 5.0),
               remnant_share=(0.10, 0.40), remnant_tn=(0.1, 0.3), w_corner=(1.5, 2.0),
               km_ratio=(0.2, 1.0), extra_delay=(0.04, 0.10), actuator_tau=(0.05, 0.15),
-              rate_limit_factor=(1.0, 2.0))
+              rate_limit_factor=(1.0, 2.0), d_ratio=(0.5, 1.0))
 EFFECT_REMNANT = (0.40, 0.60)
 OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=10,
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
@@ -163,7 +163,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         Base seed; the same arguments and seed give the same trial.
     task : {"disturbance", "tracking", "both"}
         Disturbance rejection (d only), target tracking (r only) or both on
-        interleaved line sets.
+        interleaved line sets (then the disturbance is output-equivalent, ``d_ratio``
+        times the target's RMS at the output, unless ``d_rms`` is given).
     pilot : {"precision", "hess"}
     effects : iterable of str
         Any of ``motion_feedback`` (hess pilot only), ``extra_delay``,
@@ -174,7 +175,7 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         ``wc`` (rad/s), ``pm`` (deg), ``inv_T1``, ``inv_T2`` (1/s), ``K1``,
         ``remnant_share``, ``remnant_tn`` (s), ``w_corner`` (rad/s), ``km_ratio`` (Km/Ke;
         per crossover frequency for an angle output, see :func:`~hesspipe.humanlike.pilots.draw_hess`),
-        ``extra_delay`` (s), ``actuator_tau`` (s), ``rate_limit_factor``.
+        ``extra_delay`` (s), ``actuator_tau`` (s), ``rate_limit_factor``, ``d_ratio``.
         Options: ``fs`` (Hz, 60), ``T_m`` (s, 45; fs*T_m must be whole),
         ``run_in`` (s; 15, or 60 with motion feedback or Dutch roll, whose slow modes
         - canals 5.7 s and 80 s, Dutch roll damping 0.034/s - need longer to
@@ -262,19 +263,32 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     g_f = rng["forcing"]
     corner = float(g_f.uniform(*ranges["w_corner"]))
     d_rms = opts["d_rms"] if opts["d_rms"] is not None else plant.d_rms
-    dist = forcing.design(k_d, opts["T_m"], d_rms, g_f, w_corner=corner) \
-        if task in ("disturbance", "both") else None
     if task == "both":
-        # Target about as large at the output as the disturbance's effect on it.
-        yd = plant.true.freqresp(np.array([0.5]), 1)[0] if plant.disturbance == "wind" \
-            else yc(np.array([0.5]))[0]
-        r_rms = opts["r_rms"] if opts["r_rms"] is not None else float(d_rms * abs(yd))
+        # Target about as large at the output as the plant's nominal disturbance would make it.
+        def yd(w):
+            return freqresp(*plant.nominal_yd, w)
+        r_rms = opts["r_rms"] if opts["r_rms"] is not None else float(d_rms * abs(yd(np.array([0.5]))[0]))
+        if opts["d_rms"] is None:
+            # A two-input experiment is designed so that both line sets stand above the
+            # remnant: the disturbance is output-equivalent (its lines divided by the
+            # nominal disturbance path, as multisine experiments pre-filter it with the
+            # inverse controlled element), d_ratio times the target's RMS at the output.
+            # In closed loop it then moves the control as much as the target does at
+            # every frequency. (Before, a flat disturbance of the plant's d_rms was
+            # rejected by the pilot below crossover: its lines stood 1-3 times above the
+            # remnant, the target's 4-15 times, and the vestibular path the two sets
+            # reveal together was invisible on angle tasks.)
+            ratio = float(np.random.default_rng(derive_seed(seed, "disturbance-ratio"))
+                          .uniform(*ranges["d_ratio"]))
+            dist = forcing.design(k_d, opts["T_m"], ratio * r_rms, g_f, w_corner=corner, through=yd)
+        else:
+            dist = forcing.design(k_d, opts["T_m"], d_rms, g_f, w_corner=corner)
         targ = forcing.design(k_t, opts["T_m"], r_rms, g_f, w_corner=corner)
-    elif task == "tracking":
+    elif task == "disturbance":
+        dist, targ = forcing.design(k_d, opts["T_m"], d_rms, g_f, w_corner=corner), None
+    else:  # tracking
         r_rms = opts["r_rms"] if opts["r_rms"] is not None else 1.0
-        targ = forcing.design(k_d, opts["T_m"], r_rms, g_f, w_corner=corner)
-    else:
-        targ = None
+        dist, targ = None, forcing.design(k_d, opts["T_m"], r_rms, g_f, w_corner=corner)
     g_r = rng["remnant"]
     remnant = {"share": float(g_r.uniform(*ranges["remnant_share"])),
                "Tn": float(g_r.uniform(*ranges["remnant_tn"])), "at": opts["remnant_at"],
@@ -287,7 +301,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     name = opts["name"] or f"trial-{seed}"
     options = {k: opts[k] for k in ("fs", "T_m", "run_in", "fade", "fine_ratio", "n_lines",
                                     "output", "tau_m")}
-    options.update(w_corner=corner, d_rms=d_rms, pilot_sign=sign, plant_order=order)
+    options.update(w_corner=corner, d_rms=dist.rms() if dist is not None else d_rms,
+                   pilot_sign=sign, plant_order=order)
     return TrialSpec(name=name, seed=int(seed), plant=plant, task=task, pilot=p,
                      effects=effects, options=options, disturbance=dist, target=targ,
                      remnant=remnant, actuator=actuator, motion_tf=motion_tf, style=style)
