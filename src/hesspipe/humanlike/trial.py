@@ -263,6 +263,7 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     g_f = rng["forcing"]
     corner = float(g_f.uniform(*ranges["w_corner"]))
     d_rms = opts["d_rms"] if opts["d_rms"] is not None else plant.d_rms
+    through = None
     if task == "both":
         # Target about as large at the output as the plant's nominal disturbance would make it.
         def yd(w):
@@ -280,15 +281,16 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
             # reveal together was invisible on angle tasks.)
             ratio = float(np.random.default_rng(derive_seed(seed, "disturbance-ratio"))
                           .uniform(*ranges["d_ratio"]))
-            dist = forcing.design(k_d, opts["T_m"], ratio * r_rms, g_f, w_corner=corner, through=yd)
-        else:
-            dist = forcing.design(k_d, opts["T_m"], d_rms, g_f, w_corner=corner)
+            d_rms, through = ratio * r_rms, yd
+    dist = forcing.design(k_d, opts["T_m"], d_rms, g_f, w_corner=corner, through=through) \
+        if task in ("disturbance", "both") else None
+    if task == "both":
         targ = forcing.design(k_t, opts["T_m"], r_rms, g_f, w_corner=corner)
-    elif task == "disturbance":
-        dist, targ = forcing.design(k_d, opts["T_m"], d_rms, g_f, w_corner=corner), None
-    else:  # tracking
+    elif task == "tracking":
         r_rms = opts["r_rms"] if opts["r_rms"] is not None else 1.0
-        dist, targ = None, forcing.design(k_d, opts["T_m"], r_rms, g_f, w_corner=corner)
+        targ = forcing.design(k_d, opts["T_m"], r_rms, g_f, w_corner=corner)
+    else:
+        targ = None
     g_r = rng["remnant"]
     remnant = {"share": float(g_r.uniform(*ranges["remnant_share"])),
                "Tn": float(g_r.uniform(*ranges["remnant_tn"])), "at": opts["remnant_at"],

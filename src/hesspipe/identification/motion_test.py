@@ -318,8 +318,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     lo_e = np.append(lo, [0.0] * len(extra))
     hi_e = np.append(hi, [km_hi, TAU_M_MAX][:len(extra)])
     base_e = {**p_o, "Km": 0.0, "tau_m": 0.0}
-    starts_e = [[p_o[n_] for n_ in free] + [km, tm][:len(extra)]
-                for km in (1e-6, km0, 10 * km0, 0.5 * abs(p_o["Ke"])) for tm in (0.0, 0.15)]
+    delays = [[0.0], [0.15]] if "tau_m" in extra else [[]]
+    starts_e = [[p_o[n_] for n_ in free] + [km] + tm
+                for km in (1e-6, km0, 10 * km0, 0.5 * abs(p_o["Ke"])) for tm in delays]
     rss_e, p_e, sol = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, cab, s_l, E[lines],
                            Y[lines], U[lines], w)
     # Exchange of optima: the original searched again from the expanded optimum's core
