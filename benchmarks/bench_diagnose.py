@@ -32,7 +32,12 @@ Usage::
     python benchmarks/bench_diagnose.py [--seeds 10] [--seed-start 0] [--quiet] [--plants paper,roll]
                                         [--outputs rate,angle] [--tasks disturbance,both]
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
-                                        [--tau-m 0.15]
+                                        [--tau-m 0.15] [--paired]
+
+``--paired`` gives every diagnosis a baseline run of the same pilot (``humanlike.retest``:
+the aircraft as drawn, no pilot-side effect, the pilot's run-to-run scatter, its own
+remnant and forcing phases): the within-subject design in which a simulator's extra delay
+can be told from the pilot's own.
 """
 
 from __future__ import annotations
@@ -51,14 +56,14 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.diagnose.workflow import diagnose
-from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
 
 EFFECTS = ("none", "motion_feedback", "extra_delay", "remnant", "dutch_roll", "actuator_lag",
            "extra_delay+dutch_roll", "motion_feedback+dutch_roll")
 PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 
 
-def run_case(folder, plant, output, task, effect, seed, **draw):
+def run_case(folder, plant, output, task, effect, seed, paired=False, **draw):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind") if plant == "paper" else {}
@@ -76,8 +81,18 @@ def run_case(folder, plant, output, task, effect, seed, **draw):
     path = write_trial(Path(folder) / name, trial)
     run = read_run(path)
     plants = read_plants(path.parent / "plants.json")
+    base = None
+    if paired:
+        # The same pilot and aircraft in the baseline condition: no pilot-side effect, the
+        # generator's run-to-run scatter of the pilot, its own remnant and forcing phases.
+        try:
+            bspec = retest(spec, derive_seed(s, "baseline-run"), effects=(), name=name + "-baseline")
+            btrial = simulate_trial(bspec)
+        except HesspipeError as exc:
+            return None, f"baseline run: {exc}"
+        base = read_run(write_trial(Path(folder) / (name + "-baseline"), btrial))
     t = time.process_time()
-    d = diagnose(run, plants, seed=seed)
+    d = diagnose(run, plants, seed=seed, baseline_run=base)
     return d, time.process_time() - t
 
 
@@ -113,6 +128,9 @@ def main(argv=None) -> int:
                     help="the generator's Km/Ke range 'lo,hi' (default its literature range)")
     ap.add_argument("--tau-m", type=float, default=None,
                     help="the generator's vestibular delay, s (default its own, 0)")
+    ap.add_argument("--paired", action="store_true",
+                    help="give diagnose a baseline run of the same pilot (humanlike.retest: no "
+                         "pilot-side effect, the pilot's run-to-run scatter, another remnant)")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])
     draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}
@@ -130,7 +148,7 @@ def main(argv=None) -> int:
             firsts, both, false_pilot, remnant_named, aside = Counter(), 0, 0, 0, 0
             for seed in range(args.seed_start, args.seed_start + args.seeds):
                 try:
-                    d, cpu = run_case(tmp, plant, output, task, effect, seed, **draw)
+                    d, cpu = run_case(tmp, plant, output, task, effect, seed, args.paired, **draw)
                 except HesspipeError as exc:
                     failures.append(f"{plant}/{output}/{task}/{effect}/{seed}: {exc}")
                     print("  REFUSED", failures[-1], flush=True)

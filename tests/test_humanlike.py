@@ -240,3 +240,17 @@ def test_effects_are_in_the_truth():
     # The plants file leaves the actuator out: the nominal loop crosses elsewhere.
     assert t["crossover"]["frequency_rad_s"] != pytest.approx(
         t["crossover_nominal_plant"]["frequency_rad_s"], rel=0.02)
+
+
+def test_no_drawn_hess_pilot_has_a_stiffer_inner_loop_than_a_human():
+    # Paper plants, roll rate, vestibular delay 0.15 s: this draw's visual and vestibular
+    # paths nearly cancelled at crossover, K1*K2 came out ~150 and the loop diverged.
+    from hesspipe.core.seeds import derive_seed
+    from hesspipe.humanlike.pilots import PF_GAIN_MAX
+
+    s = derive_seed(2, "bench-diagnose", "paper", "rate", "both", "motion_feedback")
+    spec = draw_trial("paper", s, task="both", pilot="hess", effects=("motion_feedback",), fs=50.0,
+                      T_m=70.0, output="rate", disturbance="wind", tau_m=0.15)
+    assert spec.pilot["K1"] * spec.pilot["K2"] <= PF_GAIN_MAX
+    trial = simulate_trial(spec, fine_ratio=10)
+    assert np.all(np.isfinite(trial.control))

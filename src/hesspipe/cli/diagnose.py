@@ -23,6 +23,10 @@ def register(sub) -> None:
                    help="effect ids to try (default: every registered effect)")
     p.add_argument("--alpha", type=float, help="significance level per round (default 0.01)")
     p.add_argument("--max-effects", type=int, help="most effects to name (default 3)")
+    p.add_argument("--baseline-run", metavar="BASE.csv",
+                   help="the same pilot's run in the baseline condition (same aircraft and columns): "
+                        "the visual delay is tested against it, so a simulator's extra delay can be "
+                        "told from the pilot's own")
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
     from ._options import add_run_options, add_seed, add_terms, field_terms
@@ -56,7 +60,10 @@ def _diagnose(args) -> int:
     from ._options import run_options
 
     run = read_run(args.run, min_samples=WELCH_SEGMENT, **run_options(args))
-    result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg)
+    base = None if args.baseline_run is None else \
+        read_run(args.baseline_run, min_samples=WELCH_SEGMENT, **run_options(args))
+    result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
+                      baseline_run=base)
     print(format_report(result))
     if args.json:
         write_json(args.json, result.to_dict())

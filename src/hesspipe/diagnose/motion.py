@@ -34,7 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.stats
 
+from ..core.errors import HesspipeError
 from ..identification.motion_test import analysis_window, forcing_lines, safe_motion_test
+from ..identification.paired_delay import paired_delay
 from .results import Step
 
 
@@ -201,6 +203,47 @@ def delay_test(delay_s: float, se_s: float, max_pilot_delay_s: float, alpha: flo
                          "is identifiable)"}
 
 
+def paired_delay_test(joint: dict, retest_sd_s: float, alpha: float) -> dict:
+    """One-sided test that the visual delay grew against the same pilot's baseline run.
+
+    In a within-subject design the pilot's own delay is measured on a baseline run (the
+    simulator without the suspected latency), so an extra delay is the difference of the
+    two runs' delays, fitted on both describing functions at once
+    (:func:`hesspipe.identification.paired_delay.paired_delay`): ``z = difference /
+    sqrt(se² + retest_sd²)``, named when ``P(N(0,1) > z) < alpha``. ``retest_sd_s`` is the
+    spread of one pilot's delay difference between two runs of one condition (humans are
+    not identical from run to run), so a difference within it is not taken for a
+    simulator's latency.
+
+    Parameters
+    ----------
+    joint : dict
+        :func:`~hesspipe.identification.paired_delay.paired_delay`'s result (s).
+    retest_sd_s : float
+        Standard deviation of the difference of one pilot's delays on two runs, s.
+    alpha : float
+        Significance level.
+    """
+    diff, se = joint["difference_s"], joint["se_s"]
+    var = retest_sd_s ** 2 + (se * se if math.isfinite(se) else 0.0)
+    z = diff / math.sqrt(var) if var > 0 else (math.inf if diff > 0 else -math.inf)
+    p = float(scipy.stats.norm.sf(z))
+    return {"named": bool(p < alpha), "delay_s": float(joint["delay_s"]), "se_s": float(se),
+            "baseline_delay_s": float(joint["baseline_delay_s"]), "retest_sd_s": float(retest_sd_s),
+            "pilot_delay_s": float(joint["baseline_delay_s"]), "difference_s": float(diff),
+            "z": float(z), "p_value": p, "alpha": float(alpha), "extra_s": float(max(diff, 0.0)),
+            "criterion": "one-sided z test of the visual delay's growth over the same pilot's "
+                         "baseline run (both describing functions fitted at once, shared "
+                         "dynamics; the pilot's run-to-run spread allowed)"}
+
+
+def _df_delay(t: dict, named: bool) -> tuple[dict, float]:
+    """(parameters, delay standard error, s) of a motion test's result: the model its verdict
+    keeps (a vestibular lead shifts the delay)."""
+    pars = t["parameters_expanded"] if named else t["parameters_original"]
+    return pars, t["standard_errors_original"].get("tau0", math.nan)
+
+
 def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float, int]:
     """Share of the control's power (in `band_hz`, Hz) between the multisine forcing lines,
     and the number of lines (0: no line structure, share NaN).
@@ -235,7 +278,7 @@ def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float
     return (float(power[inband & ~forced].sum()) / total if total > 0 else float("nan")), int(lines.size)
 
 
-def df_evidence(run, plants, start, *, k: int, cfg) -> DFEvidence | None:
+def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None) -> DFEvidence | None:
     """Motion and delay verdicts and the pilot's dynamics from the describing function
     (:func:`hesspipe.identification.motion_test.motion_test`), or None when the record has no forcing lines.
 
@@ -250,11 +293,23 @@ def df_evidence(run, plants, start, *, k: int, cfg) -> DFEvidence | None:
     k : int
         Hess's order (1 or 2).
     cfg : DiagnoseConfig
-        ``motion_alpha``, ``alpha``, ``max_pilot_delay`` (s), ``remnant_share``.
+        ``motion_alpha``, ``alpha``, ``max_pilot_delay`` (s), ``retest_delay_sd`` (s),
+        ``remnant_share``.
+    baseline_run : hesspipe.core.formats.Run, optional
+        The same pilot in the baseline condition: the delay is then tested against its
+        delay (:func:`paired_delay_test`) instead of against a human's longest.
+
+    Raises
+    ------
+    HesspipeError
+        When `baseline_run` has no describing function to read the pilot's delay from.
     """
 
     t = safe_motion_test(run, plants, start, k=k)
     if not t.get("available"):
+        if baseline_run is not None:
+            raise HesspipeError(f"{run.source or run.id}: a baseline run was given, but this run has no "
+                                f"describing function for the paired delay test ({t.get('reason', '')})")
         return None
     named = bool(t["p_value"] < cfg.motion_alpha)
     forcing = forcing_sets(run)
@@ -262,12 +317,23 @@ def df_evidence(run, plants, start, *, k: int, cfg) -> DFEvidence | None:
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
                        separable=forcing == "disturbance and target",
                        verdict=motion_words(named, forcing))
-    # The delay of the model that the motion verdict keeps: a vestibular lead shifts it.
-    pars = t["parameters_expanded"] if mv.named else t["parameters_original"]
-    se = t["standard_errors_original"].get("tau0", math.nan)
-    delay = delay_test(pars["tau0"], se, cfg.max_pilot_delay, cfg.alpha)
+    pars, se = _df_delay(t, mv.named)
+    if baseline_run is None:
+        delay = delay_test(pars["tau0"], se, cfg.max_pilot_delay, cfg.alpha)
+        own = cfg.max_pilot_delay
+    else:
+        tb = safe_motion_test(baseline_run, plants, start, k=k)
+        if not tb.get("available"):
+            raise HesspipeError(f"{baseline_run.source or baseline_run.id}: the baseline run has no "
+                                f"describing function to read the pilot's delay from "
+                                f"({tb.get('reason', 'motion test unavailable')})")
+        joint = paired_delay(run, baseline_run, plants, (t["parameters_original"], tb["parameters_original"]),
+                             k=k)
+        delay = paired_delay_test(joint, cfg.retest_delay_sd, cfg.alpha)
+        delay["baseline_run"] = baseline_run.source or baseline_run.id
+        own = delay["pilot_delay_s"] if delay["named"] else math.inf
     dyn = {n: float(pars[n]) for n in DYNAMICS if n in pars}
-    dyn["tau0"] = min(dyn["tau0"], cfg.max_pilot_delay)
+    dyn["tau0"] = min(dyn["tau0"], own)
     share, _ = remnant_share(run, cfg.band_hz)
     remnant = {"named": bool(share >= cfg.remnant_share), "share": share,
                "threshold": cfg.remnant_share,
@@ -326,7 +392,8 @@ def delay_step(ev: DFEvidence, problem, current, cfg):
     aug = current.model.with_effect("extra_delay")
     fit = None
     if d["named"]:
-        fit = problem.fit(aug, {**current.parameters, "tau0": d["max_pilot_delay_s"],
+        own = d["pilot_delay_s"] if "pilot_delay_s" in d else d["max_pilot_delay_s"]
+        fit = problem.fit(aug, {**current.parameters, "tau0": own,
                                 "tau_x": d["extra_s"]})
     return _df_step(problem, aug, fit, "extra_delay", accepted=d["named"], statistic=d["z"], dof=1,
                     p_value=d["p_value"], threshold=d["alpha"], unfitted={"tau_x": d["extra_s"]})

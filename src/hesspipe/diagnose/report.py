@@ -37,8 +37,12 @@ def format_report(d: Diagnosis) -> str:
         out.append("  -> " + d.plant_finding["message"])
     dv = d.delay_verdict
     if dv is not None:
+        against = (f"against the same pilot's baseline run {dv['baseline_run']} "
+                   f"({dv['baseline_delay_s']:.3f} s; difference {dv['difference_s']:.3f} s, run-to-run "
+                   f"spread {dv['retest_sd_s']:g} s)" if "baseline_run" in dv else
+                   f"against a human's longest {dv['max_pilot_delay_s']:g} s")
         out.append(f"Visual delay on the describing function: {dv['delay_s']:.3f} +/- {dv['se_s']:.3f} s "
-                   f"against a human's longest {dv['max_pilot_delay_s']:g} s: p={dv['p_value']:.2g} "
+                   f"{against}: p={dv['p_value']:.2g} "
                    f"(needs < {dv['alpha']:g}) -> {'extra_delay NAMED' if dv['named'] else 'no extra delay'}")
     rv = d.remnant_verdict
     if rv is not None:

@@ -103,6 +103,13 @@ class DiagnoseConfig(Settings):
     #: structure; independent generator's baselines, development seeds 100-104). Only delay
     #: beyond it is named extra_delay (diagnose.motion.delay_test).
     max_pilot_delay: float = 0.40
+    #: Spread (standard deviation) of the difference between one pilot's visual delays on
+    #: two runs of one condition, s: the paired delay test (a baseline run of the same
+    #: pilot) names only a difference beyond it and the joint fit's error. Human operators'
+    #: identified delays scatter by 0.01-0.02 s between repeated runs; the describing function
+    #: also turns part of a change of the neuromuscular mode into delay. At 0.01 s, 3 of 15
+    #: baseline pairs of the independent generator (development seeds 100-104) were named.
+    retest_delay_sd: float = 0.02
     #: Share of the control power between multisine lines from which the remnant is named.
     remnant_share: float = 0.01
 
@@ -135,6 +142,7 @@ class DiagnoseConfig(Settings):
                     k=f.integer("k", min=1, max=2),
                     motion_alpha=f.number("motion_alpha", min=0.0, max=0.5, strict_min=True),
                     max_pilot_delay=f.number("max_pilot_delay", min=0.0, max=2.0),
+                    retest_delay_sd=f.number("retest_delay_sd", min=0.0, max=1.0),
                     remnant_share=f.number("remnant_share", min=0.0, max=1.0))
 
 

@@ -134,7 +134,8 @@ def _resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ..
 
 
 def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence[str] | str | None = None,
-             seed: int = 0, config: DiagnoseConfig | None = None) -> Diagnosis:
+             seed: int = 0, config: DiagnoseConfig | None = None,
+             baseline_run: Run | None = None) -> Diagnosis:
     """Locate the model/measurement disagreement, name missing effects, show the gap shrink.
 
     Parameters
@@ -151,6 +152,12 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         Base seed of any random part. The remnant is evaluated in expectation, so today
         the result does not depend on it; same inputs + seed → identical outputs.
     config : DiagnoseConfig, optional
+    baseline_run : Run, optional
+        The same pilot flying the same aircraft in the baseline condition (a within-
+        subject design). With multisine forcing in both records the visual delay is then
+        tested against this run's (``config.retest_delay_sd`` allowing for a pilot's
+        run-to-run spread): only so can a simulator's extra delay be told from a slow
+        pilot's own, which a single record shows as one delay.
 
     Returns
     -------
@@ -170,6 +177,9 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     check_seed(seed)
     check_control(run)
     _check_inputs(run, plants, cfg)
+    if baseline_run is not None:
+        check_control(baseline_run)
+        _check_inputs(baseline_run, plants, cfg)
     check = plant_check(run, plants, max_lag=cfg.max_lag)
     # A failed plant check is a finding, never a refusal: the aircraft-side candidate that
     # closes it (or the file error it proves) is named and the pilot identified around it.
@@ -181,6 +191,8 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         # spectrum), so the report shows what naming the aircraft effect closed.
         before = Problem(run, plants, cfg, seed)
         before = (before, before.fit(base, base.defaults(k=cfg.k), grid=before.free_parameters(base)))
+    if baseline_run is not None:  # the same aircraft: the same correction
+        baseline_run = corrected(baseline_run, plants, finding)[0]
     run, plants = corrected(run, plants, finding)
     cands = tuple(c for c in cands if _effect(c).where != "aircraft")  # judged on the output above
     problem = Problem(run, plants, cfg, seed)
@@ -190,7 +202,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     start = base.defaults(k=cfg.k)
 
     k_df = choose_k(plants)[0]
-    ev = df_evidence(run, plants, base.defaults(k=k_df), k=k_df, cfg=cfg) \
+    ev = df_evidence(run, plants, base.defaults(k=k_df), k=k_df, cfg=cfg, baseline_run=baseline_run) \
         if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else None
     if ev is not None:
         start.update({n: v for n, v in ev.dynamics.items() if n in start and n not in cfg.free})

@@ -242,6 +242,14 @@ def draw_precision(rng, yc, sign: int, order: int, ranges: dict, extra_delay: fl
     return None
 
 
+PF_GAIN_MAX = 30.0
+"""Largest proprioceptive loop gain K1*K2 of a drawn hess pilot. Draws whose visual and
+vestibular paths nearly cancel at crossover need a K1*K2 of ~150 and a Ke of ~180 to meet
+the crossover (120 draws of the benchmarks' cases otherwise had 0.02-16): a stiff inner
+loop no human has, which diverged in the fine-step simulation (paper plants, roll rate,
+vestibular delay 0.15 s, benchmark seed 2)."""
+
+
 def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, fixed: dict,
               motion_tf=None, km_ratio: float = 0.0, tau_m: float = 0.0,
               angle: bool = False) -> dict | None:
@@ -317,6 +325,8 @@ def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, 
             if not idx.size:
                 continue
             logk = brentq(phase_err, grid[idx[0]], grid[idx[0] + 1], xtol=1e-12)
+            if np.exp(logk) > PF_GAIN_MAX:
+                continue
             p.update(K1=k1, K2=float(np.exp(logk)) / k1)
             num, den = pf_tf(p)
             nmn, nmd = nm_tf(p["wn"], p["zn"])

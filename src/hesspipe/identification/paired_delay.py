@@ -1,0 +1,157 @@
+"""The difference of one pilot's visual delay between two runs, on their describing functions.
+
+A simulator's extra delay and the pilot's own visual delay are one delay in a single
+record. A within-subject design separates them: the same pilot flies a baseline run, and
+the delay that grew is the simulator's. Fitting each run alone, the delay trades with the
+neuromuscular mode and the lag (a light, slow mode adds phase like a delay), so each
+run's delay scatters by 0.01-0.06 s around the truth and their difference by as much (the
+independent generator's runs, development seeds 100-104). Here both runs' lines are fitted
+together by the equation error of :mod:`.motion_test` (each line weighted by its measured
+remnant): the pilot's dynamics (neuromuscular mode, lead-lag, proprioceptive gain) are
+shared, the gain Ke and the delay are each run's own, so the trade is common to both runs
+and the difference of the delays is measured by the phase the two runs do not share.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Mapping
+
+import numpy as np
+from scipy import optimize
+
+from ..core.errors import HesspipeError
+from ..pilot.hess import PilotModel
+from ..pilot.motion import motion_block
+from .motion_test import MIN_LINES, _predict, analysis_window, forcing_lines, line_variances
+
+SHARED = ("K1", "1/T1", "wn", "zn", "1/T2")
+"""Pilot parameters common to the two runs (1/T2 for k = 2 only). (K1 each run's own too
+named fewer extra delays and no fewer false ones: development seeds 100-104.)"""
+OWN = ("Ke", "tau0")
+"""Pilot parameters each run has its own."""
+
+
+def _lines(run, band_hz):
+    start, length = analysis_window(run)
+    cut = slice(start, start + length)
+    run = dataclasses.replace(run, time=run.time[cut], disturbance=run.disturbance[cut],
+                              output=run.output[cut], control=run.control[cut],
+                              reference=run.reference[cut])
+    lines = forcing_lines(run, band_hz)
+    where = run.source or run.id
+    if lines.size < MIN_LINES:
+        raise HesspipeError(f"{where}: {lines.size} multisine forcing lines found; expected at least "
+                            f"{MIN_LINES} for the describing function")
+    var = line_variances(run, lines)
+    if not np.all(np.isfinite(var)) or not np.max(var) > 0:
+        raise HesspipeError(f"{where}: no unforced bins between the forcing lines to measure the remnant")
+    n = len(run.control)
+    s = 1j * 2.0 * np.pi * np.fft.rfftfreq(n, run.dt)[lines]
+    U = np.fft.rfft(np.asarray(run.control, dtype=float))[lines]
+    Y = np.fft.rfft(np.asarray(run.output, dtype=float))[lines]
+    E = np.fft.rfft(np.asarray(run.reference, dtype=float) - np.asarray(run.output, dtype=float))[lines]
+    return s, E, Y, U, 1.0 / np.sqrt(np.maximum(var, np.max(var) * 1e-12))
+
+
+def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], Mapping[str, float]], *,
+                 k: int = 1, band_hz: tuple[float, float] = (0.0, 5.0)) -> dict:
+    """Visual delay of `run` minus that of `baseline_run` (s), one pilot's shared dynamics.
+
+    Parameters
+    ----------
+    run, baseline_run : hesspipe.core.formats.Run
+        Two records of one pilot with multisine forcing (either line set or both).
+    plants : hesspipe.core.formats.Plants
+        Only the motion path is used (the original model has none; kept for the API).
+    starts : (mapping, mapping)
+        Starting pilot parameters of `run` and of `baseline_run` (e.g. their own
+        describing-function fits, :func:`hesspipe.identification.motion_test.motion_test`'s
+        ``parameters_original``); the fit starts from each run's dynamics in turn.
+    k : int
+        Hess model order (1 or 2).
+    band_hz : (float, float)
+        Lines are used in this band, Hz.
+
+    Returns
+    -------
+    dict
+        ``difference_s`` and ``se_s`` (its standard error from the joint fit, s),
+        ``delay_s`` and ``baseline_delay_s`` (each run's delay in the joint fit, s),
+        ``shared`` (the shared parameters), ``n_lines`` (both runs), ``degrees_of_freedom``.
+
+    Raises
+    ------
+    HesspipeError
+        When a run has too few forcing lines or no unforced bins between them.
+    """
+    a, b = _lines(run, band_hz), _lines(baseline_run, band_hz)
+    model = PilotModel()
+    cab = motion_block(plants)
+    shared = [n for n in SHARED if n != "1/T2" or k == 2]
+    own = [n for n in OWN if n != "1/T2" or k == 2]
+    k2 = model.defaults(k)["K2"]
+    bases = []
+    for st in starts:
+        p = model.complete({key: v for key, v in st.items() if key in model.parameter_names()}, k)
+        p["k"] = float(k)
+        p["K1"], p["K2"] = float(np.clip(p["K1"] * p["K2"] / k2, 1e-3, 100.0)), k2
+        bases.append(p)
+    big = 1e3 * max(abs(bases[0]["Ke"]), abs(bases[1]["Ke"]), 1.0)
+    box = {"K1": (1e-3, 100.0), "1/T1": (1e-4, 10.0), "wn": (1.0, 60.0), "zn": (0.02, 2.0),
+           "1/T2": (1e-3, 20.0), "tau0": (0.0, 0.6),
+           "Ke": (0.0, big) if bases[0]["Ke"] >= 0 else (-big, 0.0)}
+    names = shared + own + own          # x = [shared..., run's own..., baseline's own...]
+    lo = np.array([box[n][0] for n in names])
+    hi = np.array([box[n][1] for n in names])
+    i_r, i_b = len(shared) + own.index("tau0"), len(shared) + len(own) + own.index("tau0")
+
+    def params(x, which):
+        p = dict(bases[which])
+        p.update(zip(shared, x[:len(shared)]))
+        j = len(shared) + len(own) * which
+        p.update(zip(own, x[j:j + len(own)]))
+        return p
+
+    def resid(x):
+        out = []
+        for which, (s, E, Y, U, w) in enumerate((a, b)):
+            r = (U - _predict(params(x, which), model, cab, s, E, Y)) * w
+            out += [r.real, r.imag]
+        return np.concatenate(out)
+
+    best = None
+    mid = 0.5 * (bases[0]["tau0"] + bases[1]["tau0"])
+    # From each run's dynamics, with each run's own delay and with no difference at all
+    # (one start's valley of the delay-mode trade can hold the difference away from 0).
+    for src in bases:
+        for same in (False, True):
+            x0 = np.array([src[n] for n in shared] + [bases[0][n] for n in own]
+                          + [bases[1][n] for n in own], dtype=float)
+            if same:
+                x0[[i_r, i_b]] = mid
+            x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+            try:
+                sol = optimize.least_squares(resid, x0, bounds=(lo, hi), x_scale="jac", max_nfev=400)
+            except (ValueError, FloatingPointError):
+                continue
+            rss = float(np.sum(sol.fun ** 2))
+            if np.isfinite(rss) and (best is None or rss < best[0]):
+                best = (rss, sol)
+    if best is None:
+        raise HesspipeError("paired delay: no joint fit of the two describing functions converged")
+    rss, sol = best
+    dof = max(sol.fun.size - sol.x.size, 1)
+    # Parameters that end on a bound are held there (motion_test._standard_errors).
+    keep = np.flatnonzero(np.asarray(sol.active_mask) == 0)
+    se = math.nan
+    if i_r in keep and i_b in keep:
+        cov = np.linalg.pinv(sol.jac[:, keep].T @ sol.jac[:, keep]) * (rss / dof)
+        jr, jb = int(np.flatnonzero(keep == i_r)[0]), int(np.flatnonzero(keep == i_b)[0])
+        se = float(math.sqrt(max(cov[jr, jr] + cov[jb, jb] - 2.0 * cov[jr, jb], 0.0)))
+    x = sol.x
+    return {"difference_s": float(x[i_r] - x[i_b]), "se_s": se, "delay_s": float(x[i_r]),
+            "baseline_delay_s": float(x[i_b]),
+            "shared": {n: float(v) for n, v in zip(shared, x[:len(shared)])},
+            "n_lines": int(a[0].size + b[0].size), "degrees_of_freedom": int(dof)}
