@@ -28,6 +28,7 @@ Usage::
 
     nice python benchmarks/bench_fly_pilot.py [--pilots 20] [--diag-seeds 4] [--skip speed,envelope,ident,diagnose]
                                               [--cohort crossover_model|table1] [--diag-cohorts table1,crossover_model]
+                                              [--forcing paper|two-input] [--diag-cases baseline,extra_delay] [--paired]
 """
 
 from __future__ import annotations
@@ -58,6 +59,7 @@ from hesspipe.plants.settings import PlantsConfig
 
 EVERY = 3  # 120 Hz -> 40 Hz records, as the pipeline's JSBSim cohort
 CASES = None  # the diagnose section's cases (--diag-cases)
+PAIRED = False  # --paired: a baseline flight of each pilot for diagnose
 RESTARTS, PASSES = 2, 10  # the pipeline's APID budget (--restarts/--passes change it)
 CRITERION = "df"  # the pipeline's identification criterion (--criterion changes it)
 DRAW = "crossover_model"  # the pipeline's cohort draw (--cohort changes it)
@@ -306,8 +308,21 @@ def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
                 continue
             lin = (linear_run(plants, f.truth["model"], f.truth["parameters"], f.run, f.truth["seeds"]["remnant"])
                    if FORCING == "paper" else None)  # (the linear twin has no reference)
+            base = None
+            if PAIRED:
+                # The same pilot's baseline flight: no hidden effect, its own remnant and
+                # forcing phases (a model pilot: no run-to-run scatter of its parameters).
+                try:
+                    base = fly_pilot_record("737", plants, "original+remnant", params,
+                                            seed=derive_seed(pseed, "baseline-run"), workdir=work / "diag",
+                                            record_every=EVERY, remnant_share=truth["remnant_share"],
+                                            run_id=pid + "-baseline", **forcing_kwargs()).run
+                except HesspipeError as exc:
+                    rows.append(f"  {pid}: baseline flight failed ({exc})")
+                    continue
+                lin = None
             try:
-                d = diagnose(f.run, plants, model="original", seed=pseed)
+                d = diagnose(f.run, plants, model="original", seed=pseed, baseline_run=base)
                 d_lin = diagnose(lin, plants, model="original", seed=pseed) if lin is not None else None
             except HesspipeError as exc:
                 rows.append(f"  {pid}: diagnose refused ({exc})")
@@ -350,9 +365,12 @@ def main(argv=None) -> int:
                     help=f"comma list of {', '.join([*DIAG_CASES, *EXTRA_CASES])}")
     ap.add_argument("--diag-cohorts", default="table1,crossover_model",
                     help="cohort draws of the diagnose section's pilots (comma list)")
+    ap.add_argument("--paired", action="store_true",
+                    help="diagnose section: each pilot also flies a baseline flight, given to diagnose "
+                         "as baseline_run (the within-subject extra-delay test; needs --forcing two-input)")
     args = ap.parse_args(argv)
     globals().update(RESTARTS=args.restarts, PASSES=args.passes, CRITERION=args.criterion, DRAW=args.cohort,
-                     FORCING=args.forcing, TARGET_RMS=args.target_rms,
+                     FORCING=args.forcing, TARGET_RMS=args.target_rms, PAIRED=args.paired,
                      CASES={c: {**DIAG_CASES, **EXTRA_CASES}[c] for c in args.diag_cases.split(",")})
     skip = set(args.skip.split(","))
     print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737 (hesspipe.flight.closed_loop)")

@@ -26,15 +26,18 @@ parameters (the expanded model is the original at Km = 0) is the F test
 
     F = (RSS_original − RSS_expanded) / q / (RSS_expanded / (2 L − p_expanded))
 
-(L complex lines, 2 L real residuals). With target and disturbance lines the extra
-parameters are Km and a vestibular delay tau_m (q = 2), ``p = P(F(2, 2L − p) > F)``.
-The delay is the test's, not the paper's model's: human vestibular responses lag by
-0.1-0.2 s (SPEC.md "Describing functions"), and a test without it lost half its motion
-runs on angle tasks of the generator drawn with tau_m = 0.15 s (development seeds
-100-111). Under "no motion feedback" tau_m is not identified (Davies 1987) and Km sits
-on its boundary; the F(2, ·) reference covers both conservatively. With one line set
-only Km is added (q = 1): on its boundary F is 0 half the time (Self & Liang 1987), so
-``p = ½ P(F(1, 2L − p) > F)``. Both models are fitted by bounded least
+(L complex lines, 2 L real residuals). Km alone (q = 1) sits on its boundary under
+"no motion feedback", so F is 0 half the time (Self & Liang 1987) and
+``p = ½ P(F(1, 2L − p) > F)``. With target and disturbance lines a second
+alternative adds a vestibular delay tau_m (0-:data:`TAU_M_MAX` s, q = 2,
+``p = P(F(2, 2L − p) > F)``, conservative: tau_m is not identified under the null,
+Davies 1987), and the test's p is the smaller of the two, doubled (Bonferroni). The
+delay is the test's, not the paper's model's: human vestibular responses lag by
+0.1-0.2 s (SPEC.md "Describing functions"); Km alone lost half its motion runs on angle
+tasks of the generator drawn with tau_m = 0.15 s (development seeds 100-111), and the
+delayed alternative alone named 9 of 16 JSBSim-flown motion pilots (whose path has no
+delay) against 10 of 16 with Km alone or with both (benchmarks/bench_fly_pilot.py).
+With one line set only Km is tested. Both models are fitted by bounded least
 squares (Ke, K1, 1/T1, tau0, wn, zn, and 1/T2 for k = 2; K2 is held because
 only K1 K2 is identifiable), several starts each. The **gain** is
 ``1 − RSS_expanded / RSS_original``: the share of the describing-function
@@ -69,10 +72,12 @@ ALPHA = 0.05
 
 MIN_LINES = 4
 SMOOTH_ORDER = 2
-TAU_M_MAX = 0.4
-"""Upper bound of the test's vestibular delay, s (the literature's 0.1-0.2 s, shorter than
-the visual delay; SPEC.md "Describing functions")."""
 """Order of the polynomial in log frequency that smooths the lines' remnant levels."""
+TAU_M_MAX = 0.25
+"""Upper bound of the test's vestibular delay, s (the literature's 0.1-0.2 s, shorter than
+the visual delay; SPEC.md "Describing functions"). At 0.4 s the delayed path absorbed model
+error of JSBSim-flown baselines: motion named on 2 of 16 static pilots, both with the delay
+on its bound (0 of 16 at 0.25 s; benchmarks/bench_fly_pilot.py, two-input forcing)."""
 
 
 def analysis_window(run) -> tuple[int, int]:
@@ -325,33 +330,46 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     # the test sees their sum, and a free delay there cost a fifth of the named motion
     # runs of disturbance-only tasks for no gain.
     d_lines, r_lines = _line_sets(run)
-    extra = ["Km", "tau_m"] if d_lines.size and r_lines.size else ["Km"]
-    free_e = free + extra
-    km_hi = 1e3 * max(abs(base["Ke"]), 1.0)
-    lo_e = np.append(lo, [0.0] * len(extra))
-    hi_e = np.append(hi, [km_hi, TAU_M_MAX][:len(extra)])
-    base_e = {**p_o, "Km": 0.0, "tau_m": 0.0}
-    delays = [[0.0], [0.15]] if "tau_m" in extra else [[]]
-    starts_e = [[p_o[n_] for n_ in free] + [km] + tm
-                for km in (1e-6, km0, 10 * km0, 0.5 * abs(p_o["Ke"])) for tm in delays]
-    rss_e, p_e, sol = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, cab, s_l, E[lines],
-                           Y[lines], U[lines], w)
-    # Exchange of optima: the original searched again from the expanded optimum's core
-    # parameters, so that LR measures what Km adds, not a better local optimum the
-    # expanded search happened to find for the shared parameters.
-    rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], cab,
-                                s_l, E[lines], Y[lines], U[lines], w)
-    if rss_o2 < rss_o:
-        rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
-    rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
-    dof = 2 * int(lines.size) - len(free_e)
+    both = bool(d_lines.size and r_lines.size)
+    alternatives = (["Km"], ["Km", "tau_m"]) if both else (["Km"],)
+    dof = 2 * int(lines.size) - len(free) - len(alternatives[-1])
     if dof < 1:
         return {"available": False, "n_lines": int(lines.size),
                 "reason": f"{lines.size} forcing lines leave no degrees of freedom for the test"}
-    q = len(extra)
-    lr = max(rss_o - rss_e, 0.0) / q / (rss_e / dof) if rss_e > 0 else math.inf
-    # Km alone: on its boundary, F is 0 half the time under H0 (Self & Liang 1987).
-    p_value = (float(stats.f.sf(lr, q, dof)) * (0.5 if q == 1 else 1.0)) if lr > 0 else 1.0
+    km_hi = 1e3 * max(abs(base["Ke"]), 1.0)
+    fits = []
+    for extra in alternatives:
+        free_e = free + extra
+        lo_e = np.append(lo, [0.0] * len(extra))
+        hi_e = np.append(hi, [km_hi, TAU_M_MAX][:len(extra)])
+        base_e = {**p_o, "Km": 0.0, "tau_m": 0.0}
+        delays = [[0.0], [0.15]] if "tau_m" in extra else [[]]
+        starts_e = [[p_o[n_] for n_ in free] + [km] + tm
+                    for km in (1e-6, km0, 10 * km0, 0.5 * abs(p_o["Ke"])) for tm in delays]
+        rss_e, p_e, sol = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, cab, s_l, E[lines],
+                               Y[lines], U[lines], w)
+        # Exchange of optima: the original searched again from the expanded optimum's core
+        # parameters, so that LR measures what Km adds, not a better local optimum the
+        # expanded search happened to find for the shared parameters.
+        rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], cab,
+                                    s_l, E[lines], Y[lines], U[lines], w)
+        if rss_o2 < rss_o:
+            rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
+        fits.append((extra, rss_e, p_e, sol))
+    tests = []
+    for extra, rss_e, p_e, sol in fits:
+        rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
+        q, dof_e = len(extra), 2 * int(lines.size) - len(free) - len(extra)
+        lr = max(rss_o - rss_e, 0.0) / q / (rss_e / dof_e) if rss_e > 0 else math.inf
+        # Km alone: on its boundary, F is 0 half the time under H0 (Self & Liang 1987).
+        p = (float(stats.f.sf(lr, q, dof_e)) * (0.5 if q == 1 else 1.0)) if lr > 0 else 1.0
+        tests.append((p, lr, rss_e, p_e, sol, extra))
+    # With both line sets, two pre-planned alternatives - Km alone (the paper's path) and
+    # Km with a vestibular delay - and the smaller p, Bonferroni-corrected: the delay alone
+    # cost JSBSim-flown motion runs (tau_m = 0) their power, Km alone lost half the
+    # generator's runs drawn with tau_m = 0.15 s.
+    p_value, lr, rss_e, p_e, sol, extra = min(tests, key=lambda t: t[0])
+    p_value = min(1.0, p_value * len(tests))
     try:
         cov = np.linalg.pinv(sol.jac.T @ sol.jac)
         km_se = float(math.sqrt(max(cov[len(free), len(free)], 0.0)))
@@ -366,6 +384,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
             "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": float(p_e["Km"]),
             "tau_m": float(p_e.get("tau_m", 0.0)),
             "Km_se": km_se, "significant": bool(p_value < ALPHA),
+            "alternatives": {"+".join(t[5]): t[0] for t in tests},
             "degrees_of_freedom": dof}
 
 
