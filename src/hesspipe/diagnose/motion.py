@@ -35,7 +35,7 @@ import numpy as np
 import scipy.stats
 
 from ..core.errors import HesspipeError
-from ..identification.motion_test import analysis_window, forcing_lines, safe_motion_test
+from ..identification.motion_test import forcing_lines, safe_motion_test, windowed
 from ..identification.paired_delay import paired_delay
 from .results import Step
 
@@ -138,14 +138,13 @@ def forcing_sets(run) -> str:
     run : hesspipe.core.formats.Run
         The measured run (disturbance and reference are the forcing signals).
     """
-    start, length = analysis_window(run)
-    cut = slice(start, start + length)
+    run = windowed(run)
+    length = len(run.control)
     has = []
     for name in ("disturbance", "reference"):
-        sig = np.asarray(getattr(run, name), dtype=float)[cut]
-        one = dataclasses.replace(run, time=run.time[cut], disturbance=sig if name == "disturbance" else
-                                  np.zeros(length), reference=sig if name == "reference" else np.zeros(length),
-                                  output=run.output[cut], control=run.control[cut])
+        sig = np.asarray(getattr(run, name), dtype=float)
+        one = dataclasses.replace(run, disturbance=sig if name == "disturbance" else np.zeros(length),
+                                  reference=sig if name == "reference" else np.zeros(length))
         has.append(forcing_lines(one).size > 0)
     return {(True, True): "disturbance and target", (True, False): "disturbance only",
             (False, True): "target only", (False, False): "none"}[tuple(has)]
@@ -260,11 +259,7 @@ def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float
         Band of the power sums, Hz.
     """
 
-    start, length = analysis_window(run)
-    cut = slice(start, start + length)
-    run = dataclasses.replace(run, time=run.time[cut], disturbance=run.disturbance[cut],
-                              output=run.output[cut], control=run.control[cut],
-                              reference=run.reference[cut])
+    run = windowed(run)
     lines = forcing_lines(run, band_hz)
     if lines.size == 0:
         return float("nan"), 0
@@ -331,7 +326,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None) -> DFEvid
                              k=k)
         delay = paired_delay_test(joint, cfg.retest_delay_sd, cfg.alpha)
         delay["baseline_run"] = baseline_run.source or baseline_run.id
-        own = delay["pilot_delay_s"] if delay["named"] else math.inf
+        own = min(delay["pilot_delay_s"], cfg.max_pilot_delay) if delay["named"] else cfg.max_pilot_delay
     dyn = {n: float(pars[n]) for n in DYNAMICS if n in pars}
     dyn["tau0"] = min(dyn["tau0"], own)
     share, _ = remnant_share(run, cfg.band_hz)

@@ -100,6 +100,28 @@ def analysis_window(run) -> tuple[int, int]:
     return int(start), int(length)
 
 
+def windowed(run):
+    """`run` cut to its :func:`analysis_window` (the forcing's lines on exact bins).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        A record with multisine forcing.
+
+    Returns
+    -------
+    hesspipe.core.formats.Run
+        The same record over the analysis window (`run` itself when that is all of it).
+    """
+    start, length = analysis_window(run)
+    if start == 0 and length == len(run.control):
+        return run
+    cut = slice(start, start + length)
+    return dataclasses.replace(run, time=run.time[cut], disturbance=run.disturbance[cut],
+                               output=run.output[cut], control=run.control[cut],
+                               reference=run.reference[cut])
+
+
 def forcing_lines(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> np.ndarray:
     """Indices (into ``numpy.fft.rfft`` of the run as given) of the multisine forcing lines.
 
@@ -205,6 +227,32 @@ def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U
         r = (U - _predict(p, model, cab, s, E, Y)) * w
         return np.concatenate([r.real, r.imag])
 
+    rss, sol = best_least_squares(resid, starts, lo, hi, "motion test: no fit of the describing "
+                                  "function converged")
+    p = dict(base)
+    p.update(zip(free, sol.x))
+    return rss, p, sol
+
+
+def best_least_squares(resid, starts, lo, hi, failure: str):
+    """(rss, solution) of bounded least squares of `resid` from the best of `starts`.
+
+    Parameters
+    ----------
+    resid : callable
+        Residual vector of a parameter vector.
+    starts : iterable of array
+        Starting vectors (clipped just inside the bounds).
+    lo, hi : array
+        Bounds.
+    failure : str
+        The error's message when no start converges.
+
+    Raises
+    ------
+    HesspipeError
+        With `failure` when no start converges.
+    """
     best = None
     for x0 in starts:
         x0 = np.clip(np.asarray(x0, dtype=float), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
@@ -216,11 +264,29 @@ def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U
         if np.isfinite(rss) and (best is None or rss < best[0]):
             best = (rss, sol)
     if best is None:
-        raise HesspipeError("motion test: no fit of the describing function converged")
-    rss, sol = best
-    p = dict(base)
-    p.update(zip(free, sol.x))
-    return rss, p, sol
+        raise HesspipeError(failure)
+    return best
+
+
+def pilot_start(model, start: Mapping[str, float], k: int) -> dict:
+    """The starting pilot parameters of a describing-function fit: `start` completed for order
+    `k`, K2 held at its default and the start's K1 K2 carried by K1 (only the product is
+    identifiable).
+
+    Parameters
+    ----------
+    model : hesspipe.pilot.hess.PilotModel
+        The model fitted.
+    start : mapping
+        Starting values (missing ones: the model's defaults).
+    k : int
+        Hess model order (1 or 2).
+    """
+    base = model.complete({key: v for key, v in start.items() if key in model.parameter_names()}, k)
+    base["k"] = float(k)
+    k2 = model.defaults(k)["K2"]
+    base["K1"], base["K2"] = float(np.clip(base["K1"] * base["K2"] / k2, 1e-3, 100.0)), k2
+    return base
 
 
 def _standard_errors(sol, free: Sequence[str], rss: float, dof: int) -> dict:
@@ -279,12 +345,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         parameters; diagnose reads the pilot's own delay from them).
     """
 
-    start_, length = analysis_window(run)
-    if length < len(run.control):
-        cut = slice(start_, start_ + length)
-        run = dataclasses.replace(run, time=run.time[cut], disturbance=run.disturbance[cut],
-                                  output=run.output[cut], control=run.control[cut],
-                                  reference=run.reference[cut])
+    run = windowed(run)
+    length = len(run.control)
     lines = forcing_lines(run, band_hz)
     if lines.size < MIN_LINES:
         return {"available": False, "n_lines": int(lines.size),
@@ -297,11 +359,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     E = np.fft.rfft(np.asarray(run.reference, dtype=float) - np.asarray(run.output, dtype=float))
     original, expanded = PilotModel(), PilotModel(("motion_feedback",))
     cab = motion_block(plants)
-    base = original.complete({key: v for key, v in start.items() if key in original.parameter_names()}, k)
-    base["k"] = float(k)
-    # Only K1 K2 is identifiable: K2 held at its default, the start's product carried by K1.
-    k2 = original.defaults(k)["K2"]
-    base["K1"], base["K2"] = float(np.clip(base["K1"] * base["K2"] / k2, 1e-3, 100.0)), k2
+    base = pilot_start(original, start, k)
     free = ["Ke", "K1", "1/T1", "tau0", "wn", "zn"] + (["1/T2"] if k == 2 else [])
     sign = 1.0 if base["Ke"] >= 0 else -1.0
     big = 1e3 * max(abs(base["Ke"]), 1.0)

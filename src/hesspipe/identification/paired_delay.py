@@ -14,17 +14,15 @@ and the difference of the delays is measured by the phase the two runs do not sh
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import Mapping
 
 import numpy as np
-from scipy import optimize
 
 from ..core.errors import HesspipeError
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
-from .motion_test import MIN_LINES, _predict, analysis_window, forcing_lines, line_variances
+from .motion_test import MIN_LINES, _predict, best_least_squares, forcing_lines, line_variances, pilot_start, windowed
 
 SHARED = ("K1", "1/T1", "wn", "zn", "1/T2")
 """Pilot parameters common to the two runs (1/T2 for k = 2 only). (K1 each run's own too
@@ -34,11 +32,7 @@ OWN = ("Ke", "tau0")
 
 
 def _lines(run, band_hz):
-    start, length = analysis_window(run)
-    cut = slice(start, start + length)
-    run = dataclasses.replace(run, time=run.time[cut], disturbance=run.disturbance[cut],
-                              output=run.output[cut], control=run.control[cut],
-                              reference=run.reference[cut])
+    run = windowed(run)
     lines = forcing_lines(run, band_hz)
     where = run.source or run.id
     if lines.size < MIN_LINES:
@@ -91,13 +85,7 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
     cab = motion_block(plants)
     shared = [n for n in SHARED if n != "1/T2" or k == 2]
     own = [n for n in OWN if n != "1/T2" or k == 2]
-    k2 = model.defaults(k)["K2"]
-    bases = []
-    for st in starts:
-        p = model.complete({key: v for key, v in st.items() if key in model.parameter_names()}, k)
-        p["k"] = float(k)
-        p["K1"], p["K2"] = float(np.clip(p["K1"] * p["K2"] / k2, 1e-3, 100.0)), k2
-        bases.append(p)
+    bases = [pilot_start(model, st, k) for st in starts]
     big = 1e3 * max(abs(bases[0]["Ke"]), abs(bases[1]["Ke"]), 1.0)
     box = {"K1": (1e-3, 100.0), "1/T1": (1e-4, 10.0), "wn": (1.0, 60.0), "zn": (0.02, 2.0),
            "1/T2": (1e-3, 20.0), "tau0": (0.0, 0.6),
@@ -121,27 +109,19 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
             out += [r.real, r.imag]
         return np.concatenate(out)
 
-    best = None
     mid = 0.5 * (bases[0]["tau0"] + bases[1]["tau0"])
     # From each run's dynamics, with each run's own delay and with no difference at all
     # (one start's valley of the delay-mode trade can hold the difference away from 0).
+    starts = []
     for src in bases:
         for same in (False, True):
             x0 = np.array([src[n] for n in shared] + [bases[0][n] for n in own]
                           + [bases[1][n] for n in own], dtype=float)
             if same:
                 x0[[i_r, i_b]] = mid
-            x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-            try:
-                sol = optimize.least_squares(resid, x0, bounds=(lo, hi), x_scale="jac", max_nfev=400)
-            except (ValueError, FloatingPointError):
-                continue
-            rss = float(np.sum(sol.fun ** 2))
-            if np.isfinite(rss) and (best is None or rss < best[0]):
-                best = (rss, sol)
-    if best is None:
-        raise HesspipeError("paired delay: no joint fit of the two describing functions converged")
-    rss, sol = best
+            starts.append(x0)
+    rss, sol = best_least_squares(resid, starts, lo, hi, "paired delay: no joint fit of the two "
+                                  "describing functions converged")
     dof = max(sol.fun.size - sol.x.size, 1)
     # Parameters that end on a bound are held there (motion_test._standard_errors).
     keep = np.flatnonzero(np.asarray(sol.active_mask) == 0)
