@@ -19,6 +19,9 @@ the roll rate as much as the target line beside it) with a flat target; a flat t
 a 140 s analysed record (one period) whose lines reach 0.01 Hz (the descent needs the record
 terrain 4000 ft lower). Prints per pilot and the medians of |relative error| (LG: | |L_id(j
 wc_true)| - 1 |).
+
+With ``--bound N`` (:func:`information_bound`): what the lines can tell at all, per design, on
+identification's linear FFT generator: the Cramer-Rao bound with the lines' true errors.
 """
 
 from __future__ import annotations
@@ -155,6 +158,8 @@ def levers_study(plants, args, root):
 BOUND_DESIGNS = {  # name: (forcing without run-in, analysed record s)
     "TWO_INPUT lines": (replace(TWO_INPUT, run_in_s=0.0), 70.0),
     "output-equivalent wind, flat target": (replace(TWO_INPUT, run_in_s=0.0, wind_equivalent=1.0, corner_hz=0.0), 70.0),
+    "flat target, lines from 0.005 Hz, 140 s": (replace(TWO_INPUT, run_in_s=0.0, corner_hz=0.0, f_min_hz=0.005), 140.0),
+    "flat target, lines from 0.005 Hz, 280 s": (replace(TWO_INPUT, run_in_s=0.0, corner_hz=0.0, f_min_hz=0.005), 280.0),
     "flat target, lines from 0.005 Hz, 560 s": (replace(TWO_INPUT, run_in_s=0.0, corner_hz=0.0, f_min_hz=0.005), 560.0),
     "output-equivalent, flat, from 0.005 Hz, 140 s": (replace(TWO_INPUT, run_in_s=0.0, wind_equivalent=1.0, corner_hz=0.0,
                                                            f_min_hz=0.005), 140.0),
