@@ -16,8 +16,8 @@ identified with the fitted plants by
 
 Designs: TWO_INPUT; an output-equivalent wind (``wind_equivalent=1``: every wind line moves
 the roll rate as much as the target line beside it) with a flat target; a flat target alone;
-a 140 s analysed record (one period) whose lines reach 0.01 Hz (the descent needs the record
-terrain 4000 ft lower). Prints per pilot and the medians of |relative error| (LG: | |L_id(j
+a 140 s analysed record (one period) whose lines reach 0.01 Hz (the 155 s descent needs the record
+terrain at -4000 ft). Prints per pilot and the medians of |relative error| (LG: | |L_id(j
 wc_true)| - 1 |).
 
 With ``--bound N`` (:func:`information_bound`): what the lines can tell at all, per design, on
