@@ -11,9 +11,17 @@ identification's own FFT generator.
 
 Prints, per pilot and set, the relative errors of Ke, Km and K1 K2, then the medians.
 
+With ``--levers`` (issue 14's Km item): the same pilots, expanded + the cohort's remnant, flown
+with TWO_INPUT and with three design changes (an output-equivalent wind, a flat target, a 140 s
+record whose lines reach 0.01 Hz), each identified by df, by the motion test's equation-error
+fit (Km free, with its vestibular delay tau_m free and held at 0; the flown pilot has none), by
+df with the lines' errors from the smoothed remnant (motion_test.line_variances), and (default
+design only) by the ``output`` criterion.
+
 Usage::
 
     nice python benchmarks/bench_km_identifiability.py [--pilots 10] [--target-pilots 10] [--fft-pilots 4]
+    nice python benchmarks/bench_km_identifiability.py --pilots 0 --target-pilots 0 --fft-pilots 0 --levers 10 [--pilot-start 10]
 """
 
 from __future__ import annotations
@@ -48,6 +56,12 @@ def main(argv=None) -> int:
                     help="two-input study: fly only the run-in design with the cohort's remnant share x this")
     ap.add_argument("--fft-pilots", type=int, default=4,
                     help="pilots of the noise-free structural check (FFT generator)")
+    ap.add_argument("--levers", type=int, default=0,
+                    help="pilots of the Km levers study (identification and design levers, cohort remnant)")
+    ap.add_argument("--bound", type=int, default=0,
+                    help="pilots of the information bound (Cramer-Rao, FFT generator) per design")
+    ap.add_argument("--pilot-start", type=int, default=0,
+                    help="levers study: first pilot index (0: pilot01; 10: pilots 11-20)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737; identified with the fitted plants")
     with tempfile.TemporaryDirectory() as tmp:
@@ -87,6 +101,12 @@ def main(argv=None) -> int:
             target_study(plants, corner, args, root)
         if args.fft_pilots:
             structure_check(plants, args)
+        if args.levers or args.bound:
+            import bench_km_levers
+        if args.levers:
+            bench_km_levers.levers_study(plants, args, root)
+        if args.bound:
+            bench_km_levers.information_bound(plants, args)
     return 0
 
 

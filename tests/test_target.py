@@ -47,6 +47,36 @@ def test_lines_are_disjoint_interleaved_and_on_the_records_bins():
         interleaved_lines(10.0, 12, 0.03, 0.5)
 
 
+def test_output_equivalent_wind_moves_the_output_like_the_target_line_beside_it(tmp_path):
+    """wind_equivalent: each wind line, through Yd, has the amplitude of the target line next to
+    it times the ratio; a flight takes Yd from its plants; no path, no design."""
+    from hesspipe.flight.approach import FlightConfig
+    from hesspipe.flight.closed_loop import fly_pilot_record
+    from hesspipe.pilot.blocks import from_tf
+
+    plants = eq_plants()
+    yd = from_tf(plants.disturbance_to_output).response
+    dt, n = 0.025, 2800
+    tg = TargetForcing(target_rms=0.03, wind_equivalent=0.5, corner_hz=0.0)
+    wind, ref = tg.signals(np.arange(n) * dt, seed=4, disturbance_path=yd)
+    kd, kt = interleaved_lines(n * dt, tg.n_lines, tg.f_min_hz, tg.f_max_hz)
+    W, R = np.fft.rfft(wind), np.fft.rfft(ref)
+    at_output = np.abs(W[kd]) * np.abs(yd(2j * np.pi * kd / (n * dt)))
+    assert at_output == pytest.approx(0.5 * np.abs(R[kt]), rel=1e-9)
+    assert np.ptp(np.abs(W[kd])) > 0.5 * np.max(np.abs(W[kd]))  # shaped, not flat
+    assert tg.describe()["wind_output_equivalent"] == 0.5
+    with pytest.raises(HesspipeError, match="disturbance path"):
+        tg.signals(np.arange(n) * dt, seed=4)
+    with pytest.raises(HesspipeError, match="wind_equivalent"):
+        TargetForcing(wind_equivalent=-1.0)
+    cfg = FlightConfig(duration_s=20.0)
+    small = TargetForcing(target_rms=0.01, n_lines=6, f_min_hz=0.1, wind_equivalent=0.5, paper_side_wind=False)
+    f = fly_pilot_record("737", plants, "expanded", {}, seed=3, workdir=tmp_path, config=cfg, target=small)
+    m = int(round(20.0 / cfg.dt_s))
+    wind, _ = small.signals(np.arange(m) * cfg.dt_s, f.truth["seeds"]["gust"], disturbance_path=yd)
+    assert np.corrcoef(f.run.disturbance, wind)[0, 1] > 0.999
+
+
 def test_reference_line_df_equals_a_brute_force_closed_loop():
     plants = eq_plants()
     _, sim, loop = _loop(plants)

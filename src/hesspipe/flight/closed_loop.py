@@ -59,7 +59,7 @@ from ..core.formats import Plants, Run, tf_coefficients, write_run
 from ..core.io import check_output_dir, staged_output, write_json
 from ..core.provenance import versions
 from ..core.seeds import derive_seed
-from ..pilot.blocks import Loop
+from ..pilot.blocks import Loop, from_tf
 from ..pilot.crossover import gain_scale
 from ..pilot.discrete import DiscretePilot
 from ..pilot.hess import model_from_name
@@ -296,7 +296,8 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
     if target is not None:
         if reference is not None:
             raise HesspipeError("reference: expected either a reference or a target forcing, not both")
-        wind, reference = target.signals(t, gust_seed)
+        wind, reference = target.signals(t, gust_seed,
+                                         from_tf(plants.disturbance_to_output).response)
         if not target.paper_side_wind:  # its drift would hide the low wind lines
             along, lateral = np.zeros(n), np.zeros(n)
         lateral = lateral + wind

@@ -68,7 +68,7 @@ def interleaved_lines(period_s: float, n_lines: int, f_min_hz: float, f_max_hz: 
 
 
 def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: float = 0.0,
-                   fall_hz: float = 0.0) -> np.ndarray:
+                   fall_hz: float = 0.0, amplitudes=None) -> np.ndarray:
     """Sum of sines on lines `k` (cycles per `period_s`), random phases, RMS `rms`.
 
     Amplitudes are flat, or with `corner_hz` > 0 proportional to ``f / (f + corner_hz)``:
@@ -93,6 +93,9 @@ def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: floa
     fall_hz : float
         With `fall_hz` > 0 the amplitudes are also multiplied by ``1 / (1 + f / fall_hz)``:
         more power on the low lines.
+    amplitudes : array_like, optional
+        Given, the lines' amplitudes themselves (signal units, one per line): `rms`,
+        `corner_hz` and `fall_hz` are then not used.
 
     Returns
     -------
@@ -105,9 +108,35 @@ def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: floa
     if fall_hz > 0:
         a = a / (1.0 + f / fall_hz)
     phases = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, len(k))
+    if amplitudes is not None:
+        return np.sin(2.0 * np.pi * np.outer(t - t[0], f) + phases) @ np.asarray(amplitudes, dtype=float)
     x = np.sin(2.0 * np.pi * np.outer(t - t[0], f) + phases) @ a
     sd = float(np.std(x))
     return x * (rms / sd) if sd > 0 else x
+
+
+def line_amplitudes(k, period_s: float, rms: float, corner_hz: float = 0.0) -> np.ndarray:
+    """Amplitudes of :func:`line_multisine`'s lines for RMS `rms` (lines on distinct bins).
+
+    Parameters
+    ----------
+    k : sequence of int
+        Line numbers (frequency ``k / period_s`` Hz).
+    period_s : float
+        Period, s.
+    rms : float
+        RMS of the sum, the signal's units.
+    corner_hz : float
+        Amplitudes proportional to ``f / (f + corner_hz)`` (0: flat).
+
+    Returns
+    -------
+    ndarray
+        One amplitude per line, the signal's units (the RMS of the sum is ``sqrt(sum a^2 / 2)``).
+    """
+    f = np.asarray(k, dtype=float) / period_s
+    a = f / (f + corner_hz) if corner_hz > 0 else np.ones_like(f)
+    return a * rms / np.sqrt(np.sum(a ** 2) / 2.0)
 
 
 @dataclass(frozen=True)
@@ -136,6 +165,13 @@ class TargetForcing:
         transient falls in the run-in (the analysis window ends at the record's end).
     paper_side_wind : bool
         Keep the paper's turning side wind under the wind lines (False: the wind lines alone).
+    wind_equivalent : float
+        0: the wind's lines as set by `wind_rms` and `wind_fall_hz`. Above 0: an
+        output-equivalent wind, as multisine experiments are designed: each wind line's
+        amplitude is divided by the disturbance path's gain ``|Yd(j w)|`` (roll rate per
+        ft/s of wind, given to :meth:`signals`), so that at the output it stands at
+        `wind_equivalent` times the amplitude of the target line next to it (1: the wind
+        moves the roll rate as much as the target at every line). `wind_rms` is then unused.
     """
 
     target_rms: float = 0.02
@@ -147,12 +183,13 @@ class TargetForcing:
     wind_fall_hz: float = 0.0
     run_in_s: float = 0.0
     paper_side_wind: bool = True
+    wind_equivalent: float = 0.0
 
     def __post_init__(self):
         if not isinstance(self.paper_side_wind, bool):
             raise HesspipeError(f"target: paper_side_wind: expected true or false, got {self.paper_side_wind!r}")
         for name in ("target_rms", "wind_rms", "f_min_hz", "f_max_hz", "corner_hz", "wind_fall_hz",
-                     "run_in_s"):
+                     "run_in_s", "wind_equivalent"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v >= 0):
                 raise HesspipeError(f"target: {name}: expected a finite number >= 0, got {v!r}")
@@ -160,7 +197,7 @@ class TargetForcing:
             raise HesspipeError(f"target: f_max_hz: expected above f_min_hz ({self.f_min_hz:g}), "
                                 f"got {self.f_max_hz!r}")
 
-    def signals(self, t, seed: int):
+    def signals(self, t, seed: int, disturbance_path=None):
         """(wind excitation ft/s, reference rad/s) on `t` (uniform, s), periodic over the record.
 
         Parameters
@@ -169,6 +206,16 @@ class TargetForcing:
             Sample times, s.
         seed : int
             Seed of both sets' phases (derived per set).
+        disturbance_path : callable, optional
+            ``disturbance_path(s)``: the complex response of Yd (rad/s of roll rate per
+            ft/s of wind) at complex frequencies `s` (rad/s); needed when
+            `wind_equivalent` > 0.
+
+        Raises
+        ------
+        HesspipeError
+            A run-in as long as the record, or an output-equivalent wind without its
+            disturbance path (or one with no gain at a wind line).
         """
         t = np.asarray(t, dtype=float)
         period = (t[-1] - t[0]) + (t[1] - t[0]) - self.run_in_s
@@ -176,8 +223,19 @@ class TargetForcing:
             raise HesspipeError(f"target: run_in_s: expected shorter than the record "
                                 f"({(t[-1] - t[0]) + (t[1] - t[0]):g} s), got {self.run_in_s:g}")
         kd, kt = interleaved_lines(period, self.n_lines, self.f_min_hz, self.f_max_hz)
+        amplitudes = None
+        if self.wind_equivalent > 0:
+            if disturbance_path is None:
+                raise HesspipeError("target: wind_equivalent: an output-equivalent wind needs the "
+                                    "disturbance path Yd (disturbance_path)")
+            gain = np.abs(np.asarray(disturbance_path(2j * np.pi * kd / period), dtype=complex))
+            if not np.all(np.isfinite(gain) & (gain > 0)):
+                raise HesspipeError("target: wind_equivalent: the disturbance path Yd has no finite, "
+                                    "non-zero gain at every wind line")
+            target_amplitude = line_amplitudes(kt, period, self.target_rms, self.corner_hz)
+            amplitudes = self.wind_equivalent * target_amplitude / gain
         wind = line_multisine(t, kd, period, self.wind_rms, derive_seed(seed, "target-wind"),
-                              fall_hz=self.wind_fall_hz)
+                              fall_hz=self.wind_fall_hz, amplitudes=amplitudes)
         ref = line_multisine(t, kt, period, self.target_rms, derive_seed(seed, "target"), self.corner_hz)
         return wind, ref
 
@@ -188,6 +246,7 @@ class TargetForcing:
                 "band_hz": [self.f_min_hz, self.f_max_hz], "target_corner_hz": self.corner_hz,
                 "wind_fall_hz": self.wind_fall_hz,
                 "run_in_s": self.run_in_s, "paper_side_wind": self.paper_side_wind,
+                "wind_output_equivalent": self.wind_equivalent,
                 "note": "disturbance and target on interleaved lines (target = disturbance line + 1); "
                         "periodic over the record less the run-in"}
 
