@@ -104,15 +104,20 @@ def line_multisine(t, k, period_s: float, rms: float, seed: int, corner_hz: floa
     """
     t = np.asarray(t, dtype=float)
     f = np.asarray(k, dtype=float) / period_s
-    a = f / (f + corner_hz) if corner_hz > 0 else np.ones_like(f)
-    if fall_hz > 0:
-        a = a / (1.0 + f / fall_hz)
     phases = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, len(k))
+    sines = np.sin(2.0 * np.pi * np.outer(t - t[0], f) + phases)
     if amplitudes is not None:
-        return np.sin(2.0 * np.pi * np.outer(t - t[0], f) + phases) @ np.asarray(amplitudes, dtype=float)
-    x = np.sin(2.0 * np.pi * np.outer(t - t[0], f) + phases) @ a
+        return sines @ np.asarray(amplitudes, dtype=float)
+    x = sines @ _shape(f, corner_hz, fall_hz)
     sd = float(np.std(x))
     return x * (rms / sd) if sd > 0 else x
+
+
+def _shape(f, corner_hz: float, fall_hz: float = 0.0) -> np.ndarray:
+    """Relative line amplitudes at `f` (Hz): ``f / (f + corner_hz)`` (flat for 0), times
+    ``1 / (1 + f / fall_hz)`` for `fall_hz` > 0."""
+    a = f / (f + corner_hz) if corner_hz > 0 else np.ones_like(f)
+    return a / (1.0 + f / fall_hz) if fall_hz > 0 else a
 
 
 def line_amplitudes(k, period_s: float, rms: float, corner_hz: float = 0.0) -> np.ndarray:
@@ -134,8 +139,7 @@ def line_amplitudes(k, period_s: float, rms: float, corner_hz: float = 0.0) -> n
     ndarray
         One amplitude per line, the signal's units (the RMS of the sum is ``sqrt(sum a^2 / 2)``).
     """
-    f = np.asarray(k, dtype=float) / period_s
-    a = f / (f + corner_hz) if corner_hz > 0 else np.ones_like(f)
+    a = _shape(np.asarray(k, dtype=float) / period_s, corner_hz)
     return a * rms / np.sqrt(np.sum(a ** 2) / 2.0)
 
 

@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -210,6 +211,71 @@ def line_variances(run, lines) -> np.ndarray:
     return np.exp(np.polyval(coef, x))
 
 
+@dataclass(frozen=True)
+class LineData:
+    """A record's describing-function lines, as the equation-error fits read them.
+
+    Attributes
+    ----------
+    lines : ndarray of int
+        Bins of the forcing lines (in the analysis window's FFT).
+    s : ndarray
+        ``j omega`` at the lines, rad/s.
+    E, Y, U : ndarray
+        Fourier coefficients of the error, output and control at the lines.
+    w : ndarray
+        Each line's weight, 1 / the measured remnant's standard deviation there.
+    both : bool
+        The record has disturbance and target lines.
+    window_samples : int
+        Length of the analysis window, samples.
+    reason : str
+        Why the lines cannot be used ("" when they can; then the arrays may be empty).
+    """
+
+    lines: np.ndarray
+    s: np.ndarray
+    E: np.ndarray
+    Y: np.ndarray
+    U: np.ndarray
+    w: np.ndarray
+    both: bool
+    window_samples: int
+    reason: str = ""
+
+
+def line_data(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
+    """The lines of `run` in `band_hz` (Hz) over its analysis window, with their weights
+    (:func:`line_variances`), or the reason they cannot be used (``LineData.reason``).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        A record with multisine forcing (e = reference − output).
+    band_hz : (float, float)
+        Lines are used in this band, Hz.
+    """
+    run = windowed(run)
+    n = len(run.control)
+    lines = forcing_lines(run, band_hz)
+    d_lines, r_lines = _line_sets(run)
+    empty = np.zeros(0)
+    unusable = dict(lines=lines, s=empty, E=empty, Y=empty, U=empty, w=empty,
+                    both=bool(d_lines.size and r_lines.size), window_samples=n)
+    if lines.size < MIN_LINES:
+        return LineData(**unusable, reason=f"{lines.size} multisine forcing lines found (need {MIN_LINES}): "
+                                           "no describing function to test")
+    var = line_variances(run, lines)
+    if not np.all(np.isfinite(var)) or not np.max(var) > 0:
+        return LineData(**unusable, reason="no unforced bins between the forcing lines to measure the remnant")
+    U = np.fft.rfft(np.asarray(run.control, dtype=float))
+    Y = np.fft.rfft(np.asarray(run.output, dtype=float))
+    E = np.fft.rfft(np.asarray(run.reference, dtype=float) - np.asarray(run.output, dtype=float))
+    return LineData(lines=lines, s=1j * 2.0 * np.pi * np.fft.rfftfreq(n, run.dt)[lines], E=E[lines],
+                    Y=Y[lines], U=U[lines], w=1.0 / np.sqrt(np.maximum(var, np.max(var) * 1e-12)),
+                    both=unusable["both"], window_samples=n)
+
+
 def _predict(params, model, cab, s, E, Y):
     # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
     # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model).
@@ -289,27 +355,44 @@ def pilot_start(model, start: Mapping[str, float], k: int) -> dict:
     return base
 
 
-def _standard_errors(sol, free: Sequence[str], rss: float, dof: int) -> dict:
-    """Standard errors of the `free` parameters of a weighted least-squares fit (the
-    residual variance estimated as rss / dof: the lines' common scale is left to the data).
+def held_covariance(sol, rss: float, dof: int) -> np.ndarray:
+    """Covariance of a weighted least-squares solution's parameters (the residual variance
+    estimated as rss / dof: the lines' common scale is left to the data), with the
+    parameters that ended on a bound held there: their rows and columns are NaN.
 
-    A parameter that ends on a bound is held there (its standard error is NaN): left in,
-    its near-flat column (a neuromuscular mode at 60 rad/s, above every line) made the
-    delay's error 1-2 s where the delay itself was within 0.01 s of the truth (generator
-    runs, development seeds)."""
-    active = np.asarray(getattr(sol, "active_mask", np.zeros(len(free))), dtype=int) != 0
+    Left in, a held parameter's near-flat column (a neuromuscular mode at 60 rad/s, above
+    every line) made the delay's error 1-2 s where the delay itself was within 0.01 s of the
+    truth (generator runs, development seeds).
+
+    Parameters
+    ----------
+    sol : scipy.optimize.OptimizeResult
+        :func:`scipy.optimize.least_squares`'s result (``jac``, ``active_mask``).
+    rss : float
+        Its residual sum of squares.
+    dof : int
+        Degrees of freedom of the residual.
+    """
+    n = sol.jac.shape[1]
+    active = np.asarray(getattr(sol, "active_mask", np.zeros(n)), dtype=int) != 0
     keep = np.flatnonzero(~active)
-    out = {n_: math.nan for n_ in free}
+    cov = np.full((n, n), math.nan)
     if keep.size == 0:
-        return out
+        return cov
     try:
         j = sol.jac[:, keep]
-        cov = np.linalg.pinv(j.T @ j) * (rss / max(dof, 1))
+        cov[np.ix_(keep, keep)] = np.linalg.pinv(j.T @ j) * (rss / max(dof, 1))
     except np.linalg.LinAlgError:
-        return out
-    for i, col in enumerate(keep):
-        out[free[col]] = float(math.sqrt(max(cov[i, i], 0.0)))
-    return out
+        pass
+    return cov
+
+
+def _standard_errors(sol, free: Sequence[str], rss: float, dof: int) -> dict:
+    """Standard errors of the `free` parameters (:func:`held_covariance`; NaN for one held
+    on its bound)."""
+    cov = held_covariance(sol, rss, dof)
+    return {n_: float(math.sqrt(max(cov[i, i], 0.0))) if math.isfinite(cov[i, i]) else math.nan
+            for i, n_ in enumerate(free)}
 
 
 def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
@@ -345,18 +428,10 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         parameters; diagnose reads the pilot's own delay from them).
     """
 
-    run = windowed(run)
-    length = len(run.control)
-    lines = forcing_lines(run, band_hz)
-    if lines.size < MIN_LINES:
-        return {"available": False, "n_lines": int(lines.size),
-                "reason": f"{lines.size} multisine forcing lines found (need {MIN_LINES}): "
-                          "no describing function to test"}
-    n = len(run.control)
-    omega = 2.0 * np.pi * np.fft.rfftfreq(n, run.dt)
-    U = np.fft.rfft(np.asarray(run.control, dtype=float))
-    Y = np.fft.rfft(np.asarray(run.output, dtype=float))
-    E = np.fft.rfft(np.asarray(run.reference, dtype=float) - np.asarray(run.output, dtype=float))
+    ld = line_data(run, band_hz)
+    lines = ld.lines
+    if ld.reason:
+        return {"available": False, "n_lines": int(lines.size), "reason": ld.reason}
     original, expanded = PilotModel(), PilotModel(("motion_feedback",))
     cab = motion_block(plants)
     base = pilot_start(original, start, k)
@@ -365,31 +440,19 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     big = 1e3 * max(abs(base["Ke"]), 1.0)
     lo = np.array([0.0 if sign > 0 else -big, 1e-3, 1e-4, 0.0, 1.0, 0.02] + ([1e-3] if k == 2 else []))
     hi = np.array([big if sign > 0 else 0.0, 100.0, 10.0, 0.6, 60.0, 2.0] + ([20.0] if k == 2 else []))
-
-    # Remnant level at each line from the measured data between the lines (model-free).
-    s_all = 1j * omega
     x_start = [base[name] for name in free]
     starts = [x_start] + [[*x_start[:3], tau, *x_start[4:]] for tau in (0.15, 0.25, 0.35)]
-    s_l = s_all[lines]
-    var = line_variances(run, lines)
-    if not np.all(np.isfinite(var)) or not np.max(var) > 0:
-        return {"available": False, "n_lines": int(lines.size),
-                "reason": "no unforced bins between the forcing lines to measure the remnant"}
-    w = 1.0 / np.sqrt(np.maximum(var, np.max(var) * 1e-12))
+    data = (cab, ld.s, ld.E, ld.Y, ld.U)
 
     # An unweighted first fit serves as one more start (it no longer sets the weights).
-    _, p0, _ = _fit(original, base, free, lo, hi, starts, cab, s_l, E[lines], Y[lines], U[lines],
-                    np.ones(lines.size))
-    rss_o, p_o, sol_o = _fit(original, base, free, lo, hi, [[p0[n_] for n_ in free]] + starts, cab,
-                             s_l, E[lines], Y[lines], U[lines], w)
+    _, p0, _ = _fit(original, base, free, lo, hi, starts, *data, np.ones(lines.size))
+    rss_o, p_o, sol_o = _fit(original, base, free, lo, hi, [[p0[n_] for n_ in free]] + starts, *data, ld.w)
     gs = gain_scale(plants, k) if plants is not None else 1.0
     km0 = PilotModel(("motion_feedback",)).defaults(k, gs)["Km"]
     # The vestibular delay only where both line sets separate the two paths: with one set
     # the test sees their sum, and a free delay there cost a fifth of the named motion
     # runs of disturbance-only tasks for no gain.
-    d_lines, r_lines = _line_sets(run)
-    both = bool(d_lines.size and r_lines.size)
-    alternatives = (["Km"], ["Km", "tau_m"]) if both else (["Km"],)
+    alternatives = (["Km"], ["Km", "tau_m"]) if ld.both else (["Km"],)
     dof = 2 * int(lines.size) - len(free) - len(alternatives[-1])
     if dof < 1:
         return {"available": False, "n_lines": int(lines.size),
@@ -404,13 +467,11 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         delays = [[0.0], [0.15]] if "tau_m" in extra else [[]]
         starts_e = [[p_o[n_] for n_ in free] + [km] + tm
                     for km in (1e-6, km0, 10 * km0, 0.5 * abs(p_o["Ke"])) for tm in delays]
-        rss_e, p_e, sol = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, cab, s_l, E[lines],
-                               Y[lines], U[lines], w)
+        rss_e, p_e, sol = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, ld.w)
         # Exchange of optima: the original searched again from the expanded optimum's core
         # parameters, so that LR measures what Km adds, not a better local optimum the
         # expanded search happened to find for the shared parameters.
-        rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], cab,
-                                    s_l, E[lines], Y[lines], U[lines], w)
+        rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], *data, ld.w)
         if rss_o2 < rss_o:
             rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
         fits.append((extra, rss_e, p_e, sol))
@@ -433,7 +494,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         km_se = float(math.sqrt(max(cov[len(free), len(free)], 0.0)))
     except np.linalg.LinAlgError:
         km_se = math.nan
-    return {"available": True, "n_lines": int(lines.size), "window_samples": int(length),
+    return {"available": True, "n_lines": int(lines.size), "window_samples": ld.window_samples,
             "parameters_original": {n_: float(v) for n_, v in p_o.items()},
             "parameters_expanded": {n_: float(v) for n_, v in p_e.items()},
             "standard_errors_original": _standard_errors(sol_o, free, rss_o, dof + 1),

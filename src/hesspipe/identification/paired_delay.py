@@ -22,7 +22,7 @@ import numpy as np
 from ..core.errors import HesspipeError
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
-from .motion_test import MIN_LINES, _predict, best_least_squares, forcing_lines, line_variances, pilot_start, windowed
+from .motion_test import _predict, best_least_squares, held_covariance, line_data, pilot_start
 
 SHARED = ("K1", "1/T1", "wn", "zn", "1/T2")
 """Pilot parameters common to the two runs (1/T2 for k = 2 only). (K1 each run's own too
@@ -32,21 +32,10 @@ OWN = ("Ke", "tau0")
 
 
 def _lines(run, band_hz):
-    run = windowed(run)
-    lines = forcing_lines(run, band_hz)
-    where = run.source or run.id
-    if lines.size < MIN_LINES:
-        raise HesspipeError(f"{where}: {lines.size} multisine forcing lines found; expected at least "
-                            f"{MIN_LINES} for the describing function")
-    var = line_variances(run, lines)
-    if not np.all(np.isfinite(var)) or not np.max(var) > 0:
-        raise HesspipeError(f"{where}: no unforced bins between the forcing lines to measure the remnant")
-    n = len(run.control)
-    s = 1j * 2.0 * np.pi * np.fft.rfftfreq(n, run.dt)[lines]
-    U = np.fft.rfft(np.asarray(run.control, dtype=float))[lines]
-    Y = np.fft.rfft(np.asarray(run.output, dtype=float))[lines]
-    E = np.fft.rfft(np.asarray(run.reference, dtype=float) - np.asarray(run.output, dtype=float))[lines]
-    return s, E, Y, U, 1.0 / np.sqrt(np.maximum(var, np.max(var) * 1e-12))
+    ld = line_data(run, band_hz)
+    if ld.reason:
+        raise HesspipeError(f"{run.source or run.id}: {ld.reason}")
+    return ld.s, ld.E, ld.Y, ld.U, ld.w
 
 
 def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], Mapping[str, float]], *,
@@ -123,13 +112,9 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
     rss, sol = best_least_squares(resid, starts, lo, hi, "paired delay: no joint fit of the two "
                                   "describing functions converged")
     dof = max(sol.fun.size - sol.x.size, 1)
-    # Parameters that end on a bound are held there (motion_test._standard_errors).
-    keep = np.flatnonzero(np.asarray(sol.active_mask) == 0)
-    se = math.nan
-    if i_r in keep and i_b in keep:
-        cov = np.linalg.pinv(sol.jac[:, keep].T @ sol.jac[:, keep]) * (rss / dof)
-        jr, jb = int(np.flatnonzero(keep == i_r)[0]), int(np.flatnonzero(keep == i_b)[0])
-        se = float(math.sqrt(max(cov[jr, jr] + cov[jb, jb] - 2.0 * cov[jr, jb], 0.0)))
+    cov = held_covariance(sol, rss, dof)     # NaN where a delay ended on a bound
+    var = cov[i_r, i_r] + cov[i_b, i_b] - 2.0 * cov[i_r, i_b]
+    se = float(math.sqrt(max(var, 0.0))) if math.isfinite(var) else math.nan
     x = sol.x
     return {"difference_s": float(x[i_r] - x[i_b]), "se_s": se, "delay_s": float(x[i_r]),
             "baseline_delay_s": float(x[i_b]),
