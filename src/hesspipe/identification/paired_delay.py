@@ -73,7 +73,7 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
     model = PilotModel()
     cab = motion_block(plants)
     shared = [n for n in SHARED if n != "1/T2" or k == 2]
-    own = [n for n in OWN if n != "1/T2" or k == 2]
+    own = list(OWN)
     bases = [pilot_start(model, st, k) for st in starts]
     big = 1e3 * max(abs(bases[0]["Ke"]), abs(bases[1]["Ke"]), 1.0)
     box = {"K1": (1e-3, 100.0), "1/T1": (1e-4, 10.0), "wn": (1.0, 60.0), "zn": (0.02, 2.0),
