@@ -199,26 +199,28 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
 
     # Multisine lines: the describing function judges motion and delay and gives the
     # pilot's own dynamics (phase-aware); the baseline starts from them.
-    start = base.defaults(k=cfg.k)
-
     k_df = choose_k(plants)[0]
     ev = df_evidence(run, plants, base.defaults(k=k_df), k=k_df, cfg=cfg, baseline_run=baseline_run) \
         if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else None
-    if ev is not None:
-        start.update({n: v for n, v in ev.dynamics.items() if n in start and n not in cfg.free})
-    # The baseline's own parameters get the same grid start as a candidate's (the
+    dynamics = {n: v for n, v in (ev.dynamics if ev else {}).items() if n not in cfg.free}
+    # Starts, in order: the describing function's dynamics (the pilot's own), then the
+    # defaults, first with the configured order and then with Hess's rule's. The
+    # describing function's dynamics need not close the loop (an original model fitted
+    # to a motion pilot's lines can land on a 3 rad/s neuromuscular mode), and the
+    # configured order may not close it at all (k = 1 on a K/s^2-like plant); the
+    # baseline's own parameters get the same grid start as a candidate's (the
     # output-error surface has several valleys in Ke and K1).
-    current = problem.fit(base, start, grid=problem.free_parameters(base))
-    if not current.stable and ev is not None:  # the describing function's dynamics did not close
-        current = problem.fit(base, base.defaults(k=cfg.k), grid=problem.free_parameters(base))
-    if not current.stable and k_df != cfg.k:
-        # The configured order cannot close the loop on these plants (k = 1 on a K/s^2-like
-        # plant: every double-integrator run was refused); Hess's rule's order can.
-        cfg = replace(cfg, k=k_df)
-        problem = Problem(run, plants, cfg, seed)
-        start = {**base.defaults(k=k_df), **{n: v for n, v in (ev.dynamics if ev else {}).items()
-                                             if n in start and n not in cfg.free}}
-        current = problem.fit(base, start, grid=problem.free_parameters(base))
+    for k in dict.fromkeys((cfg.k, k_df)):
+        if k != cfg.k:
+            cfg = replace(cfg, k=k)
+            problem = Problem(run, plants, cfg, seed)
+        starts = ([{**base.defaults(k=k), **dynamics}] if dynamics else []) + [base.defaults(k=k)]
+        for start in starts:
+            current = problem.fit(base, start, grid=problem.free_parameters(base))
+            if current.stable:
+                break
+        if current.stable:
+            break
     if not current.stable:
         raise HesspipeError(f"{run.source or run.id}: no stable {base.name} pilot found for these data "
                             "and plants; cannot diagnose")
