@@ -3,7 +3,8 @@
 Every run is drawn by :mod:`hesspipe.humanlike` (fine-step block simulation of a
 human-like Hess pilot, literature parameter ranges, multisine forcing, shaped remnant:
 no hesspipe model code), written to a temporary folder with its ``plants.json``, read
-back and diagnosed with the original model and every registered candidate, 70 s at 50 Hz.
+back and diagnosed with the original model and every registered candidate, 70 s at 50 Hz
+(``--fs``, ``--T-m``: another logger and record length, e.g. 100 Hz and 81.92 s).
 
 Cases: hidden effect (none, motion_feedback with Km from weak to strong, extra_delay
 0.04-0.1 s, an elevated remnant, dutch_roll, actuator_lag, and two at once:
@@ -32,7 +33,7 @@ Usage::
     python benchmarks/bench_diagnose.py [--seeds 10] [--seed-start 0] [--quiet] [--plants paper,roll]
                                         [--outputs rate,angle] [--tasks disturbance,both]
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
-                                        [--tau-m 0.15] [--paired]
+                                        [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired]
 
 ``--paired`` gives every diagnosis a baseline run of the same pilot (``humanlike.retest``:
 the aircraft as drawn, no pilot-side effect, the pilot's run-to-run scatter, its own
@@ -66,12 +67,11 @@ PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 def run_case(folder, plant, output, task, effect, seed, paired=False, **draw):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
-    kw = dict(disturbance="wind") if plant == "paper" else {}
+    kw = dict(disturbance="wind", fs=50.0, T_m=70.0) if plant == "paper" else dict(fs=50.0, T_m=70.0)
     kw.update(draw)
     name = f"{plant}-{output}-{task}-{effect}-{seed}".replace("/", "_")   # "1/s", "K/s2"
     try:
-        spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
-                          output=output, name=name, **kw)
+        spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, output=output, name=name, **kw)
     except HesspipeError as exc:  # the generator found no pilot in its ranges: not diagnose's doing
         return None, str(exc)
     try:
@@ -128,6 +128,9 @@ def main(argv=None) -> int:
                     help="the generator's Km/Ke range 'lo,hi' (default its literature range)")
     ap.add_argument("--tau-m", type=float, default=None,
                     help="the generator's vestibular delay, s (default its own, 0)")
+    ap.add_argument("--fs", type=float, default=None, help="logged rate, Hz (default 50)")
+    ap.add_argument("--T-m", type=float, default=None,
+                    help="measured length, s (default 70; fs*T_m whole, e.g. 100 Hz and 81.92 s)")
     ap.add_argument("--paired", action="store_true",
                     help="give diagnose a baseline run of the same pilot (humanlike.retest: no "
                          "pilot-side effect, the pilot's run-to-run scatter, another remnant)")
@@ -136,6 +139,10 @@ def main(argv=None) -> int:
     draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}
     if args.tau_m is not None:
         draw["tau_m"] = args.tau_m
+    if args.fs is not None:
+        draw["fs"] = args.fs
+    if args.T_m is not None:
+        draw["T_m"] = args.T_m
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     rows, times, failures, skipped = {}, [], [], []
     motion = {True: [0, 0], False: [0, 0]}  # hidden motion? -> [runs naming it, runs]

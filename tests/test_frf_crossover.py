@@ -88,3 +88,24 @@ def test_smoother_fits_its_form_and_rejects_what_it_cannot_follow():
     H, sig = _points(notch, w, 0.02, 2)
     assert not consistent(fit_smooth(w, H, sig))
     assert fit_smooth(w[:3], H[:3], sig[:3]) is None
+
+
+def test_draws_without_a_crossing_raise_no_warning():
+    # Lines so noisy that many of the draws behind the std have no fall of |L| through 1:
+    # those draws are dropped, without a log-of-zero RuntimeWarning on the user's screen.
+    import warnings
+
+    import control as ct
+
+    from hesspipe.identification.frf import Response
+    from hesspipe.identification.frf_crossover import nonparametric_crossover
+
+    w = np.geomspace(0.3, 12.0, 10)
+    H = 4.4066 * np.exp(-0.34044j * w) / (1 + 0.05j * w)
+    rel = np.array([0.339, 0.065, 1.483, 1.487, 0.404, 0.412, 1.168, 1.216, 0.686, 1.113])
+    sigma = rel * np.abs(H)
+    resp = Response(freq_rad_s=w, H=H, sigma=sigma, bins=np.arange(w.size))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        c = nonparametric_crossover(resp, ct.tf([1.0], [1.0, 0.0]), seed=3)
+    assert np.isfinite(c.frequency_rad_s) and np.isfinite(c.frequency_std)

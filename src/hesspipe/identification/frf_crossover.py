@@ -329,6 +329,9 @@ def _cross(w, H, rel, plant, kernel: float = None, start: float = None
             tt = f[rows, j] / (f[rows, j] - f[rows, j + 1])
             wc = np.exp(lg[j] + tt * (lg[j + 1] - lg[j]))
         ok &= found
+        # A row with no fall keeps its previous estimate (it is dropped below), so no
+        # log of 0 or nan warns on a user's screen.
+        wc = np.where(ok & np.isfinite(wc) & (wc > 0), wc, wc0)
         done = np.abs(np.log(wc / wc0)) < 1e-3
         wc0 = np.where(ok, wc, wc0)
         if np.all(done | ~ok):
