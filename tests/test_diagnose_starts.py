@@ -11,9 +11,9 @@ runs ("no stable original pilot found"); the defaults with Hess's rule's order c
 from __future__ import annotations
 
 import pytest
-from humanlike_trials import bench_diagnose_trial
 
 from hesspipe.diagnose.workflow import diagnose
+from humanlike_trials import bench_diagnose_trial
 
 PILOT_SIDE = {"motion_feedback", "otoliths", "extra_delay"}
 
