@@ -15,6 +15,10 @@ comparing fits:
   ``close_share`` of the residual power of the nominal plants *and* that improvement is
   significant (:func:`evidence_p`, level ``alpha`` Bonferroni-corrected over the
   candidates): an aircraft-side name rests on evidence, as every other name does.
+  When the plants as given already fit at ``fit_ok`` or better, only ``actuator_lag``
+  is asked, by the same two rules: an integrating display (roll angle) can hide a
+  0.05-0.15 s lag behind a 90 % fit, while the richer candidates find evidence in the
+  small model error every real pair of plants leaves.
 * **Is the file wrong?** Evidence sought: the control or disturbance sign flipped, the
   paths mis-scaled (both fitted by linear least squares on the two path responses:
   a negative gain is a sign error, a gain outside [1/``scale_ratio``, ``scale_ratio``] a
