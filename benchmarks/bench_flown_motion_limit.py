@@ -46,7 +46,6 @@ from scipy import stats
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_fly_pilot as bfp  # noqa: E402  (the same pilots, plants and forcing)
-
 from hesspipe.core.errors import HesspipeError  # noqa: E402
 from hesspipe.core.seeds import derive_seed  # noqa: E402
 from hesspipe.flight.closed_loop import fly_pilot_record  # noqa: E402
@@ -55,8 +54,8 @@ from hesspipe.identification.frf import NEIGHBOURS  # noqa: E402
 from hesspipe.identification.motion_test import (  # noqa: E402
     TAU_M_MAX,
     _fit,
-    _predict,
     _line_sets,
+    _predict,
     line_data,
     motion_test,
     pilot_start,
