@@ -28,6 +28,7 @@ Usage::
 
     nice python benchmarks/bench_fly_pilot.py [--pilots 20] [--diag-seeds 4] [--skip speed,envelope,ident,diagnose]
                                               [--cohort crossover_model|table1] [--diag-cohorts table1,crossover_model]
+                                              [--diag-seed-start 0]
                                               [--forcing paper|two-input] [--diag-cases baseline,extra_delay] [--paired]
 """
 
@@ -277,10 +278,10 @@ DIAG_CASES = {
 EXTRA_CASES = {"extra_delay_long": (("extra_delay",), {"tau_x": (0.25, 0.4)})}
 
 
-def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
+def section_diagnose(plants, work: Path, seeds: int, how: str, seed_start: int = 0) -> None:
     from hesspipe.diagnose.workflow import diagnose
 
-    print(f"\n== 4. diagnose (baseline 'original') on JSBSim-flown runs ({FORCING} forcing), {seeds} seeds per case, "
+    print(f"\n== 4. diagnose (baseline 'original') on JSBSim-flown runs ({FORCING} forcing), {seeds} seeds per case (from {seed_start}), "
           f"pilots of the '{how}' draw" + (" (tau0 = 0.1 s and 1/T1 = 0.01 as diagnose's baseline holds them: "
                                           "the hidden effect is the only pilot-side difference)" if how == "table1" else
                                           " (the pipeline's cohort: tau0 ~0.2 s, 1/T1 by Hess's rule, which "
@@ -288,7 +289,7 @@ def section_diagnose(plants, work: Path, seeds: int, how: str) -> None:
     g = gain_scale(plants)
     for case, (effects, ranges) in CASES.items():
         named, named_lin, rows = [], [], []
-        for s in range(seeds):
+        for s in range(seed_start, seed_start + seeds):
             pid = f"diag-{case}-{s}"
             try:
                 pseed, truth, params = draw(plants, pid, 7, (), how)   # a baseline pilot (original + remnant)
@@ -350,6 +351,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pilots", type=int, default=20)
     ap.add_argument("--diag-seeds", type=int, default=4)
+    ap.add_argument("--diag-seed-start", type=int, default=0,
+                    help="first seed of the diagnose section (reported figures: 0; develop on others)")
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--skip", default="", help="comma list of sections to skip: speed,envelope,ident,diagnose "
                     "(skipping envelope skips ident too)")
@@ -386,7 +389,7 @@ def main(argv=None) -> int:
             section_envelope_and_identification(plants, root, args.pilots, ident="ident" not in skip)
         if "diagnose" not in skip:
             for how in args.diag_cohorts.split(","):
-                section_diagnose(plants, root, args.diag_seeds, how)
+                section_diagnose(plants, root, args.diag_seeds, how, args.diag_seed_start)
     return 0
 
 

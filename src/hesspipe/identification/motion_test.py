@@ -74,6 +74,10 @@ ALPHA = 0.05
 MIN_LINES = 4
 SMOOTH_ORDER = 2
 """Order of the polynomial in log frequency that smooths the lines' remnant levels."""
+MIN_LINE_SNR = 10.0
+"""A disturbance line's U/E measures the pilot's describing function for the remnant levels
+(:func:`line_variances`) only when its error power is at least this many times its unforced
+neighbours' (then the remnant's share of E there is at most about 30 % in amplitude)."""
 TAU_M_MAX = 0.25
 """Upper bound of the test's vestibular delay, s (the literature's 0.1-0.2 s, shorter than
 the visual delay; SPEC.md "Describing functions"). At 0.4 s the delayed path absorbed model
@@ -171,6 +175,15 @@ def line_variances(run, lines) -> np.ndarray:
     model's fit: fitted first, it can absorb part of the remnant-driven bins and understate
     the remnant at the low lines (bench_motion_limit: 1.5-7x on angle tasks).
 
+    Only levels measured with a usable H enter the smoothing: H's line must stand
+    :data:`MIN_LINE_SNR` times above the error power of its unforced neighbours. Where the
+    remnant makes up most of E at the line, U/E there is the loop's response to the remnant
+    (about the inverse plant, far below the pilot's gain), and ``U_j - H E_j`` at the
+    neighbours collapses with it (at high loop gain it scales with ``|H_used / H_true|^2``).
+    Lines outside the usable ones' frequency range take the smoothed level, but never less
+    than at the nearest usable line: an extrapolated quadratic that falls would over-weight
+    exactly the lines the remnant dominates.
+
     Parameters
     ----------
     run : hesspipe.core.formats.Run
@@ -190,7 +203,9 @@ def line_variances(run, lines) -> np.ndarray:
     if src.size == 0:
         src = np.asarray(lines, dtype=int)
     H_src = U[src] / E[src]
-    H = H_src[np.argmin(np.abs(np.asarray(lines)[:, None] - src[None, :]), axis=1)]
+    nearest = np.argmin(np.abs(np.asarray(lines)[:, None] - src[None, :]), axis=1)
+    H = H_src[nearest]
+    usable = (line_snr(E, src, np.union1d(d_lines, r_lines).astype(int)) >= MIN_LINE_SNR)[nearest]
     # Only bins within NEIGHBOURS of the line: frf's walk further out reaches, at the lowest
     # lines, bins several times the line's frequency, where the remnant is weaker; the
     # over-weighted low lines then named motion in 3 of 11 static double-integrator runs
@@ -200,6 +215,12 @@ def line_variances(run, lines) -> np.ndarray:
     ok = np.isfinite(raw) & (raw > 0)
     if ok.sum() < SMOOTH_ORDER + 2:
         return raw
+    # JSBSim-flown runs (SYNTHETIC, bench_flown_motion_limit, seeds 0-15): at the lowest
+    # 2-6 lines E was 80-90 % remnant and these levels came out 5-50x below the true
+    # remnant's; those lines' weight then buried the motion path (ideal weights: 13.4 of 16
+    # expected named; these: 9.4).
+    if (ok & usable).sum() >= SMOOTH_ORDER + 2:
+        ok = ok & usable
     # Between interleaved lines few bins are free, and H at a line carries the line's own
     # remnant: each raw level scatters several-fold. The remnant's spectrum is smooth, so
     # the lines share one: a quadratic in log frequency fitted to the log levels. Against
@@ -208,7 +229,42 @@ def line_variances(run, lines) -> np.ndarray:
     # target runs (1.28 is the scatter of one exponential draw: nothing left to explain).
     x = np.log(np.asarray(lines, dtype=float))
     coef = np.polyfit(x[ok], np.log(raw[ok]), SMOOTH_ORDER)
-    return np.exp(np.polyval(coef, x))
+    level = np.polyval(coef, x)
+    lo, hi = x[ok].min(), x[ok].max()
+    level[x < lo] = np.maximum(level[x < lo], np.polyval(coef, lo))
+    level[x > hi] = np.maximum(level[x > hi], np.polyval(coef, hi))
+    return np.exp(level)
+
+
+def line_snr(E, lines, all_lines) -> np.ndarray:
+    """Power of the error at each line over its mean power at the line's unforced neighbours
+    (within :data:`~hesspipe.identification.frf.NEIGHBOURS` bins): how far the forcing stands
+    above the remnant in E there.
+
+    Parameters
+    ----------
+    E : ndarray, complex
+        Fourier coefficients of the displayed error over the analysis window.
+    lines : ndarray of int
+        Bins of the lines to rate.
+    all_lines : ndarray of int
+        Every forcing line's bin (not neighbours).
+
+    Returns
+    -------
+    ndarray
+        One power ratio per line (dimensionless; inf without unforced neighbours).
+    """
+    excited = np.zeros(E.size, dtype=bool)
+    excited[np.asarray(all_lines, dtype=int)] = True
+    excited[0] = True
+    out = np.full(len(lines), math.inf)
+    for i, k in enumerate(lines):
+        nb = np.arange(max(k - NEIGHBOURS, 1), min(k + NEIGHBOURS + 1, E.size))
+        nb = nb[~excited[nb]]
+        if nb.size:
+            out[i] = np.abs(E[k]) ** 2 / np.mean(np.abs(E[nb]) ** 2)
+    return out
 
 
 @dataclass(frozen=True)
