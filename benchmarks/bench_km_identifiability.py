@@ -137,7 +137,7 @@ def target_study(plants, corner, args, root):
     print(f"\ntwo-input task ({design.n_lines} wind lines, {design.wind_rms:g} ft/s, and {design.n_lines} "
           f"roll-rate target lines, {design.target_rms:g} rad/s, {design.f_min_hz:g}-{design.f_max_hz:g} Hz, "
           "no paper's side wind); df criterion at both line sets")
-    for i in range(args.target_pilots):
+    for i in range(args.pilot_start, args.pilot_start + args.target_pilots):
         pid = f"pilot{i + 1:02d}"
         pseed, truth, params = B.draw(plants, pid, 1, ("motion_feedback",))
         for case, (tg, duration, remnant) in cases.items():
