@@ -255,16 +255,12 @@ def line_snr(E, lines, all_lines) -> np.ndarray:
     ndarray
         One power ratio per line (dimensionless; inf without unforced neighbours).
     """
-    excited = np.zeros(E.size, dtype=bool)
-    excited[np.asarray(all_lines, dtype=int)] = True
-    excited[0] = True
-    out = np.full(len(lines), math.inf)
-    for i, k in enumerate(lines):
-        nb = np.arange(max(k - NEIGHBOURS, 1), min(k + NEIGHBOURS + 1, E.size))
-        nb = nb[~excited[nb]]
-        if nb.size:
-            out[i] = np.abs(E[k]) ** 2 / np.mean(np.abs(E[nb]) ** 2)
-    return out
+    lines = np.asarray(lines, dtype=int)
+    # frf's neighbour walk with U = E and H = 0: the mean |E_j|^2 at the unforced bins.
+    floor = _neighbour_residual_power(E, E, np.zeros(lines.size), lines, np.asarray(all_lines, dtype=int),
+                                      within=NEIGHBOURS)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(np.isfinite(floor), np.abs(E[lines]) ** 2 / floor, math.inf)
 
 
 @dataclass(frozen=True)
