@@ -154,7 +154,8 @@ def _aircraft_candidates(p: _Paths, plants, nominal_residual: np.ndarray, only=N
     in the path(s) it changes; the disturbance path's gain and the slow modes' initial
     conditions are refitted linearly (:meth:`_Paths.residual`) for every candidate alike.
     `nominal_residual` is the plants' own refit (a rate limit on a constant control is no
-    change: it keeps that residual). `only` (ids) limits the candidates fitted."""
+    change: it keeps that residual). `only` (ids) limits the candidates fitted. Each
+    explanation carries :func:`evidence_p` of its improvement over that refit."""
     residuals = {}
     only = set(_N_PARAMETERS) if only is None else set(only)
 
@@ -226,7 +227,7 @@ def _aircraft_candidates(p: _Paths, plants, nominal_residual: np.ndarray, only=N
         out.append(Explanation("actuator_lag", "aircraft", p.fit_of(residuals["actuator_lag"]),
                                {"tau_a": float(x[0])}, "a first-order actuator between the control and the aircraft"))
     if "rate_limit" not in only:
-        return out, residuals
+        return _with_evidence(out, residuals, nominal_residual, p.dt), residuals
 
     u = p.cols["control"]
     top = float(np.max(np.abs(np.diff(u)))) / p.dt
@@ -244,7 +245,19 @@ def _aircraft_candidates(p: _Paths, plants, nominal_residual: np.ndarray, only=N
         best = (p.fit_of(residuals["rate_limit"]), math.exp(sol.x))
     out.append(Explanation("rate_limit", "aircraft", best[0], {"rate": best[1]},
                            "the surface follows the control at a bounded rate (units/s)"))
-    return out, residuals
+    return _with_evidence(out, residuals, nominal_residual, p.dt), residuals
+
+
+def _with_evidence(out, residuals, nominal_residual, dt):
+    """`out` with each candidate's p-value against the plants' own refit (:func:`evidence_p`)."""
+    return [replace(e, p_value=evidence_p(nominal_residual, residuals[e.id], _N_PARAMETERS[e.id], dt))
+            for e in out]
+
+
+def _terms(e: Explanation) -> str:
+    """``(how; name=value, ...)`` of an explanation, for a finding's message."""
+    return (f"({e.how}; " + ", ".join(f"{k}={v:.3g}" for k, v in e.parameters.items() if isinstance(v, float))
+            + ")")
 
 
 def _file_candidates(p: _Paths, plants) -> list[Explanation]:
@@ -323,20 +336,18 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
         # closed half of the folded-down drift of 2 of 9 double-integrator baselines; the
         # lag's p stayed >= 0.1 on all of them.
         level = alpha / len(_N_PARAMETERS)  # Bonferroni over every candidate, as if all were tried
-        tried, res = _aircraft_candidates(p, plants, nominal, only=("actuator_lag",))
-        tried = [replace(e, p_value=evidence_p(nominal, res[e.id], 1, p.dt)) for e in tried]
+        tried, _ = _aircraft_candidates(p, plants, nominal, only=("actuator_lag",))
         closing = [e for e in tried if e.p_value < level and _residual_share(e, ref) <= 1.0 - close_share]
         if not closing:
             return PlantFinding("match", f0, explanations=(ref,), message=match)
         best = max(closing, key=lambda e: e.fit_percent)
         msg = (f"{match}; yet {best.id} closes {100 * (1 - _residual_share(best, ref)):.0f} % of what is "
                f"left: fit {best.fit_percent:.1f} % (improvement p = {best.p_value:.2g} < {level:.2g}) "
-               f"({best.how}; " + ", ".join(f"{k}={v:.3g}" for k, v in best.parameters.items()) + ")")
+               + _terms(best))
         expl = tuple(sorted(tried + [ref], key=lambda e: -e.fit_percent))
         return PlantFinding("aircraft", f0, best.id, dict(best.parameters), expl, msg)
     tried, res = _aircraft_candidates(p, plants, nominal)
-    tried = [replace(e, p_value=evidence_p(nominal, res[e.id], _N_PARAMETERS[e.id], p.dt))
-             for e in tried] + [ref]
+    tried = tried + [ref]
     air = [e for e in tried if e.kind == "aircraft"]
     # An aircraft-side name rests on evidence, the bar of every other candidate: an
     # improvement significant after a Bonferroni correction (evidence_p).
@@ -378,8 +389,7 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
         return PlantFinding("wrong_file", f0, best_file.id, dict(best_file.parameters), expl, msg)
     if best_air in supported and _residual_share(best_air, ref) <= 1.0 - close_share:
         msg = (f"{head}; {best_air.id} closes the gap: fit {best_air.fit_percent:.1f} % "
-               f"(improvement p = {best_air.p_value:.2g} < {level:.2g}) "
-               f"({best_air.how}; " + ", ".join(f"{k}={v:.3g}" for k, v in best_air.parameters.items() if isinstance(v, float)) + ")")
+               f"(improvement p = {best_air.p_value:.2g} < {level:.2g}) " + _terms(best_air))
         return PlantFinding("aircraft", f0, best_air.id, dict(best_air.parameters), expl, msg)
     msg = (f"{head}; no aircraft-side candidate or file error closes it (best {expl[0].id}: "
            f"fit {expl[0].fit_percent:.1f} %; best-supported aircraft improvement p = "
