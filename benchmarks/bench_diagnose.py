@@ -34,6 +34,12 @@ Usage::
                                         [--outputs rate,angle] [--tasks disturbance,both]
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
                                         [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired]
+                                        [--pilot precision]
+
+``--pilot precision`` draws McRuer precision pilots instead of Hess-structured ones (with
+motion: the multimodal model of motion experiments, its own canal model; see
+``hesspipe.humanlike.pilots``): pilots whose structure is not the one diagnose fits, as
+real humans' is not.
 
 ``--paired`` gives every diagnosis a baseline run of the same pilot (``humanlike.retest``:
 the aircraft as drawn, no pilot-side effect, the pilot's run-to-run scatter, its own
@@ -64,14 +70,16 @@ EFFECTS = ("none", "motion_feedback", "extra_delay", "remnant", "dutch_roll", "a
 PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 
 
-def run_case(folder, plant, output, task, effect, seed, paired=False, **draw):
+def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hess", **draw):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind", fs=50.0, T_m=70.0) if plant == "paper" else dict(fs=50.0, T_m=70.0)
     kw.update(draw)
     name = f"{plant}-{output}-{task}-{effect}-{seed}".replace("/", "_")   # "1/s", "K/s2"
+    if pilot != "hess":
+        name += f"-{pilot}"
     try:
-        spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, output=output, name=name, **kw)
+        spec = draw_trial(plant, s, task=task, pilot=pilot, effects=effects, output=output, name=name, **kw)
     except HesspipeError as exc:  # the generator found no pilot in its ranges: not diagnose's doing
         return None, str(exc)
     try:
@@ -131,6 +139,9 @@ def main(argv=None) -> int:
     ap.add_argument("--fs", type=float, default=None, help="logged rate, Hz (default 50)")
     ap.add_argument("--T-m", type=float, default=None,
                     help="measured length, s (default 70; fs*T_m whole, e.g. 100 Hz and 81.92 s)")
+    ap.add_argument("--pilot", choices=("hess", "precision"), default="hess",
+                    help="the generator's pilot structure (precision: McRuer's, with the "
+                         "multimodal model's vestibular path under motion)")
     ap.add_argument("--paired", action="store_true",
                     help="give diagnose a baseline run of the same pilot (humanlike.retest: no "
                          "pilot-side effect, the pilot's run-to-run scatter, another remnant)")
@@ -143,7 +154,8 @@ def main(argv=None) -> int:
         draw["fs"] = args.fs
     if args.T_m is not None:
         draw["T_m"] = args.T_m
-    print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
+    print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike "
+          f"({args.pilot} pilots).")
     rows, times, failures, skipped = {}, [], [], []
     motion = {True: [0, 0], False: [0, 0]}  # hidden motion? -> [runs naming it, runs]
     # (hidden motion?, one forcing function?) -> [named, "cannot tell", runs]
@@ -155,7 +167,8 @@ def main(argv=None) -> int:
             firsts, both, false_pilot, remnant_named, aside = Counter(), 0, 0, 0, 0
             for seed in range(args.seed_start, args.seed_start + args.seeds):
                 try:
-                    d, cpu = run_case(tmp, plant, output, task, effect, seed, args.paired, **draw)
+                    d, cpu = run_case(tmp, plant, output, task, effect, seed, args.paired,
+                                      args.pilot, **draw)
                 except HesspipeError as exc:
                     failures.append(f"{plant}/{output}/{task}/{effect}/{seed}: {exc}")
                     print("  REFUSED", failures[-1], flush=True)

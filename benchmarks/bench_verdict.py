@@ -1,6 +1,6 @@
 """The compare-pilots motion verdict on cohorts from the INDEPENDENT generator.
 
-For each plant and seed, two SYNTHETIC cohorts of hess-structured human-like pilots are
+For each plant and seed, two SYNTHETIC cohorts of human-like pilots (hess-structured, or ``--pilot precision``) are
 drawn by :func:`hesspipe.humanlike.draw_trial` (a draw whose pilot misses the
 generator's crossover ranges is redrawn with the next sub-seed) (fine-step time-domain simulation that
 shares no modelling code with hesspipe's pilot model; multisine disturbance lines,
@@ -13,6 +13,10 @@ contrast, the PSD-fitness improvement 1 - expanded/original of the paper's crite
     python benchmarks/bench_verdict.py [--n 8] [--seeds 1,2,3] [--plants roll,1/s]
                                        [--task disturbance] [--T 45] [--fs 60]
                                        [--output rate|angle] [--km-ratio 0.2,1.0]
+                                       [--pilot precision] [--tau-m 0.15]
+
+``--pilot precision``: McRuer precision pilots (with motion, the multimodal model's
+vestibular path and canals), a structure other than the Hess model compare-pilots fits.
 
 ``--output angle``: the display shows the angle and the cab turns at its rate (the
 generator's plants carry ``motion_path`` s/(0.01 s + 1)); with ``--task both`` this is the
@@ -36,7 +40,7 @@ from hesspipe.pilots.compare import compare_pilots
 
 
 def cohort(folder: Path, plant: str, n: int, seed: int, effects, task: str, T: float, fs: float,
-           **draw) -> int:
+           pilot: str = "hess", **draw) -> int:
     """Write `n` trials; a draw with no pilot meeting the generator's crossover/phase-margin
     ranges is redrawn with the next sub-seed. Returns the number of redraws."""
     redraws = 0
@@ -44,7 +48,7 @@ def cohort(folder: Path, plant: str, n: int, seed: int, effects, task: str, T: f
         for attempt in range(50):
             s = derive_seed(seed, "bench_verdict", plant, task, ",".join(effects), str(i), str(attempt))
             try:
-                spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, T_m=T, fs=fs,
+                spec = draw_trial(plant, s, task=task, pilot=pilot, effects=effects, T_m=T, fs=fs,
                                   name=f"pilot{i + 1:02d}", **draw)
             except HesspipeError:
                 redraws += 1
@@ -64,11 +68,15 @@ def main(argv=None) -> None:
     ap.add_argument("--fs", type=float, default=60.0)
     ap.add_argument("--output", default="rate", choices=("rate", "angle"))
     ap.add_argument("--km-ratio", default=None, help="Km/Ke range 'lo,hi' (default the generator's)")
+    ap.add_argument("--pilot", choices=("hess", "precision"), default="hess")
+    ap.add_argument("--tau-m", type=float, default=None, help="vestibular delay, s (default 0)")
     args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
-    print(f"SYNTHETIC data: independent generator hesspipe.humanlike, hess pilots, task "
+    print(f"SYNTHETIC data: independent generator hesspipe.humanlike, {args.pilot} pilots, task "
           f"{args.task}, output {args.output}, {args.n} pilots per cohort, {args.T:g} s at {args.fs:g} Hz")
     draw = {"output": args.output}
+    if args.tau_m is not None:
+        draw["tau_m"] = args.tau_m
     if args.km_ratio:
         draw["km_ratio"] = tuple(float(x) for x in args.km_ratio.split(","))
     tally = {"motion": [0, 0], "none": [0, 0]}
@@ -77,7 +85,8 @@ def main(argv=None) -> None:
             for label, effects in (("motion", ("motion_feedback",)), ("none", ())):
                 with tempfile.TemporaryDirectory() as tmp:
                     folder = Path(tmp) / "runs"
-                    cohort(folder, plant, args.n, seed, effects, args.task, args.T, args.fs, **draw)
+                    cohort(folder, plant, args.n, seed, effects, args.task, args.T, args.fs, args.pilot,
+                           **draw)
                     t0 = time.perf_counter()
                     comp = compare_pilots(folder, read_plants(folder / "plants.json"), workers=1,
                                           seed=seed, progress=False)

@@ -165,8 +165,9 @@ def test_bad_input():
         draw_trial("1/s", 1, tua=0.2)
     with pytest.raises(HesspipeError, match="effects"):
         draw_trial("1/s", 1, effects=("nope",))
-    with pytest.raises(HesspipeError, match="motion_feedback"):
-        draw_trial("1/s", 1, effects=("motion_feedback",))
+    with pytest.raises(HesspipeError, match="motion_path"):     # canals x s^3 x NM: improper
+        simulate_trial(draw_trial("K/s2", 1, effects=("motion_feedback",), output="angle",
+                                  motion_path=([1.0, 0.0, 0.0, 0.0], [1.0]), **SHORT))
     with pytest.raises(HesspipeError, match="plant"):
         make_plant("no/such/plants.json")
     with pytest.raises(HesspipeError, match="T_m"):
@@ -223,6 +224,32 @@ def test_motion_feedback_is_simulated_as_reported(output, tmp_path):
     assert ("motion_path" in plants) == (output == "angle")
     if output == "angle":
         assert plants["motion_path"] == {"num": [1.0, 0.0], "den": [0.01, 1.0]}
+
+
+@pytest.mark.parametrize("plant", ["1/s", "K/s2"])
+def test_precision_pilot_with_motion_is_simulated_as_reported(plant):
+    # The multimodal pilot (McRuer's visual path, its own canals): fine-step simulation
+    # against the truth's analytic parts, at both line sets.
+    spec = draw_trial(plant, 1, task="both", pilot="precision", effects=("motion_feedback",),
+                      output="angle", remnant_share=0.0, tau_m=0.15, T_m=15.0)
+    p = spec.pilot
+    assert p["Km"] > 0 and p["tau_m"] == 0.15
+    m = loop_metrics(lambda w: sum(spec.pilot_parts(w)) * spec.yc_effective(w))
+    assert 1.5 <= m["frequency_rad_s"] <= 4.0 and 20 <= m["phase_margin_deg"] <= 60
+    tr = simulate_trial(spec)
+    U, E = np.fft.fft(tr.control), np.fft.fft(tr.reference - tr.output)
+    from hesspipe.humanlike.pilots import parts
+    a, b = parts(p, spec.disturbance.w, spec.motion_tf)
+    k = spec.disturbance.k
+    assert np.max(np.abs(U[k] / E[k] - (a + b)) / (np.abs(a) + np.abs(b))) < 0.03
+    tl = tr.truth["target_lines_u_over_e"]
+    ue = np.array(tl["re"]) + 1j * np.array(tl["im"])
+    kt = spec.target.k
+    assert np.max(np.abs(U[kt] / E[kt] / ue - 1)) < 0.03
+    # The cab's motion supplies lead: on K/s2 the visual lead is less than without it.
+    if plant == "K/s2":
+        static = draw_trial(plant, 1, task="both", pilot="precision", output="angle", T_m=15.0)
+        assert p["TL"] < static.pilot["TL"]
 
 
 def test_effects_are_in_the_truth():

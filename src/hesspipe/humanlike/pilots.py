@@ -4,8 +4,13 @@ Two structures, both written from their equations (SPEC "Stage three",
 McRuer's precision model), not from hesspipe's pilot code:
 
 ``precision``
-    ``u = Kp (1 + TL s)/(1 + TI s) e^(-tau s) Y_NM e`` with
-    ``Y_NM = wn^2 / (s^2 + 2 zn wn s + wn^2)``.
+    ``u = Y_NM (Kp (1 + TL s)/(1 + TI s) e^(-tau s) e - u_v)`` with
+    ``Y_NM = wn^2 / (s^2 + 2 zn wn s + wn^2)`` and the optional vestibular path of
+    the multimodal models fitted to motion experiments (van der Vaart; Zaal et al.
+    2009, J. Guid. Control Dyn. 32(4)): ``u_v = Km H_SCC e^(-tau_m s) M y`` with the
+    canals ``H_SCC = 5.9 s (1 + 0.11 s) / ((1 + 5.9 s)(1 + 0.005 s))`` on the angular
+    velocity (unit gain between 0.2 and 9 rad/s, the lead above), a different canal
+    model from the hess pilot's on purpose.
 ``hess``
     ``delta = Y_NM (u_e - u_p - u_v)``, ``u_e = Ke e^(-tau s) e``,
     ``u_p = Y_PF delta`` with ``Y_PF = K1 K2 s / ((s + 1/T1)(s + 1/T2)^(k-1))``,
@@ -14,8 +19,9 @@ McRuer's precision model), not from hesspipe's pilot code:
 
 With ``G = Y_NM / (1 + Y_NM Y_PF)`` (inner loop closed):
 
-* visual part ``A = Ke e^(-tau s) G`` (precision: the whole pilot),
-* vestibular part ``B = Km Y_SCC M G`` (zero without motion).
+* visual part ``A = Ke e^(-tau s) G`` (precision: ``Kp (1 + TL s)/(1 + TI s) e^(-tau s) Y_NM``),
+* vestibular part ``B = Km Y_SCC M G`` (precision: ``Km H_SCC e^(-tau_m s) M Y_NM``;
+  zero without motion).
 
 On a disturbance line (r = 0 there, so y = -e) the control is
 ``u = (A + B) e``: the describing function a U/E estimate measures is
@@ -31,6 +37,12 @@ from scipy.optimize import brentq
 from .lti import freqresp, series
 
 SCC = ([80 * 5.73, 0.0, 0.0], [80 * 5.73, 80 + 5.73, 1.0])
+"""Hess pilot's canals (SPEC): per unit angular velocity
+``80*5.73 s^2 / ((1 + 80 s)(1 + 5.73 s))``, descending powers of s."""
+
+SCC_MULTIMODAL = ([5.9 * 0.11, 5.9, 0.0], [5.9 * 0.005, 5.9 + 0.005, 1.0])
+"""Precision pilot's canals (Zaal et al. 2009): per unit angular velocity
+``5.9 s (1 + 0.11 s) / ((1 + 5.9 s)(1 + 0.005 s))``, descending powers of s."""
 
 
 def nm_tf(wn: float, zn: float) -> tuple:
@@ -87,6 +99,24 @@ def equaliser_nm_tf(p: dict) -> tuple:
     return series(([p["Kp"] * p["TL"], p["Kp"]], [p["TI"], 1.0]), nm_tf(p["wn"], p["zn"]))
 
 
+def vestibular_nm_tf(motion_tf, p: dict) -> tuple:
+    """Precision pilot's vestibular path without gain and delay: ``H_SCC M Y_NM`` (one block).
+
+    Parameters
+    ----------
+    motion_tf : (num, den)
+        Cab angular velocity per unit plant output, descending powers of s.
+    p : dict
+        ``wn`` (rad/s), ``zn``.
+
+    Returns
+    -------
+    (num, den)
+        Descending powers of s, per unit plant output.
+    """
+    return series(tuple(motion_tf), SCC_MULTIMODAL, nm_tf(p["wn"], p["zn"]))
+
+
 def inner_loop(p: dict, w) -> np.ndarray:
     """``G = Y_NM / (1 + Y_NM Y_PF)`` of the hess pilot at `w`.
 
@@ -125,7 +155,12 @@ def parts(p: dict, w, motion_tf=None) -> tuple[np.ndarray, np.ndarray]:
     delay = np.exp(-1j * w * p["tau"])
     if p["structure"] == "precision":
         n, d = equaliser_nm_tf(p)
-        return freqresp(n, d, w) * delay, np.zeros(w.shape, dtype=complex)
+        if p.get("Km", 0.0) and motion_tf is not None:
+            b = p["Km"] * freqresp(*vestibular_nm_tf(motion_tf, p), w) \
+                * np.exp(-1j * w * p.get("tau_m", 0.0))
+        else:
+            b = np.zeros(w.shape, dtype=complex)
+        return freqresp(n, d, w) * delay, b
     g = inner_loop(p, w)
     a = p["Ke"] * delay * g
     if p.get("Km", 0.0) and motion_tf is not None:
@@ -193,13 +228,27 @@ def _accept(p, yc, motion_tf, ranges, wc, pm) -> dict | None:
     return m if ok else None
 
 
+def _equaliser(p: dict, x_deg: float, wc: float) -> None:
+    """Set a precision pilot's TL/TI so the equaliser adds `x_deg` of phase at `wc`."""
+    if x_deg >= 0.0:
+        p["TL"], p["TI"] = float(np.tan(np.radians(x_deg)) / wc), 0.0
+    else:
+        p["TL"], p["TI"] = 0.0, float(np.tan(np.radians(-x_deg)) / wc)
+
+
 def draw_precision(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float,
-                   fixed: dict) -> dict | None:
+                   fixed: dict, motion_tf=None, km_ratio: float = 0.0, tau_m: float = 0.0,
+                   angle: bool = False) -> dict | None:
     """Draw a precision pilot whose loop crosses over at a drawn wc with a drawn PM.
 
     The equalisation is chosen as a human would for the plant: a lag (or
     nothing) when the plant is K/s-like near crossover (`order` <= 1), a lead
-    when it is K/s^2-like. Returns None when no draw in the budget fits.
+    when it is K/s^2-like. With a vestibular path (`km_ratio` > 0) the
+    equaliser is whichever lead or lag (-60 to 75 deg at wc) meets the phase
+    margin with the least equalisation: the cab's motion supplies lead, so
+    the visual lead shrinks, as measured in motion experiments. ``Km`` is
+    ``km_ratio * Kp`` (per ``wc`` on an angle display, as for the hess pilot).
+    Returns None when no draw in the budget fits.
 
     Parameters
     ----------
@@ -216,28 +265,58 @@ def draw_precision(rng, yc, sign: int, order: int, ranges: dict, extra_delay: fl
         Added visual delay, s.
     fixed : dict
         Values that are not drawn.
+    motion_tf : (num, den), optional
+        Cab angular velocity per unit plant output.
+    km_ratio : float
+        Km / Kp (0: no vestibular path).
+    tau_m : float
+        Vestibular delay, s.
+    angle : bool
+        The displayed output is an angle whose rate the cab turns at.
     """
+    motion = bool(km_ratio) and motion_tf is not None
     for _ in range(20):
         p = {"structure": "precision", **_common(rng, ranges), **fixed.get("common", {})}
         p["tau"] = p["tau_v"] + extra_delay
+        if motion:
+            p["tau_m"] = tau_m
         for _ in range(40):
             wc = float(fixed.get("wc") or rng.uniform(*ranges["wc"]))
             pm = float(fixed.get("pm") or rng.uniform(*ranges["pm"]))
             ycw = sign * yc(np.array([wc]))[0]
-            nm = freqresp(*nm_tf(p["wn"], p["zn"]), np.array([wc]))[0]
-            base = np.degrees(np.angle(ycw * nm * np.exp(-1j * wc * p["tau"])))
-            need = _wrap180(-180.0 + pm - base)
-            if order <= 1 and -60.0 <= need <= 0.0:
-                p["TL"], p["TI"] = 0.0, float(np.tan(np.radians(-need)) / wc)
-            elif order == 2 and 0.0 < need <= 75.0:
-                p["TL"], p["TI"] = float(np.tan(np.radians(need)) / wc), 0.0
+            x = np.array([wc])
+            if not motion:
+                # Closed form: the equaliser alone makes up the phase.
+                nm = freqresp(*nm_tf(p["wn"], p["zn"]), x)[0]
+                base = np.degrees(np.angle(ycw * nm * np.exp(-1j * wc * p["tau"])))
+                need = _wrap180(-180.0 + pm - base)
+                if not ((order <= 1 and -60.0 <= need <= 0.0) or (order == 2 and 0.0 < need <= 75.0)):
+                    continue
+                _equaliser(p, need, wc)
+                p["Kp"] = 1.0
             else:
-                continue
-            p["Kp"] = 1.0
-            h = sum(parts(p, np.array([wc])))[0]
+                km_ke = km_ratio / wc if angle else km_ratio
+                p.update(Kp=1.0, Km=km_ke)
+
+                def phase_err(x_deg):
+                    _equaliser(p, x_deg, wc)
+                    return _wrap180(np.degrees(np.angle(sum(parts(p, x, motion_tf))[0] * ycw))
+                                    + 180.0 - pm)
+
+                grid = np.linspace(-60.0, 75.0, 28)
+                err = np.array([phase_err(g) for g in grid])
+                idx = np.nonzero((np.sign(err[:-1]) != np.sign(err[1:]))
+                                 & (np.abs(err[:-1] - err[1:]) < 90))[0]
+                if not idx.size:
+                    continue
+                # The least equalisation that meets the margin.
+                i = min(idx, key=lambda j: min(abs(grid[j]), abs(grid[j + 1])))
+                _equaliser(p, brentq(phase_err, grid[i], grid[i + 1], xtol=1e-10), wc)
+            h = sum(parts(p, x, motion_tf))[0]
             p["Kp"] = float(sign / abs(h * ycw))
-            m = _accept(p, yc, None, ranges, wc, pm)
-            if m is not None:
+            if motion:
+                p["Km"] = float(km_ke * p["Kp"])
+            if _accept(p, yc, motion_tf, ranges, wc, pm) is not None:
                 return p
     return None
 

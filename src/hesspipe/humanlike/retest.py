@@ -68,7 +68,7 @@ def retest(spec: TrialSpec, seed: int, *, effects=None, name: str | None = None)
     p = {k: v for k, v in spec.pilot.items() if k not in ("tau", "extra_delay", "km_ratio")}
     # The pilot's own delay stays a human's (the generator's range, widened by the scatter).
     p["tau_v"] = float(np.clip(p["tau_v"] + rng.normal(0.0, tau_sd), 0.1, 0.45))
-    for key in ("Ke", "K1", "Km"):
+    for key in ("Ke", "Kp", "K1", "Km"):
         if p.get(key):
             p[key] = float(p[key] * np.exp(rng.normal(0.0, gain_cv)))
     if p.get("wn"):

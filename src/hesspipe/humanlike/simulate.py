@@ -26,8 +26,9 @@ class Wiring:
 
     Blocks are :class:`~hesspipe.humanlike.lti.Discrete`; `plant` has two
     inputs (plant input, side wind). `pilot` is ``"precision"`` (block
-    ``eqnm`` driven by the delayed error) or ``"hess"`` (blocks ``nm``, ``pf``
-    and, with motion, ``motion`` and ``scc``).
+    ``eqnm`` driven by the delayed error and, with motion, ``vnm``: canals, motion
+    path and neuromuscular system driven by the output delayed by the vestibular
+    delay) or ``"hess"`` (blocks ``nm``, ``pf`` and, with motion, ``motion`` and ``scc``).
 
     Attributes
     ----------
@@ -113,6 +114,10 @@ def _source(wr: Wiring) -> str:
             f"n = g*({_output('rem', b['rem'], ['wk'])})"]
     pilot_block = "nm" if hess else "eqnm"
     body.append(f"delta = {_output(pilot_block, b[pilot_block], ['0.0'])}")
+    vestibular = not hess and b.get("vnm") is not None
+    if vestibular:
+        # Strictly proper: its output is its state's, so the current y is not needed yet.
+        body.append(f"delta = delta - {_lit(wr.Km)}*({_output('vnm', b['vnm'], ['0.0'])})")
     body.append("u = delta + n" if wr.remnant_at == "control" else "u = delta")
     body.append(f"a = {_output('act', b['act'], ['u'])}" if b.get("act") is not None else "a = u")
     if wr.rate_limit is not None:
@@ -144,6 +149,13 @@ def _source(wr: Wiring) -> str:
         updates += _update("nm", b["nm"], ["nmin"]) + _update("pf", b["pf"], ["delta"])
     else:
         updates += _update("eqnm", b["eqnm"], ["ed"])
+        if vestibular:
+            if wr.motion_delay_steps:
+                body += ["yv = mbuf[mi]", "mbuf[mi] = y", "mi += 1",
+                         f"if mi == {wr.motion_delay_steps}: mi = 0"]
+            else:
+                body.append("yv = y")
+            updates += _update("vnm", b["vnm"], ["yv"])
     if b.get("act") is not None:
         updates += _update("act", b["act"], ["u"])
     updates += _update("plant", b["plant"], ["v", "wind"])

@@ -167,7 +167,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         times the target's RMS at the output, unless ``d_rms`` is given).
     pilot : {"precision", "hess"}
     effects : iterable of str
-        Any of ``motion_feedback`` (hess pilot only), ``extra_delay``,
+        Any of ``motion_feedback`` (hess: Hess's canals; precision: the multimodal
+        model's, see :mod:`hesspipe.humanlike.pilots`), ``extra_delay``,
         ``remnant`` (elevated remnant, 40-60 %), ``dutch_roll`` (plant "roll" or
         "paper"), ``actuator_lag``, ``rate_limit``.
     **overrides
@@ -209,8 +210,6 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         raise HesspipeError(f"task: expected 'disturbance', 'tracking' or 'both', got {task!r}")
     if pilot not in ("precision", "hess"):
         raise HesspipeError(f"pilot: expected 'precision' or 'hess', got {pilot!r}")
-    if "motion_feedback" in effects and pilot != "hess":
-        raise HesspipeError("effect 'motion_feedback': needs pilot 'hess'")
     n_log = opts["fs"] * opts["T_m"]
     if abs(n_log - round(n_log)) > 1e-9 or n_log < 4:
         raise HesspipeError(f"T_m: fs*T_m must be a whole number of samples, got {n_log:g}")
@@ -249,7 +248,9 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         p.setdefault("tau", p.get("tau_v", 0.0) + extra)
         p.setdefault("tau_v", p["tau"] - extra)
     elif pilot == "precision":
-        p = pilots.draw_precision(rng["pilot"], yc, sign, order, ranges, extra, fixed)
+        p = pilots.draw_precision(rng["pilot"], yc, sign, order, ranges, extra, fixed,
+                                  motion_tf, km_ratio, float(opts["tau_m"]),
+                                  angle=plant.output == "angle")
     else:
         p = pilots.draw_hess(rng["pilot"], yc, sign, order, ranges, extra, fixed,
                              motion_tf, km_ratio, float(opts["tau_m"]), angle=plant.output == "angle")
@@ -319,6 +320,13 @@ def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
     steps = delay_steps(p["tau"], h, outer_holds(spec))
     if p["structure"] == "precision":
         blocks["eqnm"] = zoh(ss_from_tf(*pilots.equaliser_nm_tf(p)), h)
+        if p.get("Km") and spec.motion_tf is not None:
+            num, den = pilots.vestibular_nm_tf(spec.motion_tf, p)
+            if np.trim_zeros(np.asarray(num, dtype=float), "f").size >= np.asarray(den).size:
+                raise HesspipeError("motion_path: the vestibular path canals x motion path x "
+                                    "neuromuscular must be strictly proper; the motion path "
+                                    "has too many zeros")
+            blocks["vnm"] = zoh(ss_from_tf(num, den), h)
     else:
         blocks["nm"] = zoh(ss_from_tf(*pilots.nm_tf(p["wn"], p["zn"])), h)
         blocks["pf"] = discretise(ss_from_tf(*pilots.pf_tf(p)), h)
