@@ -1,0 +1,50 @@
+"""The motion test against pilots whose structure is not Hess's (SYNTHETIC data).
+
+McRuer precision pilots of the independent generator (:mod:`hesspipe.humanlike`,
+fine-step block simulation, no hesspipe model code) on the yaw stand-in's angle tasks:
+a lead of 1-1.5 s on a double integrator and a lag on a single one, which Hess's
+proprioceptive loop alone cannot always follow. The runs are development seeds of
+``benchmarks/bench_diagnose.py --pilot precision`` that the test misjudged before the
+visual equaliser (``motion_test.VISUAL_EQUALISER``).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from hesspipe.core.formats import read_plants, read_run
+from hesspipe.core.seeds import derive_seed
+from hesspipe.diagnose.motion import delay_test
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.identification.motion_test import motion_test
+from hesspipe.pilot.hess import PilotModel
+
+
+def _run(tmp_path, plant, task, seed):
+    s = derive_seed(seed, "bench-diagnose", plant, "angle", task, "none")
+    spec = draw_trial(plant, s, task=task, pilot="precision", output="angle", fs=50.0,
+                      T_m=70.0, tau_m=0.15, name="pilot")
+    path = write_trial(tmp_path, simulate_trial(spec))
+    return spec, read_run(path), read_plants(tmp_path / "plants.json")
+
+
+@pytest.mark.parametrize("seed", [102, 104])
+def test_a_humans_visual_lead_is_not_read_as_motion_feedback(tmp_path, seed):
+    # Disturbance only, no motion: the pilot's lead (TL 1.0-1.4 s) made the test name
+    # motion at p = 0.0002 and 0.005 before, the vestibular path (a differentiated output)
+    # standing in for the lead.
+    spec, run, plants = _run(tmp_path, "K/s2", "disturbance", seed)
+    assert spec.pilot["TL"] > 1.0 and not spec.pilot.get("Km")
+    t = motion_test(run, plants, PilotModel().defaults(2), k=2)
+    assert t["available"] and t["p_value"] > 0.01, t["p_value"]
+    assert t["parameters_original"]["TL_v"] > 0.3     # the lead is the visual path's
+
+
+def test_a_humans_visual_lag_is_not_read_as_extra_delay(tmp_path):
+    # Target and disturbance, no motion, a pilot's 0.345 s delay and 0.145 s lag: the lag's
+    # phase read as delay, 0.451 +- 0.018 s, an extra delay beyond a human's 0.40 s.
+    spec, run, plants = _run(tmp_path, "1/s", "both", 108)
+    assert spec.pilot["TI"] > 0.1 and spec.pilot["tau"] < 0.35
+    t = motion_test(run, plants, PilotModel().defaults(1), k=1)
+    tau0, se = t["parameters_original"]["tau0"], t["standard_errors_original"]["tau0"]
+    assert not delay_test(tau0, se, 0.40, 0.01)["named"], (tau0, se)
