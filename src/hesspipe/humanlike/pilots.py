@@ -6,7 +6,7 @@ McRuer's precision model), not from hesspipe's pilot code:
 ``precision``
     ``u = Y_NM (Kp (1 + TL s)/(1 + TI s) e^(-tau s) e - u_v)`` with
     ``Y_NM = wn^2 / (s^2 + 2 zn wn s + wn^2)`` and the optional vestibular path of
-    the multimodal models fitted to motion experiments (van der Vaart; Zaal et al.
+    the multimodal models fitted to motion experiments (e.g. Zaal et al.
     2009, J. Guid. Control Dyn. 32(4)): ``u_v = Km H_SCC e^(-tau_m s) M y`` with the
     canals ``H_SCC = 5.9 s (1 + 0.11 s) / ((1 + 5.9 s)(1 + 0.005 s))`` on the angular
     velocity (unit gain between 0.2 and 9 rad/s, the lead above), a different canal
