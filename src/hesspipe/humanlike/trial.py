@@ -16,7 +16,7 @@ import numpy as np
 from ..core.errors import HesspipeError
 from ..core.seeds import derive_seed
 from . import forcing, pilots
-from .lti import discretise, freqresp, ss_from_tf, zoh
+from .lti import discretise, freqresp, ss_from_tf, tf, zoh
 from .plants import Plant, make_plant
 from .simulate import Wiring, compile_loop, delay_steps
 from .truth import build_truth, outer_holds
@@ -321,8 +321,8 @@ def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
     if p["structure"] == "precision":
         blocks["eqnm"] = zoh(ss_from_tf(*pilots.equaliser_nm_tf(p)), h)
         if p.get("Km") and spec.motion_tf is not None:
-            num, den = pilots.vestibular_nm_tf(spec.motion_tf, p)
-            if np.trim_zeros(np.asarray(num, dtype=float), "f").size >= np.asarray(den).size:
+            num, den = tf(*pilots.vestibular_nm_tf(spec.motion_tf, p), "motion_path")
+            if num.size >= den.size:
                 raise HesspipeError("motion_path: the vestibular path canals x motion path x "
                                     "neuromuscular must be strictly proper; the motion path "
                                     "has too many zeros")
