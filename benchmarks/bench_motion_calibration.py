@@ -16,7 +16,7 @@ script prints, per case and effect, how often p < 0.01 and p < 0.05, and the tot
 Usage::
 
     python benchmarks/bench_motion_calibration.py [--seeds 10] [--seed-start 0]
-        [--cases paper:rate:disturbance,...] [--effects none,motion_feedback] [--tau-m 0.15]
+        [--cases paper:rate:disturbance,...] [--effects none,motion_feedback] [--tau-m 0.15] [--pilot precision]
 """
 
 from __future__ import annotations
@@ -41,14 +41,14 @@ CASES = ",".join([f"{p}:{o}:{t}" for p in ("paper", "roll") for o in ("rate", "a
                   for t in ("disturbance", "both")] + ["1/s:angle:both", "K/s2:angle:both"])
 
 
-def p_value(folder, plant, output, task, effect, seed, tau_m=0.0):
+def p_value(folder, plant, output, task, effect, seed, tau_m=0.0, pilot="hess"):
     """The motion test's p-value on one generated run, or None (not generated / no lines)."""
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind") if plant == "paper" else {}
     name = f"{plant}-{output}-{task}-{effect}-{seed}".replace("/", "_")
     try:
-        spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
+        spec = draw_trial(plant, s, task=task, pilot=pilot, effects=effects, fs=50.0, T_m=70.0,
                           output=output, name=name, tau_m=tau_m, **kw)
     except HesspipeError:
         return None
@@ -71,6 +71,8 @@ def main(argv=None) -> int:
     ap.add_argument("--cases", default=CASES, help="plant:output:task, comma-separated")
     ap.add_argument("--effects", default="none,motion_feedback")
     ap.add_argument("--tau-m", type=float, default=0.0, help="generator's vestibular delay, s")
+    ap.add_argument("--pilot", choices=("hess", "precision"), default="hess",
+                    help="generator pilot structure (precision: McRuer's, not the one fitted)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     total = {}
@@ -79,18 +81,19 @@ def main(argv=None) -> int:
         for case in args.cases.split(","):
             plant, output, task = case.split(":")
             for effect in args.effects.split(","):
-                ps = [p for p in (p_value(tmp, plant, output, task, effect, seed, args.tau_m)
+                ps = [p for p in (p_value(tmp, plant, output, task, effect, seed, args.tau_m, args.pilot)
                                   for seed in range(args.seed_start, args.seed_start + args.seeds))
                       if p is not None]
                 total.setdefault(effect, []).extend(ps)
                 ps = np.array(ps)
                 print(f"  {case:<24} {effect:<16} {ps.size:3d} runs: p<0.01 {int(np.sum(ps < 0.01)):3d}, "
-                      f"p<0.05 {int(np.sum(ps < 0.05)):3d}", flush=True)
+                      f"p<0.05 {int(np.sum(ps < 0.05)):3d}, p<0.2 {int(np.sum(ps < 0.2)):3d}; "
+                      f"p = {' '.join(f'{p:.2g}' for p in np.sort(ps)[:5])} ...", flush=True)
     for effect, ps in total.items():
         ps = np.array(ps)
         line = (f"{effect}: {ps.size} runs, p < 0.01 in {int(np.sum(ps < 0.01))} "
                 f"({100 * np.mean(ps < 0.01):.1f} %), p < 0.05 in {int(np.sum(ps < 0.05))} "
-                f"({100 * np.mean(ps < 0.05):.1f} %)")
+                f"({100 * np.mean(ps < 0.05):.1f} %), p < 0.2 in {int(np.sum(ps < 0.2))}")
         print(line)
     print(f"wall time {time.perf_counter() - t0:.0f} s")
     return 0

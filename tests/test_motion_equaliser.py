@@ -48,3 +48,19 @@ def test_a_humans_visual_lag_is_not_read_as_extra_delay(tmp_path):
     t = motion_test(run, plants, PilotModel().defaults(1), k=1)
     tau0, se = t["parameters_original"]["tau0"], t["standard_errors_original"]["tau0"]
     assert not delay_test(tau0, se, 0.40, 0.01)["named"], (tau0, se)
+
+
+def test_a_lead_bought_with_delay_is_not_read_as_extra_delay(tmp_path):
+    # A Hess-structured pilot (delay 0.33 s) on the paper's roll angle, disturbance only:
+    # the equaliser's lead (0.28 +- 0.08 s, not significant) let the fit take 0.57 +- 0.04 s
+    # of delay, which diagnose named extra_delay. Without the lead the fit gives 0.28 s.
+    from hesspipe.diagnose.workflow import diagnose
+
+    s = derive_seed(3, "bench-diagnose", "paper", "angle", "disturbance", "none")
+    spec = draw_trial("paper", s, task="disturbance", pilot="hess", output="angle",
+                      disturbance="wind", fs=50.0, T_m=70.0, name="pilot")
+    assert spec.pilot["structure"] == "hess" and spec.pilot["tau"] < 0.35
+    path = write_trial(tmp_path, simulate_trial(spec))
+    d = diagnose(read_run(path), read_plants(tmp_path / "plants.json"), seed=3)
+    assert "extra_delay" not in d.named_effects, d.named_effects
+    assert d.delay_verdict["delay_s"] < 0.40

@@ -33,7 +33,7 @@ def test_verdict_yes_for_motion_cohort_no_without(tmp_path):
     assert all(t["available"] and t["n_lines"] >= 10 for t in {**yes, **no}.values())
     assert v_yes["answer"] == "yes" and v_yes["sentence"].startswith("yes: motion feedback")
     assert v_no["answer"] == "no" and v_no["sentence"].startswith("no: ")
-    assert v_yes["fisher_p"] < 0.05 < v_no["fisher_p"]
+    assert v_yes["fisher_p"] < 0.01 < v_no["fisher_p"]
     assert v_yes["n_significant"] >= 2 and v_no["n_significant"] <= 1
     assert v_yes["median_gain"] > v_no["median_gain"] + 0.1
 
@@ -53,16 +53,19 @@ def test_random_forcing_has_no_lines_and_an_undetermined_verdict(tmp_path):
 
 def test_cohort_counts_and_binomial():
     t = lambda p: {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": 1.0,  # noqa: E731
-                   "Km_se": 0.1, "significant": p < 0.05}
-    v = cohort_verdict({"a": t(0.001), "b": t(0.01), "c": t(0.5), "d": {"available": False}})
+                   "Km_se": 0.1, "significant": p < 0.01}
+    v = cohort_verdict({"a": t(0.001), "b": t(0.005), "c": t(0.5), "d": {"available": False}})
     assert v["n_tested"] == 3 and v["n_significant"] == 2
-    assert v["binomial_p"] == pytest.approx(3 * 0.05 ** 2 * 0.95 + 0.05 ** 3)
+    assert v["binomial_p"] == pytest.approx(3 * 0.01 ** 2 * 0.99 + 0.01 ** 3)
     assert "2 of 3 pilots" in v["sentence"] and "1 pilot(s) without forcing lines" in v["sentence"]
-    chi = -2 * np.log([0.001, 0.01, 0.5]).sum()
+    chi = -2 * np.log([0.001, 0.005, 0.5]).sum()
     assert v["fisher_p"] == pytest.approx(np.exp(-chi / 2) * sum((chi / 2) ** j / math.factorial(j)
                                                                  for j in range(3)))
     assert v["answer"] == "yes"
     assert cohort_verdict({"a": t(0.04), "b": t(0.6), "c": t(0.9)})["answer"] == "no"
+    # The cohort's level is the motion test's: Fisher's p = 0.013 is a "no".
+    assert 0.01 < cohort_verdict({"a": t(0.013)})["fisher_p"] < 0.05
+    assert cohort_verdict({"a": t(0.013)})["answer"] == "no"
 
 
 def test_tracking_target_lines_drive_the_motion_test(tmp_path):

@@ -315,6 +315,16 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None) -> DFEvid
     pars, se = _df_delay(t, mv.named)
     if baseline_run is None:
         delay = delay_test(pars["tau0"], se, cfg.max_pilot_delay, cfg.alpha)
+        eq = t.get("equaliser")
+        if eq and not mv.named:
+            # The visual equaliser trades phase with delay and the lines may not resolve
+            # it (a lead buys delay, a lag's phase reads as delay): a delay beyond a human's
+            # must stand with and without it, so the weaker of the two tests decides.
+            alt = delay_test(eq["tau0"], eq["tau0_se"], cfg.max_pilot_delay, cfg.alpha)
+            if alt["z"] < delay["z"]:
+                delay = alt
+            delay["criterion"] += (f"; the weaker of the fits with and without the visual "
+                                   f"equaliser {eq['name']}")
         own = cfg.max_pilot_delay
     else:
         tb = safe_motion_test(baseline_run, plants, start, k=k)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..core.config import Fields, Settings
+from ..identification.motion_test import ALPHA as MOTION_ALPHA
 
 #: Default band edges (Hz) for the band-wise disagreement.
 BAND_EDGES_HZ = (0.0, 0.25, 0.5, 1.0, 2.0, 3.5, 5.0)
@@ -93,10 +94,10 @@ class DiagnoseConfig(Settings):
     weighting: str = "random-share"
     k: int = 1
     #: Level of the describing-function motion test (one pre-planned test per diagnosis;
-    #: compare-pilots uses 0.05 per pilot, then combines pilots). 0.01 here: at 0.05 a
+    #: the motion test's own level, which compare-pilots uses too). 0.01: at 0.05 a
     #: baseline's structural mismatch passed for a vestibular path in 2 of 20 development runs
     #: (seeds 100-104), while the motion runs' p-values were mostly far below 0.01.
-    motion_alpha: float = 0.01
+    motion_alpha: float = MOTION_ALPHA
     #: Longest visual delay of a human pilot as the describing-function fit sees it, s:
     #: tracking studies report up to about 0.35 s (SPEC: 0.2-0.3 s typical), and the fitted
     #: delay of a human-like pilot came out up to 0.05 s above the true one (sampling, model
