@@ -160,6 +160,20 @@ def test_plants_file_and_dutch_roll(tmp_path):
         write_trial(tmp_path, simulate_trial(other))
 
 
+@pytest.mark.parametrize("output", ["rate", "angle"])
+def test_paper_dutch_roll_aircraft_feels_the_papers_wind(output):
+    # The "paper" trial sizes its wind for Eq. 16; the full aircraft behind it must move as
+    # much per ft/s, or the disturbance lines vanish under the target's (Table 4's own
+    # sideslip path is 15-120 times weaker).
+    full = make_plant("paper", output=output, dutch_roll=True).true
+    nominal = make_plant("paper", output=output).true
+    w = np.geomspace(0.2, 5.0, 25)
+    ratio = np.abs(full.freqresp(w, 1)) / np.abs(nominal.freqresp(w, 1))
+    assert 0.5 < np.exp(np.mean(np.log(ratio))) < 2.0
+    # The control path and the Dutch roll are Table 4's, untouched.
+    assert np.allclose(full.freqresp(w, 0), make_plant("roll", output=output, dutch_roll=True).true.freqresp(w, 0))
+
+
 def test_bad_input():
     with pytest.raises(HesspipeError, match="unknown option"):
         draw_trial("1/s", 1, tua=0.2)
