@@ -34,7 +34,7 @@ Usage::
                                         [--outputs rate,angle] [--tasks disturbance,both]
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
                                         [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired]
-                                        [--pilot precision]
+                                        [--pilot precision] [--remnant-at error]
 
 ``--pilot precision`` draws McRuer precision pilots instead of Hess-structured ones (with
 motion: the multimodal model of motion experiments, its own canal model; see
@@ -142,6 +142,9 @@ def main(argv=None) -> int:
     ap.add_argument("--pilot", choices=("hess", "precision"), default="hess",
                     help="the generator's pilot structure (precision: McRuer's, with the "
                          "multimodal model's vestibular path under motion)")
+    ap.add_argument("--remnant-at", choices=("control", "error"), default=None,
+                    help="where the generator injects the remnant (default control; error: "
+                         "perceptual noise shaped by the pilot's own dynamics, as Levison's)")
     ap.add_argument("--paired", action="store_true",
                     help="give diagnose a baseline run of the same pilot (humanlike.retest: no "
                          "pilot-side effect, the pilot's run-to-run scatter, another remnant)")
@@ -154,6 +157,8 @@ def main(argv=None) -> int:
         draw["fs"] = args.fs
     if args.T_m is not None:
         draw["T_m"] = args.T_m
+    if args.remnant_at is not None:
+        draw["remnant_at"] = args.remnant_at
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike "
           f"({args.pilot} pilots).")
     rows, times, failures, skipped = {}, [], [], []
