@@ -149,3 +149,19 @@ def test_remnant_share_is_the_power_between_the_forcing_lines():
     noisy = Run(t, d, np.zeros(n), -0.5 * d + np.sqrt(v) * noise, np.zeros(n), synthetic=True)
     expect = (v / 5) / (v / 5 + 0.25 * 0.5 * bins.size)
     assert remnant_share(noisy)[0] == pytest.approx(expect, rel=0.15)
+
+
+def test_a_lag_shorter_than_a_sample_is_not_an_actuator(tmp_path):
+    # A smooth control (remnant injected at the error, as perceptual noise): the plants fit
+    # at 99.9 % and a 0.5 ms "actuator" closed the rest at p ~ 1e-219, named actuator_lag,
+    # though it is the logger's timing within one 20 ms sample (precision pilot, single
+    # integrator, report seed 0 of bench_diagnose --pilot precision --remnant-at error).
+    from hesspipe.core.seeds import derive_seed
+
+    s = derive_seed(0, "bench-diagnose", "1/s", "angle", "both", "none")
+    spec = draw_trial("1/s", s, task="both", pilot="precision", output="angle", fs=50.0, T_m=70.0,
+                      tau_m=0.15, remnant_at="error", name="pilot")
+    path = write_trial(tmp_path, simulate_trial(spec))
+    d = diagnose(read_run(path), read_plants(tmp_path / "plants.json"), seed=0)
+    assert d.plant_finding["verdict"] == "match", d.plant_finding["message"]
+    assert "actuator_lag" not in d.named_effects

@@ -69,6 +69,19 @@ PARSIMONY = 1.2
 #: Parameters each candidate fits beyond the plants as given (whose refit has the
 #: disturbance gain and the slow modes' initial state): its own, and the initial state of
 #: the poles it adds (the Dutch roll's two numerators replace the disturbance gain).
+MIN_LAG_SAMPLES = 1.0
+"""Shortest actuator lag named, in sample intervals of the log. Below one sample a lag is the
+logger's own timing (the control's course between samples, the hold), not an actuator: a
+smooth control (the generator's remnant injected at the error, as perceptual noise) left
+the plants at 99.93 % and a 0.5 ms "actuator" closed the rest at p ~ 1e-219 on every
+single-integrator run (SYNTHETIC, precision pilots, report seeds 0-9)."""
+
+
+def _physical(e, dt: float) -> bool:
+    """False for an actuator lag shorter than :data:`MIN_LAG_SAMPLES` samples of `dt` s."""
+    return e.id != "actuator_lag" or e.parameters["tau_a"] >= MIN_LAG_SAMPLES * dt
+
+
 _N_PARAMETERS = {"actuator_lag": 1, "rate_limit": 1, "roll_mode": 3, "dutch_roll": 9}
 #: A path gain beyond this factor (either way) is a units error, not an aircraft change.
 SCALE_RATIO = 3.0
@@ -337,7 +350,8 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
         # lag's p stayed >= 0.1 on all of them.
         level = alpha / len(_N_PARAMETERS)  # Bonferroni over every candidate, as if all were tried
         tried, _ = _aircraft_candidates(p, plants, nominal, only=("actuator_lag",))
-        closing = [e for e in tried if e.p_value < level and _residual_share(e, ref) <= 1.0 - close_share]
+        closing = [e for e in tried if e.p_value < level and _residual_share(e, ref) <= 1.0 - close_share
+                   and _physical(e, p.dt)]
         if not closing:
             return PlantFinding("match", f0, explanations=(ref,), message=match)
         best = max(closing, key=lambda e: e.fit_percent)
@@ -355,7 +369,7 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
     # A Dutch-roll pair leaves the aileron's immediate roll power (the control numerator's
     # s^2 coefficient) about as it was: a flipped or units-size change there is the file's
     # sign or scale, which the free numerator would otherwise absorb.
-    supported = [e for e in air if e.p_value < level and (
+    supported = [e for e in air if e.p_value < level and _physical(e, p.dt) and (
         e.id != "dutch_roll" or 1 / SCALE_RATIO <= e.parameters["control_numerator"][0] <= SCALE_RATIO)]
     files = _file_candidates(p, plants)
     expl = tuple(sorted(tried + files, key=lambda e: -e.fit_percent if math.isfinite(e.fit_percent) else math.inf))

@@ -415,6 +415,9 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
     0.47 s lag, generator seed 6: 0.56 +- 0.01 s of delay at the optimum).
     """
     i = free.index("tau0")
+    if optima[0][i] <= bound:   # the optimum is admissible: F = 0
+        return {"bound_s": float(bound), "f": 0.0, "p_value": 1.0, "dof": int(dof),
+                "bounded_tau0": float(optima[0][i])}
     hi_b = np.array(hi, dtype=float)
     hi_b[i] = bound
     clip = [[*x[:i], min(x[i], bound), *x[i + 1:]] for x in [*optima, *starts]]
