@@ -66,15 +66,12 @@ CLOSE_SHARE = 0.5
 #: Residual power a simpler aircraft candidate may leave, relative to the best one's, and
 #: still be preferred.
 PARSIMONY = 1.2
-#: Parameters each candidate fits beyond the plants as given (whose refit has the
-#: disturbance gain and the slow modes' initial state): its own, and the initial state of
-#: the poles it adds (the Dutch roll's two numerators replace the disturbance gain).
+#: Shortest actuator lag named, in sample intervals of the log. Below one sample a lag is
+#: the logger's own timing (the control's course between samples, the hold), not an
+#: actuator: a smooth control (the generator's remnant injected at the error, as perceptual
+#: noise) left the plants at 99.93 % and a 0.5 ms "actuator" closed the rest at p ~ 1e-219
+#: on every single-integrator run (SYNTHETIC, precision pilots, report seeds 0-9).
 MIN_LAG_SAMPLES = 1.0
-"""Shortest actuator lag named, in sample intervals of the log. Below one sample a lag is the
-logger's own timing (the control's course between samples, the hold), not an actuator: a
-smooth control (the generator's remnant injected at the error, as perceptual noise) left
-the plants at 99.93 % and a 0.5 ms "actuator" closed the rest at p ~ 1e-219 on every
-single-integrator run (SYNTHETIC, precision pilots, report seeds 0-9)."""
 
 
 def _physical(e, dt: float) -> bool:
@@ -82,6 +79,9 @@ def _physical(e, dt: float) -> bool:
     return e.id != "actuator_lag" or e.parameters["tau_a"] >= MIN_LAG_SAMPLES * dt
 
 
+#: Parameters each candidate fits beyond the plants as given (whose refit has the
+#: disturbance gain and the slow modes' initial state): its own, and the initial state of
+#: the poles it adds (the Dutch roll's two numerators replace the disturbance gain).
 _N_PARAMETERS = {"actuator_lag": 1, "rate_limit": 1, "roll_mode": 3, "dutch_roll": 9}
 #: A path gain beyond this factor (either way) is a units error, not an aircraft change.
 SCALE_RATIO = 3.0
