@@ -14,6 +14,7 @@ contrast, the PSD-fitness improvement 1 - expanded/original of the paper's crite
                                        [--task disturbance] [--T 45] [--fs 60]
                                        [--output rate|angle] [--km-ratio 0.2,1.0]
                                        [--pilot precision] [--tau-m 0.15]
+                                       [--remnant-at error]
 
 ``--pilot precision``: McRuer precision pilots (with motion, the multimodal model's
 vestibular path and canals), a structure other than the Hess model compare-pilots fits.
@@ -70,6 +71,8 @@ def main(argv=None) -> None:
     ap.add_argument("--km-ratio", default=None, help="Km/Ke range 'lo,hi' (default the generator's)")
     ap.add_argument("--pilot", choices=("hess", "precision"), default="hess")
     ap.add_argument("--tau-m", type=float, default=None, help="vestibular delay, s (default 0)")
+    ap.add_argument("--remnant-at", choices=("control", "error"), default=None,
+                    help="where the generator injects the remnant (default control)")
     args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
     print(f"SYNTHETIC data: independent generator hesspipe.humanlike, {args.pilot} pilots, task "
@@ -77,6 +80,8 @@ def main(argv=None) -> None:
     draw = {"output": args.output}
     if args.tau_m is not None:
         draw["tau_m"] = args.tau_m
+    if args.remnant_at is not None:
+        draw["remnant_at"] = args.remnant_at
     if args.km_ratio:
         draw["km_ratio"] = tuple(float(x) for x in args.km_ratio.split(","))
     tally = {"motion": [0, 0], "none": [0, 0]}

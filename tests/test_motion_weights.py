@@ -101,3 +101,29 @@ def test_roll_angle_target_motion_is_named_and_static_runs_are_not(tmp_path):
     static = [_p_value(tmp_path, (), seed) < 0.01 for seed in range(200, 206)]
     assert sum(named) >= 5, named
     assert sum(static) <= 1, static
+
+
+def test_levels_from_a_few_high_lines_stay_finite(tmp_path):
+    # Remnant at the error (perceptual noise), single integrator with motion: only the four
+    # lines at 2.6-4.4 Hz had a usable describing function, and the quadratic through their
+    # levels, extrapolated to 0.03 Hz, overflowed; the pilot went "not tested" (bench_verdict
+    # --pilot precision --remnant-at error, seed 1, pilot 4).
+    from hesspipe.core.errors import HesspipeError
+
+    for attempt in range(50):
+        s = derive_seed(1, "bench_verdict", "1/s", "both", "motion_feedback", "3", str(attempt))
+        try:
+            spec = draw_trial("1/s", s, task="both", pilot="precision", effects=("motion_feedback",),
+                              T_m=70.0, fs=50.0, name="pilot04", output="angle", tau_m=0.15,
+                              remnant_at="error")
+            break
+        except HesspipeError:
+            continue
+    path = write_trial(tmp_path, simulate_trial(spec))
+    run, plants = read_run(path), read_plants(tmp_path / "plants.json")
+    lines = forcing_lines(run)
+    with np.errstate(over="raise"):
+        var = line_variances(run, lines)
+    assert np.all(np.isfinite(var))
+    t = motion_test(run, plants, PilotModel().defaults(1), k=1)
+    assert t["available"] and t["p_value"] < 0.01, t

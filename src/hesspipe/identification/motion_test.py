@@ -86,6 +86,10 @@ MIN_LINE_SNR = 10.0
 """A disturbance line's U/E measures the pilot's describing function for the remnant levels
 (:func:`line_variances`) only when its error power is at least this many times its unforced
 neighbours' (then the remnant's share of E there is at most about 30 % in amplitude)."""
+MAX_EXTRAPOLATED_RISE = math.log(1e6)
+"""Largest rise (natural log) of an extrapolated remnant level over the highest level inside
+the usable lines' range (:func:`line_variances`): a line a million times noisier than any
+measured one carries no weight in the fits."""
 TAU_M_MAX = 0.25
 """Upper bound of the test's vestibular delay, s (the literature's 0.1-0.2 s, shorter than
 the visual delay; SPEC.md "Describing functions"). At 0.4 s the delayed path absorbed model
@@ -252,7 +256,11 @@ def line_variances(run, lines) -> np.ndarray:
     lo, hi = x[ok].min(), x[ok].max()
     level[x < lo] = np.maximum(level[x < lo], np.polyval(coef, lo))
     level[x > hi] = np.maximum(level[x > hi], np.polyval(coef, hi))
-    return np.exp(level)
+    # A quadratic through a few usable lines at one end can rise without bound across the
+    # rest (4 lines at 2.6-4.4 Hz, extrapolated to 0.03 Hz, overflowed: the test was
+    # "unavailable"); such a line weighs nothing at this cap anyway.
+    inside = level[(x >= lo) & (x <= hi)]
+    return np.exp(np.minimum(level, inside.max() + MAX_EXTRAPOLATED_RISE))
 
 
 def line_snr(E, lines, all_lines) -> np.ndarray:
