@@ -411,6 +411,16 @@ def _standard_errors(sol, free: Sequence[str], rss: float, dof: int) -> dict:
             for i, n_ in enumerate(free)}
 
 
+def _nested_f(rss_restricted: float, rss_full: float, q: int, dof: int) -> tuple[float, float]:
+    """(F, p) of a nested least-squares test: `q` parameters, `dof` residual degrees of freedom
+    of the full model. With one parameter the restriction is a bound (Km >= 0, a delay at
+    most a human's), where F is 0 half the time under H0 (Self & Liang 1987): p is halved."""
+    gain = max(rss_restricted - rss_full, 0.0)
+    f = gain / q / (rss_full / dof) if rss_full > 0 and dof > 0 else math.inf
+    p = float(stats.f.sf(f, q, dof)) * (0.5 if q == 1 else 1.0) if f > 0 else 1.0
+    return f, p
+
+
 def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, data, w) -> dict:
     """Likelihood-ratio test of "the visual delay is at most `bound` (s)" in the original model.
 
@@ -430,9 +440,7 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
     hi_b[i] = bound
     clip = [[*x[:i], min(x[i], bound), *x[i + 1:]] for x in [*optima, *starts]]
     rss_b, p_b, _ = _fit(model, base, free, lo, hi_b, clip, *data, w)
-    rss_b = max(rss_b, rss)
-    f = (rss_b - rss) / (rss / dof) if rss > 0 and dof > 0 else math.inf
-    p = 0.5 * float(stats.f.sf(f, 1, dof)) if f > 0 else 1.0
+    f, p = _nested_f(rss_b, rss, 1, dof)
     return {"bound_s": float(bound), "f": float(f), "p_value": p, "dof": int(dof),
             "bounded_tau0": float(p_b["tau0"])}
 
@@ -470,8 +478,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         units as the pilot model's Km), ``significant`` (p < :data:`ALPHA`),
         ``parameters_original`` / ``parameters_expanded`` (the two fits' pilot
         parameters), ``standard_errors_original`` (of the original's free
-        parameters; diagnose reads the pilot's own delay from them), ``equaliser``
-        (``name``, ``value`` in s) and ``delay_bound`` (None without `max_delay`; else
+        parameters; diagnose reads the pilot's own delay from them) and
+        ``delay_bound`` (None without `max_delay`; else
         :func:`_delay_bound`'s test of the original's delay against it).
     """
 
@@ -555,9 +563,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     for extra, rss_e, p_e, sol in fits:
         rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
         q, dof_e = len(extra), 2 * int(lines.size) - len(free) - len(extra)
-        lr = max(rss_o - rss_e, 0.0) / q / (rss_e / dof_e) if rss_e > 0 else math.inf
-        # Km alone: on its boundary, F is 0 half the time under H0 (Self & Liang 1987).
-        p = (float(stats.f.sf(lr, q, dof_e)) * (0.5 if q == 1 else 1.0)) if lr > 0 else 1.0
+        lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
         tests.append((p, lr, rss_e, p_e, sol, extra))
     # With both line sets, two pre-planned alternatives - Km alone (the paper's path) and
     # Km with a vestibular delay - and the smaller p, Bonferroni-corrected: the delay alone
@@ -580,7 +586,6 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
             "tau_m": float(p_e.get("tau_m", 0.0)),
             "Km_se": km_se, "significant": bool(p_value < ALPHA),
             "alternatives": {"+".join(t[5]): t[0] for t in tests},
-            "equaliser": {"name": eq, "value": float(p_o[eq])},
             "delay_bound": delay_bound,
             "degrees_of_freedom": dof}
 
