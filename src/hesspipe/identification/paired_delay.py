@@ -23,7 +23,8 @@ from ..core.errors import HesspipeError
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
 from ._lsq import best_least_squares, held_covariance
-from .motion_test import _predict, line_data, pilot_start
+from .lines import line_data
+from .motion_test import _predict, pilot_start
 
 SHARED = ("K1", "1/T1", "wn", "zn", "1/T2")
 """Pilot parameters common to the two runs (1/T2 for k = 2 only). (K1 each run's own too
