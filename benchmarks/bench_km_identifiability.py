@@ -11,6 +11,10 @@ identification's own FFT generator.
 
 Prints, per pilot and set, the relative errors of Ke, Km and K1 K2, then the medians.
 
+With ``--runs N`` the two-input study's remnant case flies each pilot N times (each run its own
+remnant and forcing phases, as a human repeats a condition) and identifies the pilot from the
+runs' averaged describing function (:func:`hesspipe.identification.frf_average.average_frf`).
+
 With ``--levers`` (issue 14's Km item): the same pilots, expanded + the cohort's remnant, flown
 with TWO_INPUT and with three design changes (an output-equivalent wind, a flat target, a 140 s
 record whose lines reach 0.01 Hz), each identified by df, by the motion test's equation-error
@@ -22,6 +26,7 @@ Usage::
 
     nice python benchmarks/bench_km_identifiability.py [--pilots 10] [--target-pilots 10] [--fft-pilots 4]
     nice python benchmarks/bench_km_identifiability.py --pilots 0 --target-pilots 0 --fft-pilots 0 --levers 10 [--pilot-start 10]
+    nice python benchmarks/bench_km_identifiability.py --pilots 0 --target-pilots 10 --fft-pilots 0 --runs 8
 """
 
 from __future__ import annotations
@@ -37,6 +42,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 import bench_fly_pilot as B  # noqa: E402  (the same plants, draws and helpers)
+from hesspipe.core.seeds import derive_seed  # noqa: E402
 from hesspipe.flight.approach import FlightConfig  # noqa: E402
 from hesspipe.flight.closed_loop import fly_pilot_record  # noqa: E402
 from hesspipe.flight.target import TWO_INPUT, TargetForcing  # noqa: E402
@@ -62,6 +68,10 @@ def main(argv=None) -> int:
                     help="pilots of the information bound (Cramer-Rao, FFT generator) per design")
     ap.add_argument("--pilot-start", type=int, default=0,
                     help="levers study: first pilot index (0: pilot01; 10: pilots 11-20)")
+    ap.add_argument("--runs", type=int, default=1,
+                    help="two-input study: runs flown per pilot with the cohort's remnant (each its own "
+                         "remnant and forcing phases), identified through their averaged describing "
+                         "function (hesspipe.identification.frf_average)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: Hess pilot models flying the JSBSim 737; identified with the fitted plants")
     with tempfile.TemporaryDirectory() as tmp:
@@ -134,6 +144,8 @@ def target_study(plants, corner, args, root):
         cases = {f"run-in 15 s, remnant x {args.remnant_scale:g}": (design, 70.0 + design.run_in_s, True)}
     keys = ("Ke", "Km", "Km/Ke", "K1K2", "LG")
     errs = {(c, n): {k: [] for k in keys} for c in cases for n in sets}
+    if args.runs > 1:
+        print(f"\nwith the cohort's remnant: {args.runs} runs per pilot, averaged describing function")
     print(f"\ntwo-input task ({design.n_lines} wind lines, {design.wind_rms:g} ft/s, and {design.n_lines} "
           f"roll-rate target lines, {design.target_rms:g} rad/s, {design.f_min_hz:g}-{design.f_max_hz:g} Hz, "
           "no paper's side wind); df criterion at both line sets")
@@ -155,11 +167,19 @@ def target_study(plants, corner, args, root):
             wc = crossover("expanded", core, plants, duration_s=70.0).frequency_rad_s
             frf = estimate_frf(f.run, plants, seed=pseed)
             nref = 0 if frf.reference is None else frf.reference.H.size
+            runs = [f.run]
+            for j in range(1, args.runs if remnant else 1):
+                runs.append(fly_pilot_record(
+                    "737", plants, model, params, seed=derive_seed(pseed, "repeat", str(j)),
+                    workdir=root / "w", record_every=B.EVERY, run_id=f"{pid}-{j + 1}", target=tg,
+                    remnant_share=truth["remnant_share"] * args.remnant_scale,
+                    config=FlightConfig(duration_s=duration)).run)
             row = [f"{pid} {case} (lines {frf.feedback.H.size}+{nref}, bank {f.truth['envelope']['max_abs_bank_deg']:.1f} deg)"]
             for name, (free, from_truth, values) in sets.items():
                 fixed = {**{k: tp[k] for k in from_truth}, **values} or None
-                p = identify(f.run, plants, "expanded", free=free, fixed=fixed, seed=pseed, criterion="df",
-                             with_benchmark=False, with_identifiability=False).parameters
+                p = identify(runs if len(runs) > 1 else f.run, plants, "expanded", free=free, fixed=fixed,
+                             seed=pseed, criterion="df", with_benchmark=False,
+                             with_identifiability=False).parameters
                 e = errs[(case, name)]
                 e["Ke"].append(B.rel(p["Ke"], tp["Ke"]))
                 e["Km"].append(B.rel(p["Km"], tp["Km"]))

@@ -27,7 +27,7 @@ _API = {
     "fly": "flight", "FlightConfig": "flight", "fly_pilot": "flight",
     "fit_plants": "plants", "PlantsConfig": "plants",
     "PilotModel": "pilot", "simulate": "pilot", "Simulator": "pilot",
-    "identify": "identification", "estimate_frf": "identification",
+    "identify": "identification", "estimate_frf": "identification", "average_frf": "identification",
     "compare_pilots": "pilots", "PilotsConfig": "pilots",
     "DiagnoseConfig": "diagnose", "Diagnosis": "diagnose",
 }

@@ -19,9 +19,11 @@ def check_file_outputs(*, json: str | None = None, figure: str | None = None) ->
 
 
 def write_result_json(path: str, result, **inputs) -> None:
-    """Write ``result.to_dict()`` to `path`, with the input files it came from (`inputs`: key → path)."""
+    """Write ``result.to_dict()`` to `path`, with the input files it came from (`inputs`: key →
+    path, or a list of paths)."""
     from ..core.io import write_json
 
     obj = result.to_dict()
-    obj.update({key: str(value) for key, value in inputs.items()})
+    obj.update({key: [str(v) for v in value] if isinstance(value, (list, tuple)) else str(value)
+                for key, value in inputs.items()})
     write_json(path, obj)

@@ -1,4 +1,5 @@
-"""``hesspipe frf``: the pilot's nonparametric describing function from one measured run."""
+"""``hesspipe frf``: the pilot's nonparametric describing function from a measured run (or
+repeated runs, averaged)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,9 @@ def register(subparsers) -> None:
                     "of a multisine disturbance (and, separately, of the reference), or by Welch "
                     "cross-spectra for a broadband disturbance; per-line uncertainty, the remnant "
                     "share of control power, and the crossover and phase margin of L = H Yc.")
-    p.add_argument("run", metavar="RUN.csv", help="measured run (time, disturbance, output, control)")
+    p.add_argument("run", metavar="RUN.csv", nargs="+",
+                   help="measured run (time, disturbance, output, control); several runs of one pilot "
+                        "in one condition (one multisine forcing) are averaged line by line")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants (Yc is used)")
     from ._options import add_run_options, add_seed
 
@@ -83,17 +86,20 @@ def _model_curves(path) -> dict:
 def run(args) -> int:
     from ..core.formats import read_plants, read_run
     from ..identification.frf import estimate_frf
+    from ..identification.frf_average import average_frf
     from ._options import run_options
     from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
     curves = _model_curves(args.model) if args.model else None  # a bad file fails before any work
-    rec = read_run(args.run, **run_options(args))
-    result = estimate_frf(rec, plants, seed=args.seed)
+    recs = [read_run(path, **run_options(args)) for path in args.run]
+    result = (average_frf(recs, plants, seed=args.seed) if len(recs) > 1 else
+              estimate_frf(recs[0], plants, seed=args.seed))
     print(format_table(result))
     if args.json:
-        write_result_json(args.json, result, run=args.run, plants=args.plants)
+        write_result_json(args.json, result, run=args.run if len(args.run) > 1 else args.run[0],
+                          plants=args.plants)
     if args.figure:
         from ..viz.frf import frf_figure
 

@@ -1,4 +1,4 @@
-"""``hesspipe identify``: identify pilot-model parameters from one measured run."""
+"""``hesspipe identify``: identify pilot-model parameters from a measured run (or repeated runs)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,8 @@ from ._options import add_run_options, add_seed, add_terms, run_options
 
 #: The library's names of identify's settings → this command's options.
 TERMS = {r"(^|: )free: ": r"\1--free: ", r"(^|: )fixed: ": r"\1--fix: ",
-         r"\bhold it in fixed\b": "hold it with --fix", r"(^|: )band: ": r"\1--band: "}
+         r"\bhold it in fixed\b": "hold it with --fix", r"(^|: )band: ": r"\1--band: ",
+         r"(^|: )criterion: ": r"\1--criterion: "}
 
 
 def _fix(text: str) -> tuple[str, float]:
@@ -60,7 +61,10 @@ def register(subparsers) -> None:
         description="Fit the Hess structural model (original or expanded with motion feedback) to "
                     "a measured run by matching control power spectra (paper Eqs. 5-10), with the "
                     "bit-climbing GA (APID) or a scipy optimiser.")
-    p.add_argument("run", metavar="RUN.csv", help="measured run (time, disturbance, output, control)")
+    p.add_argument("run", metavar="RUN.csv", nargs="+",
+                   help="measured run (time, disturbance, output, control); several runs of one pilot "
+                        "in one condition are fitted through their averaged describing function "
+                        "(--criterion df)")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="fitted plants (Yc, Yd)")
     p.add_argument("--model", default="original",
                    help="original | expanded, optionally +EFFECT (e.g. expanded+remnant)")
@@ -169,7 +173,8 @@ def run(args) -> int:
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
-    rec = read_run(args.run, min_samples=PaperWelch().nperseg, **run_options(args))
+    recs = [read_run(path, min_samples=PaperWelch().nperseg, **run_options(args)) for path in args.run]
+    rec = recs[0]
     free = None
     if args.free is not None:
         free = [n.strip() for n in args.free.split(",") if n.strip()]
@@ -184,14 +189,15 @@ def run(args) -> int:
         if all(n in fixed for n in defaults):
             raise HesspipeError(f"--fix: every parameter identified by default ({', '.join(defaults)}) "
                                 "is fixed: nothing to identify; name the parameters to identify with --free")
-    result = identify(rec, plants, args.model, free=free, fixed=fixed, seed=args.seed,
+    result = identify(recs if len(recs) > 1 else rec, plants, args.model, free=free, fixed=fixed, seed=args.seed,
                       passes=args.passes, optimizer=args.optimizer, band=args.band, k=args.k,
                       fields=dict(args.bits) or None, psd_method=args.psd,
                       with_benchmark=not args.no_benchmark, restarts=args.restarts, coding=args.coding,
                       criterion=args.criterion)
     print(format_table(result))
     if args.json:
-        write_result_json(args.json, result, run=args.run, plants=args.plants)
+        write_result_json(args.json, result, run=args.run if len(args.run) > 1 else args.run[0],
+                          plants=args.plants)
     if args.figure and result.criterion == "paper":
         from ..viz.pilots import identification_figure
 

@@ -21,6 +21,7 @@ K1 and K2 enter only as a product; this is reported, never hidden.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from typing import Mapping, Sequence
 
@@ -39,6 +40,7 @@ from ..pilot.simulation import unstable_fitness
 from .apid import Field, bit_climb
 from .criteria import check_criterion, choose_k, identify_phase_aware
 from .frf import estimate_frf
+from .frf_average import average_frf
 from .problem import (
     Identification,
     SpectralObjective,
@@ -146,8 +148,11 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
 
     Parameters
     ----------
-    run : hesspipe.core.formats.Run
-        Measured (or synthetic) run: disturbance, output, control.
+    run : hesspipe.core.formats.Run or sequence of Run
+        Measured (or synthetic) run: disturbance, output, control. Several runs of one
+        pilot in one condition (repeats of one multisine forcing) are fitted through their
+        averaged describing function (:func:`~hesspipe.identification.frf_average.average_frf`;
+        criterion "df" only); the reported spectra and the run id are the first run's.
     plants : hesspipe.core.formats.Plants
     model : PilotModel or str
         "original", "expanded", "original+remnant", ...
@@ -198,6 +203,19 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
 
     model = model_from_name(model)
     criterion = check_criterion(criterion)
+    runs = None
+    if isinstance(run, (list, tuple)):
+        runs = list(run)
+        if criterion != "df" and len(runs) > 1:
+            raise HesspipeError(f"criterion: {len(runs)} runs are fitted through their averaged "
+                                f"describing function, which only criterion 'df' uses; got {criterion!r}")
+        if not runs:
+            raise HesspipeError("run: expected at least one run, got none")
+        for one in runs:
+            check_control(one)
+        if len(runs) > 1 and frf is None:
+            frf = average_frf(runs, plants, seed=check_seed(seed))
+        run = runs[0]
     if fixed and "k" in fixed:
         k_rule = f"k = {int(round(float(fixed['k'])))} (given)"
     elif k is None:
@@ -208,10 +226,13 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     check_control(run)
     if criterion != "paper":
         # The band and PSD method still define the control PSDs reported beside the fit.
-        return identify_phase_aware(run, plants, model, criterion=criterion, free=free, fixed=fixed,
-                                    seed=seed, k=k, k_rule=k_rule, limits=limits,
-                                    with_benchmark=with_benchmark, frf=frf, starts=restarts,
-                                    initial=initial, fields=fields, band=band, psd_method=psd_method)
+        result = identify_phase_aware(run, plants, model, criterion=criterion, free=free, fixed=fixed,
+                                      seed=seed, k=k, k_rule=k_rule, limits=limits,
+                                      with_benchmark=with_benchmark, frf=frf, starts=restarts,
+                                      initial=initial, fields=fields, band=band, psd_method=psd_method)
+        if runs is not None and len(runs) > 1:
+            result = dataclasses.replace(result, run_id=frf.run_id or result.run_id)
+        return result
     if optimizer not in OPTIMIZERS:
         raise HesspipeError(f"optimizer: expected one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
     where = run.source or run.id

@@ -74,12 +74,17 @@ class Response:
         Standard deviation of the complex error of H (same units; ``E|dH|^2``).
     bins : ndarray
         FFT bin of each line in the analysis window (Welch bins for "welch").
+    error_per_forcing : ndarray, complex, optional
+        E/F at the lines, F the forcing that owns them (disturbance or reference), so that
+        repeated runs average U/F and E/F before the ratio
+        (:func:`~hesspipe.identification.frf_average.average_frf`); None for "welch".
     """
 
     freq_rad_s: np.ndarray
     H: np.ndarray
     sigma: np.ndarray
     bins: np.ndarray
+    error_per_forcing: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready: frequencies (rad/s), magnitude (linear and dB), phase (deg), H and sigma."""
@@ -112,6 +117,11 @@ class Frf:
     crossover : FrfCrossover
     window : (start, length)
         Samples of the run analysed.
+    repeats : dict or None
+        For an average over repeated runs
+        (:func:`~hesspipe.identification.frf_average.average_frf`): ``runs`` and the Birge
+        ratio of each line set (``feedback``, ``reference``: the runs' scatter over what
+        their remnant explains, about 1 for runs that differ by their remnant alone).
     """
 
     method: str
@@ -124,6 +134,7 @@ class Frf:
     run_id: str = ""
     synthetic: bool = False
     notes: tuple = field(default=())
+    repeats: dict | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready: the method, both responses, the remnant share and the crossover."""
@@ -136,6 +147,7 @@ class Frf:
                 "crossover": self.crossover.to_dict(),
                 "window": {"start_sample": int(self.window[0]), "samples": int(self.window[1]),
                            "duration_s": self.window[1] * self.dt},
+                "repeats": self.repeats,
                 "notes": list(self.notes)}
 
 
@@ -344,11 +356,11 @@ def _neighbour_residual_power(U, E, H, lines, all_lines, within: int | None = No
     return power
 
 
-def _response(U, E, lines, all_lines, omega) -> Response:
+def _response(U, E, F, lines, all_lines, omega) -> Response:
     H = U[lines] / E[lines]
     power = _neighbour_residual_power(U, E, H, lines, all_lines)
     sig = np.sqrt(power) / np.maximum(np.abs(E[lines]), 1e-300)
-    return Response(omega[lines], H, sig, np.asarray(lines))
+    return Response(omega[lines], H, sig, np.asarray(lines), E[lines] / F[lines])
 
 
 def _welch(d, e, u, dt, where) -> Response:
@@ -501,12 +513,12 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
     E = np.fft.rfft(e_w - e_w.mean())
     omega = 2 * np.pi * np.fft.rfftfreq(length, dt)
     all_lines = np.union1d(d_lines, r_lines)
-    source = d_lines if d_lines.size else r_lines
+    source, owner = (d_lines, D) if d_lines.size else (r_lines, R)
     if not d_lines.size:
         notes.append("the disturbance has no lines: the feedback response is taken at the "
                      "reference's lines")
-    fb = _response(U, E, source, all_lines, omega)
-    ref = _response(U, E, r_lines, all_lines, omega) if (d_lines.size and r_lines.size) else None
+    fb = _response(U, E, owner, source, all_lines, omega)
+    ref = _response(U, E, R, r_lines, all_lines, omega) if (d_lines.size and r_lines.size) else None
     pu = np.abs(U) ** 2
     quiet = np.ones(pu.size, dtype=bool)
     quiet[0] = False
