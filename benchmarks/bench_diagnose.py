@@ -33,7 +33,7 @@ Usage::
     python benchmarks/bench_diagnose.py [--seeds 10] [--seed-start 0] [--quiet] [--plants paper,roll]
                                         [--outputs rate,angle] [--tasks disturbance,both]
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
-                                        [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired]
+                                        [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired [--repeats 3]]
                                         [--pilot precision] [--remnant-at error]
 
 ``--pilot precision`` draws McRuer precision pilots instead of Hess-structured ones (with
@@ -44,7 +44,9 @@ real humans' is not.
 ``--paired`` gives every diagnosis a baseline run of the same pilot (``humanlike.retest``:
 the aircraft as drawn, no pilot-side effect, the pilot's run-to-run scatter, its own
 remnant and forcing phases): the within-subject design in which a simulator's extra delay
-can be told from the pilot's own.
+can be told from the pilot's own. ``--repeats N`` (with ``--paired``) flies each condition N
+times (retests of the pilot; the condition's runs share the simulator's extra delay): the
+delay test compares the conditions' mean delays.
 """
 
 from __future__ import annotations
@@ -70,7 +72,7 @@ EFFECTS = ("none", "motion_feedback", "extra_delay", "remnant", "dutch_roll", "a
 PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 
 
-def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hess", **draw):
+def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hess", repeats=1, **draw):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind", fs=50.0, T_m=70.0) if plant == "paper" else dict(fs=50.0, T_m=70.0)
@@ -89,18 +91,25 @@ def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hes
     path = write_trial(Path(folder) / name, trial)
     run = read_run(path)
     plants = read_plants(path.parent / "plants.json")
-    base = None
+    base, more = None, []
     if paired:
         # The same pilot and aircraft in the baseline condition: no pilot-side effect, the
         # generator's run-to-run scatter of the pilot, its own remnant and forcing phases.
-        try:
-            bspec = retest(spec, derive_seed(s, "baseline-run"), effects=(), name=name + "-baseline")
-            btrial = simulate_trial(bspec)
-        except HesspipeError as exc:
-            return None, f"baseline run: {exc}"
-        base = read_run(write_trial(Path(folder) / (name + "-baseline"), btrial))
+        # With repeats, more runs of each condition (the same simulator latency in each).
+        base = []
+        for j in range(repeats):
+            tag = "" if j == 0 else f"-{j + 1}"
+            try:
+                bspec = retest(spec, derive_seed(s, "baseline-run", *([str(j)] if j else [])),
+                               effects=(), name=name + "-baseline" + tag)
+                base.append(read_run(write_trial(Path(folder) / bspec.name, simulate_trial(bspec))))
+                if j:
+                    rspec = retest(spec, derive_seed(s, "repeat-run", str(j)), name=name + tag)
+                    more.append(read_run(write_trial(Path(folder) / rspec.name, simulate_trial(rspec))))
+            except HesspipeError as exc:
+                return None, f"repeat or baseline run: {exc}"
     t = time.process_time()
-    d = diagnose(run, plants, seed=seed, baseline_run=base)
+    d = diagnose(run, plants, seed=seed, baseline_run=base or None, repeat_runs=more)
     return d, time.process_time() - t
 
 
@@ -148,6 +157,8 @@ def main(argv=None) -> int:
     ap.add_argument("--paired", action="store_true",
                     help="give diagnose a baseline run of the same pilot (humanlike.retest: no "
                          "pilot-side effect, the pilot's run-to-run scatter, another remnant)")
+    ap.add_argument("--repeats", type=int, default=1,
+                    help="with --paired: runs of each condition (the delay test compares their means)")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])
     draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}
@@ -173,7 +184,7 @@ def main(argv=None) -> int:
             for seed in range(args.seed_start, args.seed_start + args.seeds):
                 try:
                     d, cpu = run_case(tmp, plant, output, task, effect, seed, args.paired,
-                                      args.pilot, **draw)
+                                      args.pilot, args.repeats, **draw)
                 except HesspipeError as exc:
                     failures.append(f"{plant}/{output}/{task}/{effect}/{seed}: {exc}")
                     print("  REFUSED", failures[-1], flush=True)

@@ -17,6 +17,8 @@ from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
+from hesspipe.diagnose.motion import paired_delay_test
+from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
 
@@ -76,3 +78,64 @@ def test_a_baseline_run_without_forcing_lines_is_an_error_naming_it(tmp_path):
     noisy = replace(base, disturbance=rng.standard_normal(len(base)), reference=0.0 * base.reference)
     with pytest.raises(HesspipeError, match="baseline run"):
         diagnose(run, plants, baseline_run=noisy)
+
+
+def _repeats(folder, effect, seed, n, task="disturbance"):
+    """n runs of each condition (roll rate; the condition's repeats keep the simulator's extra
+    delay, every run draws the pilot's run-to-run scatter), as bench_diagnose.py --paired
+    --repeats n draws them."""
+    effects = () if effect == "none" else (effect,)
+    s = derive_seed(seed, "bench-diagnose", "roll", "rate", task, effect)
+    spec = draw_trial("roll", s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
+                      output="rate", name="run")
+    cond = [spec] + [retest(spec, derive_seed(s, "repeat-run", str(j)), name=f"run{j}") for j in range(1, n)]
+    base = [retest(spec, derive_seed(s, "baseline-run", *([str(j)] if j else [])), effects=(), name=f"base{j}")
+            for j in range(n)]
+    read = [read_run(write_trial(folder / x.name, simulate_trial(x))) for x in cond + base]
+    return read[:n], read[n:], read_plants(folder / "run" / "plants.json"), spec.pilot["extra_delay"]
+
+
+def test_repeated_runs_name_an_extra_delay_that_one_pair_cannot(tmp_path):
+    # Development seed 100, roll rate, disturbance only: 0.054 s of extra delay; one pair
+    # measures it but within the pilot's run-to-run spread (p = 0.02), three runs of each
+    # condition shrink the spread by sqrt(3).
+    cond, base, plants, extra = _repeats(tmp_path, "extra_delay", 100, 3)
+    assert cond[1].source != cond[0].source and len(base) == 3
+    one = diagnose(cond[0], plants, baseline_run=base[0], candidates=("extra_delay",)).delay_verdict
+    assert not one["named"]
+    out = tmp_path / "d.json"
+    assert main(["diagnose", *(str(r.source) for r in cond), "--plants", str(tmp_path / "run" / "plants.json"),
+                 "--baseline-run", *(str(b.source) for b in base), "--candidates", "extra_delay",
+                 "--json", str(out)]) == 0
+    d = json.loads(out.read_text())
+    dv = d["delay_verdict"]
+    assert "extra_delay" in d["named_effects"] and dv["runs"] == 3 and dv["baseline_runs"] == 3
+    assert dv["spread_s"] == pytest.approx(DiagnoseConfig().retest_delay_sd / np.sqrt(3))
+    assert abs(dv["difference_s"] - extra) < 0.03
+
+
+def test_the_allowed_spread_shrinks_with_the_runs_of_each_condition():
+    joint = {"difference_s": 0.03, "se_s": 0.0, "delay_s": 0.33, "baseline_delay_s": 0.30}
+    one = paired_delay_test(joint, 0.02, 0.01)
+    assert one["spread_s"] == pytest.approx(0.02) and not one["named"]            # z = 1.5
+    many = paired_delay_test({**joint, "runs": 4, "baseline_runs": 4}, 0.02, 0.01)
+    assert many["spread_s"] == pytest.approx(0.01) and many["named"]              # z = 3
+    assert paired_delay_test({**joint, "runs": 1, "baseline_runs": 3}, 0.02, 0.01)["spread_s"] == \
+        pytest.approx(0.02 * np.sqrt((1 + 1 / 3) / 2))
+
+
+def test_a_repeat_without_a_baseline_is_a_one_line_error(tmp_path, capsys):
+    run, base, plants, _ = _pair(tmp_path, "none", 100)
+    assert main(["diagnose", str(run.source), str(base.source), "--plants",
+                 str(tmp_path / "plants.json")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "--baseline-run" in err and str(base.source) in err
+    with pytest.raises(HesspipeError, match="^repeat_runs: .* expected baseline_run"):
+        diagnose(run, plants, repeat_runs=[base])
+
+
+def test_a_repeat_of_the_condition_keeps_the_simulators_extra_delay():
+    spec = draw_trial("roll", 7, task="both", pilot="hess", effects=("extra_delay",), fs=50.0, T_m=70.0)
+    again = retest(spec, 3)
+    assert again.pilot["extra_delay"] == spec.pilot["extra_delay"] > 0
+    assert again.pilot["tau_v"] != spec.pilot["tau_v"]                   # the pilot's scatter

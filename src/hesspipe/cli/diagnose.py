@@ -15,7 +15,9 @@ def register(sub) -> None:
                     "feedback on the describing function, identify the baseline pilot model, locate "
                     "where its control PSD disagrees with the measurement, try each candidate effect, "
                     "name the significant ones and report the gap before and after.")
-    p.add_argument("run", metavar="RUN.csv", help="measured run (time, disturbance, output, control)")
+    p.add_argument("run", metavar="RUN.csv", nargs="+",
+                   help="measured run (time, disturbance, output, control); more runs of the same pilot "
+                        "and condition are repeats for the delay test against --baseline-run")
     p.add_argument("--plants", metavar="PLANTS.json", required=True, help="plants file (Yc, Yd)")
     p.add_argument("--model", default="original", help="baseline model: original or expanded "
                                                        "(default: %(default)s)")
@@ -23,9 +25,9 @@ def register(sub) -> None:
                    help="effect ids to try (default: every registered effect)")
     p.add_argument("--alpha", type=float, help="significance level per round (default 0.01)")
     p.add_argument("--max-effects", type=int, help="most effects to name (default 3)")
-    p.add_argument("--baseline-run", metavar="BASE.csv",
-                   help="the same pilot's run in the baseline condition (same aircraft and columns): "
-                        "the visual delay is tested against it, so a simulator's extra delay can be "
+    p.add_argument("--baseline-run", metavar="BASE.csv", nargs="+",
+                   help="the same pilot's run(s) in the baseline condition (same aircraft and columns): "
+                        "the visual delay is tested against theirs, so a simulator's extra delay can be "
                         "told from the pilot's own")
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
@@ -59,11 +61,14 @@ def _diagnose(args) -> int:
     plants = read_plants(args.plants)
     from ._options import run_options
 
-    run = read_run(args.run, min_samples=WELCH_SEGMENT, **run_options(args))
+    if len(args.run) > 1 and args.baseline_run is None:
+        raise HesspipeError(f"{args.run[1]}: a second RUN.csv is a repeat for the delay test against "
+                            "the same pilot's baseline; expected --baseline-run BASE.csv too")
+    run, *repeats = (read_run(path, min_samples=WELCH_SEGMENT, **run_options(args)) for path in args.run)
     base = None if args.baseline_run is None else \
-        read_run(args.baseline_run, min_samples=WELCH_SEGMENT, **run_options(args))
+        [read_run(path, min_samples=WELCH_SEGMENT, **run_options(args)) for path in args.baseline_run]
     result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
-                      baseline_run=base)
+                      baseline_run=base, repeat_runs=repeats)
     print(format_report(result))
     if args.json:
         write_json(args.json, result.to_dict())

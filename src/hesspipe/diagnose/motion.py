@@ -239,30 +239,36 @@ def paired_delay_test(joint: dict, retest_sd_s: float, alpha: float) -> dict:
     simulator without the suspected latency), so an extra delay is the difference of the
     two runs' delays, fitted on both describing functions at once
     (:func:`hesspipe.identification.paired_delay.paired_delay`): ``z = difference /
-    sqrt(se² + retest_sd²)``, named when ``P(N(0,1) > z) < alpha``. ``retest_sd_s`` is the
+    sqrt(se² + spread²)``, named when ``P(N(0,1) > z) < alpha``. ``retest_sd_s`` is the
     spread of one pilot's delay difference between two runs of one condition (humans are
     not identical from run to run), so a difference within it is not taken for a
-    simulator's latency.
+    simulator's latency. With repeated runs (n of the condition, m of the baseline) the
+    conditions' mean delays differ by ``spread = retest_sd_s sqrt((1/n + 1/m) / 2)``: each
+    run's own delay scatters by ``retest_sd_s / sqrt(2)`` about the pilot's.
 
     Parameters
     ----------
     joint : dict
-        :func:`~hesspipe.identification.paired_delay.paired_delay`'s result (s).
+        :func:`~hesspipe.identification.paired_delay.paired_delay`'s result (s; ``runs``
+        and ``baseline_runs`` default to 1).
     retest_sd_s : float
         Standard deviation of the difference of one pilot's delays on two runs, s.
     alpha : float
         Significance level.
     """
     diff, se = joint["difference_s"], joint["se_s"]
-    var = retest_sd_s ** 2 + (se * se if math.isfinite(se) else 0.0)
+    n, m = int(joint.get("runs", 1)), int(joint.get("baseline_runs", 1))
+    spread = retest_sd_s * math.sqrt((1.0 / n + 1.0 / m) / 2.0)
+    var = spread ** 2 + (se * se if math.isfinite(se) else 0.0)
     z = diff / math.sqrt(var) if var > 0 else (math.inf if diff > 0 else -math.inf)
     p = float(scipy.stats.norm.sf(z))
     return {"named": bool(p < alpha), "delay_s": float(joint["delay_s"]), "se_s": float(se),
             "baseline_delay_s": float(joint["baseline_delay_s"]), "retest_sd_s": float(retest_sd_s),
+            "spread_s": float(spread), "runs": n, "baseline_runs": m,
             "pilot_delay_s": float(joint["baseline_delay_s"]), "difference_s": float(diff),
             "z": float(z), "p_value": p, "alpha": float(alpha), "extra_s": float(max(diff, 0.0)),
             "criterion": "one-sided z test of the visual delay's growth over the same pilot's "
-                         "baseline run (both describing functions fitted at once, shared "
+                         "baseline run(s) (all describing functions fitted at once, shared "
                          "dynamics; the pilot's run-to-run spread allowed)"}
 
 
@@ -303,7 +309,7 @@ def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float
     return (float(power[inband & ~forced].sum()) / total if total > 0 else float("nan")), int(lines.size)
 
 
-def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None) -> DFEvidence | None:
+def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_runs=()) -> DFEvidence | None:
     """Motion and delay verdicts and the pilot's dynamics from the describing function
     (:func:`hesspipe.identification.motion_test.motion_test`), or None when the record has no forcing lines.
 
@@ -320,14 +326,18 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None) -> DFEvid
     cfg : DiagnoseConfig
         ``motion_alpha``, ``alpha``, ``max_pilot_delay`` (s), ``retest_delay_sd`` (s),
         ``remnant_share``.
-    baseline_run : hesspipe.core.formats.Run, optional
-        The same pilot in the baseline condition: the delay is then tested against its
-        delay (:func:`paired_delay_test`) instead of against a human's longest.
+    baseline_run : hesspipe.core.formats.Run or sequence of Run, optional
+        The same pilot in the baseline condition (one run or repeats): the delay is then
+        tested against its delay (:func:`paired_delay_test`) instead of against a human's
+        longest.
+    repeat_runs : sequence of Run
+        More runs of `run`'s pilot and condition, for the paired delay test only.
 
     Raises
     ------
     HesspipeError
-        When `baseline_run` has no describing function to read the pilot's delay from.
+        When `baseline_run` or a repeat has no describing function to read the pilot's
+        delay from.
     """
 
     t = safe_motion_test(run, plants, start, k=k,
@@ -352,15 +362,16 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None) -> DFEvid
             delay = delay_test(pars["tau0"], se, cfg.max_pilot_delay, cfg.alpha)
         own = cfg.max_pilot_delay
     else:
-        tb = safe_motion_test(baseline_run, plants, start, k=k)
+        bases = list(baseline_run) if isinstance(baseline_run, (list, tuple)) else [baseline_run]
+        tb = safe_motion_test(bases[0], plants, start, k=k)
         if not tb.get("available"):
-            raise HesspipeError(f"{baseline_run.source or baseline_run.id}: the baseline run has no "
+            raise HesspipeError(f"{bases[0].source or bases[0].id}: the baseline run has no "
                                 f"describing function to read the pilot's delay from "
                                 f"({tb.get('reason', 'motion test unavailable')})")
-        joint = paired_delay(run, baseline_run, plants, (t["parameters_original"], tb["parameters_original"]),
-                             k=k)
+        joint = paired_delay([run, *repeat_runs], bases, plants,
+                             (t["parameters_original"], tb["parameters_original"]), k=k)
         delay = paired_delay_test(joint, cfg.retest_delay_sd, cfg.alpha)
-        delay["baseline_run"] = baseline_run.source or baseline_run.id
+        delay["baseline_run"] = ", ".join(b.source or b.id for b in bases)
         own = min(delay["pilot_delay_s"], cfg.max_pilot_delay) if delay["named"] else cfg.max_pilot_delay
     dyn = {n: float(pars[n]) for n in DYNAMICS if n in pars}
     dyn["tau0"] = min(dyn["tau0"], own)

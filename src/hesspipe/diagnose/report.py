@@ -37,9 +37,11 @@ def format_report(d: Diagnosis) -> str:
         out.append("  -> " + d.plant_finding["message"])
     dv = d.delay_verdict
     if dv is not None:
+        runs = dv.get("runs", 1), dv.get("baseline_runs", 1)
+        counted = "" if runs == (1, 1) else f" over {runs[0]} and {runs[1]} runs"
         against = (f"against the same pilot's baseline run {dv['baseline_run']} "
                    f"({dv['baseline_delay_s']:.3f} s; difference {dv['difference_s']:.3f} s, run-to-run "
-                   f"spread {dv['retest_sd_s']:g} s)" if "baseline_run" in dv else
+                   f"spread {dv.get('spread_s', dv['retest_sd_s']):.3g} s{counted})" if "baseline_run" in dv else
                    f"against a human's longest {dv['max_pilot_delay_s']:g} s")
         out.append(f"Visual delay on the describing function: {dv['delay_s']:.3f} +/- {dv['se_s']:.3f} s "
                    f"{against}: p={dv['p_value']:.2g} "

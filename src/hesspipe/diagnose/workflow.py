@@ -135,7 +135,8 @@ def _resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ..
 
 def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence[str] | str | None = None,
              seed: int = 0, config: DiagnoseConfig | None = None,
-             baseline_run: Run | None = None) -> Diagnosis:
+             baseline_run: Run | Sequence[Run] | None = None,
+             repeat_runs: Sequence[Run] = ()) -> Diagnosis:
     """Locate the model/measurement disagreement, name missing effects, show the gap shrink.
 
     Parameters
@@ -152,12 +153,17 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         Base seed of any random part. The remnant is evaluated in expectation, so today
         the result does not depend on it; same inputs + seed → identical outputs.
     config : DiagnoseConfig, optional
-    baseline_run : Run, optional
+    baseline_run : Run or sequence of Run, optional
         The same pilot flying the same aircraft in the baseline condition (a within-
         subject design). With multisine forcing in both records the visual delay is then
         tested against this run's (``config.retest_delay_sd`` allowing for a pilot's
         run-to-run spread): only so can a simulator's extra delay be told from a slow
-        pilot's own, which a single record shows as one delay.
+        pilot's own, which a single record shows as one delay. A sequence: repeated
+        baseline runs, whose mean delay is the pilot's.
+    repeat_runs : sequence of Run
+        More runs of `run`'s pilot in `run`'s condition, for the paired delay test only
+        (the condition's mean delay against the baseline's; the run-to-run spread allowed
+        shrinks with the number of runs). Needs `baseline_run`.
 
     Returns
     -------
@@ -177,9 +183,15 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     check_seed(seed)
     check_control(run)
     _check_inputs(run, plants, cfg)
-    if baseline_run is not None:
-        check_control(baseline_run)
-        _check_inputs(baseline_run, plants, cfg)
+    bases = [] if baseline_run is None else (
+        list(baseline_run) if isinstance(baseline_run, (list, tuple)) else [baseline_run])
+    repeats = list(repeat_runs)
+    if repeats and not bases:
+        raise HesspipeError("repeat_runs: repeats of the run serve the paired delay test against "
+                            "the same pilot's baseline run; expected baseline_run too")
+    for other in bases + repeats:
+        check_control(other)
+        _check_inputs(other, plants, cfg)
     check = plant_check(run, plants, max_lag=cfg.max_lag)
     # A failed plant check is a finding, never a refusal: the aircraft-side candidate that
     # closes it (or the file error it proves) is named and the pilot identified around it.
@@ -191,8 +203,9 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         # spectrum), so the report shows what naming the aircraft effect closed.
         before = Problem(run, plants, cfg, seed)
         before = (before, before.fit(base, base.defaults(k=cfg.k), grid=before.free_parameters(base)))
-    if baseline_run is not None:  # the same aircraft: the same correction
-        baseline_run = corrected(baseline_run, plants, finding)[0]
+    # The same aircraft: the same correction.
+    bases = [corrected(b, plants, finding)[0] for b in bases]
+    repeats = [corrected(r, plants, finding)[0] for r in repeats]
     run, plants = corrected(run, plants, finding)
     cands = tuple(c for c in cands if _effect(c).where != "aircraft")  # judged on the output above
     problem = Problem(run, plants, cfg, seed)
@@ -200,7 +213,8 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     # Multisine lines: the describing function judges motion and delay and gives the
     # pilot's own dynamics (phase-aware); the baseline starts from them.
     k_df = choose_k(plants)[0]
-    ev = df_evidence(run, plants, base.defaults(k=k_df), k=k_df, cfg=cfg, baseline_run=baseline_run) \
+    ev = df_evidence(run, plants, base.defaults(k=k_df), k=k_df, cfg=cfg, baseline_run=bases or None,
+                     repeat_runs=repeats) \
         if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else None
     dynamics = {n: v for n, v in (ev.dynamics if ev else {}).items() if n not in cfg.free}
     # Starts, in order: the describing function's dynamics (the pilot's own), then the

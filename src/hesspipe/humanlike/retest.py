@@ -48,7 +48,8 @@ def retest(spec: TrialSpec, seed: int, *, effects=None, name: str | None = None)
     -------
     TrialSpec
         The second trial; its pilot's ``tau_v`` (s) is the first's plus the scatter, and
-        ``extra_delay`` (s) is drawn afresh when the effect is on.
+        ``extra_delay`` (s) is the first trial's when both have the effect (a repeat of the
+        condition: the simulator's latency), else drawn afresh when the effect is on.
 
     Raises
     ------
@@ -82,6 +83,9 @@ def retest(spec: TrialSpec, seed: int, *, effects=None, name: str | None = None)
         over["rate_limit_factor"] = spec.actuator["rate_limit_factor"]
     if "motion_feedback" in pilot_side and spec.motion_tf is not None:
         over["motion_path"] = spec.motion_tf
+    if "extra_delay" in pilot_side and spec.pilot.get("extra_delay"):
+        # A repeat of the condition: the simulator's latency is the same on every run.
+        over["extra_delay"] = (spec.pilot["extra_delay"],) * 2
     return draw_trial(spec.plant, seed, task=spec.task, pilot=p["structure"],
                       effects=aircraft + pilot_side, pilot_params=p, style=spec.style,
                       name=name or f"{spec.name}-retest", **over)

@@ -10,6 +10,11 @@ together by the equation error of :mod:`.motion_test` (each line weighted by its
 remnant): the pilot's dynamics (neuromuscular mode, lead-lag, proprioceptive gain) are
 shared, the gain Ke and the delay are each run's own, so the trade is common to both runs
 and the difference of the delays is measured by the phase the two runs do not share.
+
+Repeated runs of either condition join the same fit, each with its own gain and delay (a
+human's delay scatters from run to run); the difference is that of the conditions' mean
+delays, whose run-to-run spread shrinks with the number of runs
+(:func:`hesspipe.diagnose.motion.paired_delay_test`).
 """
 
 from __future__ import annotations
@@ -40,20 +45,28 @@ def _lines(run, band_hz):
     return ld.s, ld.E, ld.Y, ld.U, ld.w
 
 
+def _as_list(runs) -> list:
+    return list(runs) if isinstance(runs, (list, tuple)) else [runs]
+
+
 def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], Mapping[str, float]], *,
                  k: int = 1, band_hz: tuple[float, float] = (0.0, 5.0)) -> dict:
     """Visual delay of `run` minus that of `baseline_run` (s), one pilot's shared dynamics.
 
     Parameters
     ----------
-    run, baseline_run : hesspipe.core.formats.Run
-        Two records of one pilot with multisine forcing (either line set or both).
+    run, baseline_run : hesspipe.core.formats.Run or sequence of Run
+        Records of one pilot with multisine forcing (either line set or both): the
+        condition under test and the baseline condition. Several runs of a condition
+        (repeats) each keep their own gain and delay; the difference is then that of the
+        conditions' mean delays.
     plants : hesspipe.core.formats.Plants
         Only the motion path is used (the original model has none; kept for the API).
     starts : (mapping, mapping)
-        Starting pilot parameters of `run` and of `baseline_run` (e.g. their own
-        describing-function fits, :func:`hesspipe.identification.motion_test.motion_test`'s
-        ``parameters_original``); the fit starts from each run's dynamics in turn.
+        Starting pilot parameters of the condition and of the baseline (e.g. their first
+        runs' own describing-function fits,
+        :func:`hesspipe.identification.motion_test.motion_test`'s ``parameters_original``);
+        the fit starts from each condition's dynamics in turn.
     k : int
         Hess model order (1 or 2).
     band_hz : (float, float)
@@ -63,15 +76,18 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
     -------
     dict
         ``difference_s`` and ``se_s`` (its standard error from the joint fit, s),
-        ``delay_s`` and ``baseline_delay_s`` (each run's delay in the joint fit, s),
-        ``shared`` (the shared parameters), ``n_lines`` (both runs), ``degrees_of_freedom``.
+        ``delay_s`` and ``baseline_delay_s`` (each condition's mean delay in the joint fit,
+        s), ``runs`` and ``baseline_runs`` (how many of each), ``shared`` (the shared
+        parameters), ``n_lines`` (all runs), ``degrees_of_freedom``.
 
     Raises
     ------
     HesspipeError
-        When a run has too few forcing lines or no unforced bins between them.
+        When a run has too few forcing lines or no unforced bins between them (naming it).
     """
-    a, b = _lines(run, band_hz), _lines(baseline_run, band_hz)
+    runs, base_runs = _as_list(run), _as_list(baseline_run)
+    data = [_lines(r, band_hz) for r in runs + base_runs]
+    side = [0] * len(runs) + [1] * len(base_runs)      # which start each run takes
     model = PilotModel()
     cab = motion_block(plants)
     shared = [n for n in SHARED if n != "1/T2" or k == 2]
@@ -81,44 +97,49 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
     box = {"K1": (1e-3, 100.0), "1/T1": (1e-4, 10.0), "wn": (1.0, 60.0), "zn": (0.02, 2.0),
            "1/T2": (1e-3, 20.0), "tau0": (0.0, 0.6),
            "Ke": (0.0, big) if bases[0]["Ke"] >= 0 else (-big, 0.0)}
-    names = shared + own + own          # x = [shared..., run's own..., baseline's own...]
+    names = shared + own * len(data)    # x = [shared..., each run's own...]
     lo = np.array([box[n][0] for n in names])
     hi = np.array([box[n][1] for n in names])
-    i_r, i_b = len(shared) + own.index("tau0"), len(shared) + len(own) + own.index("tau0")
+    taus = np.array([len(shared) + len(own) * i + own.index("tau0") for i in range(len(data))])
+    # The difference of the conditions' mean delays, as a weight on each run's delay.
+    g = np.array([1.0 / len(runs) if sd == 0 else -1.0 / len(base_runs) for sd in side])
 
-    def params(x, which):
-        p = dict(bases[which])
+    def params(x, i):
+        p = dict(bases[side[i]])
         p.update(zip(shared, x[:len(shared)]))
-        j = len(shared) + len(own) * which
+        j = len(shared) + len(own) * i
         p.update(zip(own, x[j:j + len(own)]))
         return p
 
     def resid(x):
         out = []
-        for which, (s, E, Y, U, w) in enumerate((a, b)):
-            r = (U - _predict(params(x, which), model, cab, s, E, Y)) * w
+        for i, (s, E, Y, U, w) in enumerate(data):
+            r = (U - _predict(params(x, i), model, cab, s, E, Y)) * w
             out += [r.real, r.imag]
         return np.concatenate(out)
 
     mid = 0.5 * (bases[0]["tau0"] + bases[1]["tau0"])
-    # From each run's dynamics, with each run's own delay and with no difference at all
-    # (one start's valley of the delay-mode trade can hold the difference away from 0).
-    starts = []
+    # From each condition's dynamics, with each condition's own delay and with no
+    # difference at all (one start's valley of the delay-mode trade can hold the
+    # difference away from 0).
+    x_starts = []
     for src in bases:
         for same in (False, True):
-            x0 = np.array([src[n] for n in shared] + [bases[0][n] for n in own]
-                          + [bases[1][n] for n in own], dtype=float)
+            x0 = np.array([src[n] for n in shared]
+                          + [v for i in range(len(data)) for v in (bases[side[i]][n] for n in own)],
+                          dtype=float)
             if same:
-                x0[[i_r, i_b]] = mid
-            starts.append(x0)
-    rss, sol = best_least_squares(resid, starts, lo, hi, "paired delay: no joint fit of the two "
+                x0[taus] = mid
+            x_starts.append(x0)
+    rss, sol = best_least_squares(resid, x_starts, lo, hi, "paired delay: no joint fit of the "
                                   "describing functions converged")
     dof = max(sol.fun.size - sol.x.size, 1)
     cov = held_covariance(sol, rss, dof)     # NaN where a delay ended on a bound
-    var = cov[i_r, i_r] + cov[i_b, i_b] - 2.0 * cov[i_r, i_b]
+    var = float(g @ cov[np.ix_(taus, taus)] @ g)
     se = float(math.sqrt(max(var, 0.0))) if math.isfinite(var) else math.nan
-    x = sol.x
-    return {"difference_s": float(x[i_r] - x[i_b]), "se_s": se, "delay_s": float(x[i_r]),
-            "baseline_delay_s": float(x[i_b]),
-            "shared": {n: float(v) for n, v in zip(shared, x[:len(shared)])},
-            "n_lines": int(a[0].size + b[0].size), "degrees_of_freedom": int(dof)}
+    t = sol.x[taus]
+    mine, theirs = float(t[:len(runs)].mean()), float(t[len(runs):].mean())
+    return {"difference_s": mine - theirs, "se_s": se, "delay_s": mine,
+            "baseline_delay_s": theirs, "runs": len(runs), "baseline_runs": len(base_runs),
+            "shared": {n: float(v) for n, v in zip(shared, sol.x[:len(shared)])},
+            "n_lines": int(sum(d[0].size for d in data)), "degrees_of_freedom": int(dof)}
