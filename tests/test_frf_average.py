@@ -89,6 +89,8 @@ def test_runs_of_other_lengths_or_without_lines_are_refused_by_name(repeats):
         average_frf([runs[0], noisy])
     with pytest.raises(HesspipeError, match="at least one run"):
         average_frf([])
+    with pytest.raises(HesspipeError, match="^r1: the same record as r1; expected distinct"):
+        average_frf([runs[0], runs[1], runs[1]])
 
 
 def test_identify_and_frf_take_repeated_runs_from_files(tmp_path, repeats, capsys):

@@ -132,6 +132,8 @@ def test_a_repeat_without_a_baseline_is_a_one_line_error(tmp_path, capsys):
     assert err.count("\n") == 0 and "--baseline-run" in err and str(base.source) in err
     with pytest.raises(HesspipeError, match="^repeat_runs: .* expected baseline_run"):
         diagnose(run, plants, repeat_runs=[base])
+    with pytest.raises(HesspipeError, match="the same record as"):
+        diagnose(run, plants, baseline_run=[base, base])
 
 
 def test_a_repeat_of_the_condition_keeps_the_simulators_extra_delay():

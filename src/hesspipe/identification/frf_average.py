@@ -44,11 +44,31 @@ from .frf_crossover import FrfCrossover, nonparametric_crossover
 from .lines import line_variances, windowed
 
 
-def _name(frf: Frf, i: int) -> str:
-    return frf.run_id or f"run {i + 1}"
+def _where(run, i: int) -> str:
+    return getattr(run, "source", "") or getattr(run, "id", "") or f"run {i + 1}"
 
 
-def _combine(responses: Sequence[Response], frfs) -> tuple[Response, float, int]:
+def check_distinct(runs: Sequence) -> None:
+    """Raise if a record appears twice among repeated runs (the same control samples):
+    counted twice, it would shrink the errors and the allowed run-to-run spread for nothing.
+
+    Parameters
+    ----------
+    runs : sequence of hesspipe.core.formats.Run
+
+    Raises
+    ------
+    HesspipeError
+        Naming the repeated record (its file, else its id) and the first one it repeats.
+    """
+    for i, run in enumerate(runs):
+        for j in range(i):
+            if np.array_equal(np.asarray(run.control), np.asarray(runs[j].control)):
+                raise HesspipeError(f"{_where(run, i)}: the same record as {_where(runs[j], j)}; "
+                                    "expected distinct repeated runs")
+
+
+def _combine(responses: Sequence[Response], names: Sequence[str]) -> tuple[Response, float, int]:
     """Ratio of the runs' mean U/F and E/F at each line of one set, the set's Birge ratio,
     and how many lines some run lacks.
 
@@ -57,7 +77,7 @@ def _combine(responses: Sequence[Response], frfs) -> tuple[Response, float, int]
     """
     for i, r in enumerate(responses):
         if r.error_per_forcing is None:
-            raise HesspipeError(f"{_name(frfs[i], i)}: the describing function carries no E/F at its "
+            raise HesspipeError(f"{names[i]}: the describing function carries no E/F at its "
                                 "lines; expected one from estimate_frf")
     bins = np.unique(np.concatenate([np.asarray(r.bins, dtype=int) for r in responses]))
     n, k = len(responses), bins.size
@@ -125,32 +145,34 @@ def average_frf(runs: Sequence, plants=None, *, seed: int = 0) -> Frf:
     Raises
     ------
     HesspipeError
-        No runs; a run without multisine lines (Welch estimates are not averaged here);
+        No runs; a record given twice; a run without multisine lines (Welch estimates are
+        not averaged here);
         runs whose sampling interval, analysed length or reference lines differ (naming
         the run); what :func:`~hesspipe.identification.frf.estimate_frf` raises for a run.
     """
     runs = list(runs)
     if not runs:
         raise HesspipeError("average_frf: expected at least one run, got none")
-    frfs = []
+    frfs, names = [], [_where(r, i) for i, r in enumerate(runs)]
+    check_distinct(runs)
     for i, run in enumerate(runs):
         f = estimate_frf(run, seed=seed)
         first = frfs[0] if frfs else f
         if f.method != "multisine":
-            raise HesspipeError(f"{_name(f, i)}: no multisine lines (describing function by "
+            raise HesspipeError(f"{names[i]}: no multisine lines (describing function by "
                                 f"{f.method!r}); expected lines to average over repeated runs")
         if abs(f.dt - first.dt) > 1e-6 * first.dt or f.window[1] != first.window[1]:
-            raise HesspipeError(f"{_name(f, i)}: {f.window[1]} samples at {f.dt:.6g} s analysed; "
+            raise HesspipeError(f"{names[i]}: {f.window[1]} samples at {f.dt:.6g} s analysed; "
                                 f"expected {first.window[1]} at {first.dt:.6g} s like "
-                                f"{_name(first, 0)}: repeated runs of one forcing")
+                                f"{names[0]}: repeated runs of one forcing")
         if (f.reference is None) != (first.reference is None):
-            raise HesspipeError(f"{_name(f, i)}: reference lines {'absent' if f.reference is None else 'present'}"
-                                f"; expected them as in {_name(first, 0)}: repeated runs of one forcing")
+            raise HesspipeError(f"{names[i]}: reference lines {'absent' if f.reference is None else 'present'}"
+                                f"; expected them as in {names[0]}: repeated runs of one forcing")
         frfs.append(_with_remnant_levels(run, f))
-    feedback, birge_fb, gaps = _combine([f.feedback for f in frfs], frfs)
+    feedback, birge_fb, gaps = _combine([f.feedback for f in frfs], names)
     reference, birge_ref = None, None
     if frfs[0].reference is not None:
-        reference, birge_ref, more = _combine([f.reference for f in frfs], frfs)
+        reference, birge_ref, more = _combine([f.reference for f in frfs], names)
         gaps += more
     yc = None if plants is None else getattr(plants, "control_to_output", plants)
     cross = (nonparametric_crossover(feedback, yc, seed=seed) if yc is not None else
