@@ -33,7 +33,7 @@ Usage::
     python benchmarks/bench_diagnose.py [--seeds 10] [--seed-start 0] [--quiet] [--plants paper,roll]
                                         [--outputs rate,angle] [--tasks disturbance,both]
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
-                                        [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired [--repeats 3]]
+                                        [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired] [--repeats 3]
                                         [--pilot precision] [--remnant-at error]
 
 ``--pilot precision`` draws McRuer precision pilots instead of Hess-structured ones (with
@@ -44,9 +44,10 @@ real humans' is not.
 ``--paired`` gives every diagnosis a baseline run of the same pilot (``humanlike.retest``:
 the aircraft as drawn, no pilot-side effect, the pilot's run-to-run scatter, its own
 remnant and forcing phases): the within-subject design in which a simulator's extra delay
-can be told from the pilot's own. ``--repeats N`` (with ``--paired``) flies each condition N
-times (retests of the pilot; the condition's runs share the simulator's extra delay): the
-delay test compares the conditions' mean delays.
+can be told from the pilot's own. ``--repeats N`` flies the condition N times (retests of
+the pilot; the runs share the simulator's extra delay): diagnose pools them in the motion
+test, and with ``--paired`` (N baseline runs too) the delay test compares the conditions'
+mean delays.
 """
 
 from __future__ import annotations
@@ -91,23 +92,23 @@ def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hes
     path = write_trial(Path(folder) / name, trial)
     run = read_run(path)
     plants = read_plants(path.parent / "plants.json")
-    base, more = None, []
-    if paired:
-        # The same pilot and aircraft in the baseline condition: no pilot-side effect, the
-        # generator's run-to-run scatter of the pilot, its own remnant and forcing phases.
-        # With repeats, more runs of each condition (the same simulator latency in each).
-        base = []
-        for j in range(repeats):
-            tag = "" if j == 0 else f"-{j + 1}"
-            try:
-                bspec = retest(spec, derive_seed(s, "baseline-run", *([str(j)] if j else [])),
-                               effects=(), name=name + "-baseline" + tag)
-                base.append(read_run(write_trial(Path(folder) / bspec.name, simulate_trial(bspec))))
-                if j:
-                    rspec = retest(spec, derive_seed(s, "repeat-run", str(j)), name=name + tag)
-                    more.append(read_run(write_trial(Path(folder) / rspec.name, simulate_trial(rspec))))
-            except HesspipeError as exc:
-                return None, f"repeat or baseline run: {exc}"
+    base, more = [], []
+    # With repeats, more runs of the condition (retests of the pilot: its run-to-run
+    # scatter, its own remnant and forcing phases; the simulator's extra delay kept) and,
+    # paired, as many of the baseline condition (the same aircraft, no pilot-side effect).
+    for j in range(1, repeats):
+        try:
+            rspec = retest(spec, derive_seed(s, "repeat-run", str(j)), name=f"{name}-{j + 1}")
+            more.append(read_run(write_trial(Path(folder) / rspec.name, simulate_trial(rspec))))
+        except HesspipeError as exc:
+            return None, f"repeat run: {exc}"
+    for j in range(repeats if paired else 0):
+        try:
+            bspec = retest(spec, derive_seed(s, "baseline-run", *([str(j)] if j else [])), effects=(),
+                           name=name + "-baseline" + ("" if j == 0 else f"-{j + 1}"))
+            base.append(read_run(write_trial(Path(folder) / bspec.name, simulate_trial(bspec))))
+        except HesspipeError as exc:
+            return None, f"baseline run: {exc}"
     t = time.process_time()
     d = diagnose(run, plants, seed=seed, baseline_run=base or None, repeat_runs=more)
     return d, time.process_time() - t
@@ -158,7 +159,8 @@ def main(argv=None) -> int:
                     help="give diagnose a baseline run of the same pilot (humanlike.retest: no "
                          "pilot-side effect, the pilot's run-to-run scatter, another remnant)")
     ap.add_argument("--repeats", type=int, default=1,
-                    help="with --paired: runs of each condition (the delay test compares their means)")
+                    help="runs of the condition (pooled by the motion test; with --paired also of the "
+                         "baseline, and the delay test compares their means)")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])
     draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}

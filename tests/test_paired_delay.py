@@ -124,16 +124,14 @@ def test_the_allowed_spread_shrinks_with_the_runs_of_each_condition():
         pytest.approx(0.02 * np.sqrt((1 + 1 / 3) / 2))
 
 
-def test_a_repeat_without_a_baseline_is_a_one_line_error(tmp_path, capsys):
+def test_a_record_given_twice_is_refused_by_name(tmp_path, capsys):
     run, base, plants, _ = _pair(tmp_path, "none", 100)
-    assert main(["diagnose", str(run.source), str(base.source), "--plants",
-                 str(tmp_path / "plants.json")]) == 1
+    assert main(["diagnose", str(run.source), "--plants", str(tmp_path / "plants.json"),
+                 "--baseline-run", str(base.source), str(base.source)]) == 1
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "--baseline-run" in err and str(base.source) in err
-    with pytest.raises(HesspipeError, match="^repeat_runs: .* expected baseline_run"):
-        diagnose(run, plants, repeat_runs=[base])
+    assert err.count("\n") == 0 and "the same record as" in err and str(base.source) in err
     with pytest.raises(HesspipeError, match="the same record as"):
-        diagnose(run, plants, baseline_run=[base, base])
+        diagnose(run, plants, repeat_runs=[run])
 
 
 def test_a_repeat_of_the_condition_keeps_the_simulators_extra_delay():

@@ -17,7 +17,8 @@ def register(sub) -> None:
                     "name the significant ones and report the gap before and after.")
     p.add_argument("run", metavar="RUN.csv", nargs="+",
                    help="measured run (time, disturbance, output, control); more runs of the same pilot "
-                        "and condition are repeats for the delay test against --baseline-run")
+                        "and condition are repeats, pooled with it in the motion test and in the "
+                        "delay test against --baseline-run")
     p.add_argument("--plants", metavar="PLANTS.json", required=True, help="plants file (Yc, Yd)")
     p.add_argument("--model", default="original", help="baseline model: original or expanded "
                                                        "(default: %(default)s)")
@@ -61,9 +62,6 @@ def _diagnose(args) -> int:
     plants = read_plants(args.plants)
     from ._options import run_options
 
-    if len(args.run) > 1 and args.baseline_run is None:
-        raise HesspipeError(f"{args.run[1]}: a second RUN.csv is a repeat for the delay test against "
-                            "the same pilot's baseline; expected --baseline-run BASE.csv too")
     run, *repeats = (read_run(path, min_samples=WELCH_SEGMENT, **run_options(args)) for path in args.run)
     base = None if args.baseline_run is None else \
         [read_run(path, min_samples=WELCH_SEGMENT, **run_options(args)) for path in args.baseline_run]

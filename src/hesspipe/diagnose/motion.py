@@ -57,7 +57,10 @@ class MotionVerdict:
     Km, Km_se : float
         Fitted vestibular gain and its standard error (control units per rad/s).
     n_lines : int
-        Forcing lines used.
+        Forcing lines used (of all runs pooled).
+    runs : int
+        Runs pooled: the diagnosed run and its repeats of the condition, each with its own
+        gain (:func:`hesspipe.identification.motion_test.motion_test`).
     alpha : float
         Significance level.
     note : str
@@ -84,6 +87,7 @@ class MotionVerdict:
     n_lines: int = 0
     alpha: float = float("nan")
     note: str = ""
+    runs: int = 1
     forcing: str = ""
     separable: bool = True
     verdict: str = ""
@@ -92,6 +96,7 @@ class MotionVerdict:
         """JSON-ready fields and the criterion that produced them."""
         return {"named": self.named, "statistic": self.statistic, "p_value": self.p_value,
                 "gain": self.gain, "Km": self.Km, "Km_se": self.Km_se, "n_lines": self.n_lines,
+                "runs": self.runs,
                 "alpha": self.alpha, "note": self.note, "forcing": self.forcing,
                 "separable": self.separable, "verdict": self.verdict,
                 "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
@@ -331,7 +336,8 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
         tested against its delay (:func:`paired_delay_test`) instead of against a human's
         longest.
     repeat_runs : sequence of Run
-        More runs of `run`'s pilot and condition, for the paired delay test only.
+        More runs of `run`'s pilot and condition: pooled with it in the motion test (each
+        run its own gain) and in the paired delay test.
 
     Raises
     ------
@@ -340,7 +346,8 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
         delay from.
     """
 
-    t = safe_motion_test(run, plants, start, k=k,
+    pooled = [run, *repeat_runs] if repeat_runs else run
+    t = safe_motion_test(pooled, plants, start, k=k,
                          max_delay=cfg.max_pilot_delay if baseline_run is None else None)
     if not t.get("available"):
         if baseline_run is not None:
@@ -352,7 +359,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
     mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
                        separable=forcing == "disturbance and target",
-                       verdict=motion_words(named, forcing))
+                       verdict=motion_words(named, forcing), runs=1 + len(repeat_runs))
     pars, se = _df_delay(t, mv.named)
     if baseline_run is None:
         bound = t.get("delay_bound")

@@ -52,7 +52,8 @@ def format_report(d: Diagnosis) -> str:
                    f"lines (named from {100 * rv['threshold']:g} %) -> {'NAMED' if rv['named'] else 'not named'}")
     mv = d.motion_verdict
     if mv is not None:
-        out.append(f"Motion feedback on the describing function ({mv['n_lines']} lines; misfit removed "
+        runs = f" of {mv['runs']} runs, each its own gain" if mv.get("runs", 1) > 1 else ""
+        out.append(f"Motion feedback on the describing function ({mv['n_lines']} lines{runs}; misfit removed "
                    f"{100 * mv['gain']:.0f} % with Km={mv['Km']:.3g}): F={mv['statistic']:.1f}, "
                    f"p={mv['p_value']:.2g} (needs < {d.config.motion_alpha:g}) -> "
                    f"{'NAMED' if mv['named'] else 'not named'}")

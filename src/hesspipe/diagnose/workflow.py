@@ -162,9 +162,11 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         pilot's own, which a single record shows as one delay. A sequence: repeated
         baseline runs, whose mean delay is the pilot's.
     repeat_runs : sequence of Run
-        More runs of `run`'s pilot in `run`'s condition, for the paired delay test only
-        (the condition's mean delay against the baseline's; the run-to-run spread allowed
-        shrinks with the number of runs). Needs `baseline_run`.
+        More runs of `run`'s pilot in `run`'s condition (the same forcing). The motion test
+        pools their describing-function lines with `run`'s, each run with its own gain
+        (a human's gains move by 5-15 % between runs); with `baseline_run` the delay test
+        compares the condition's mean delay with the baseline's (the run-to-run spread
+        allowed shrinks with the number of runs). The rest of the diagnosis is `run`'s.
 
     Returns
     -------
@@ -187,9 +189,6 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     bases = [] if baseline_run is None else (
         list(baseline_run) if isinstance(baseline_run, (list, tuple)) else [baseline_run])
     repeats = list(repeat_runs)
-    if repeats and not bases:
-        raise HesspipeError("repeat_runs: repeats of the run serve the paired delay test against "
-                            "the same pilot's baseline run; expected baseline_run too")
     for other in bases + repeats:
         check_control(other)
         _check_inputs(other, plants, cfg)

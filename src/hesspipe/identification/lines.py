@@ -232,6 +232,8 @@ class LineData:
         Length of the analysis window, samples.
     reason : str
         Why the lines cannot be used ("" when they can; then the arrays may be empty).
+    groups : ndarray of int or None
+        The run of each line when repeated runs are pooled (:func:`pooled_line_data`).
     """
 
     lines: np.ndarray
@@ -243,6 +245,7 @@ class LineData:
     both: bool
     window_samples: int
     reason: str = ""
+    groups: np.ndarray | None = None
 
 
 def line_data(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
@@ -275,3 +278,32 @@ def line_data(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
     return LineData(lines=lines, s=1j * 2.0 * np.pi * np.fft.rfftfreq(n, run.dt)[lines], E=E[lines],
                     Y=Y[lines], U=U[lines], w=1.0 / np.sqrt(np.maximum(var, np.max(var) * 1e-12)),
                     both=unusable["both"], window_samples=n)
+
+
+def pooled_line_data(runs, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
+    """The lines of repeated runs of one pilot in one condition, side by side, each line
+    weighted by its own run's remnant (:func:`line_data`).
+
+    Parameters
+    ----------
+    runs : sequence of hesspipe.core.formats.Run
+        Records with multisine forcing (e = reference − output).
+    band_hz : (float, float)
+        Lines are used in this band, Hz.
+
+    Returns
+    -------
+    LineData
+        Arrays concatenated run after run (``lines`` are each run's own bins, ``groups``
+        the run's index); ``both`` only if every run has both line sets; the first
+        unusable run's reason, naming it.
+    """
+    parts = [line_data(r, band_hz) for r in runs]
+    for r, ld in zip(runs, parts):
+        if ld.reason:
+            return dataclasses.replace(ld, reason=f"{r.source or r.id}: {ld.reason}")
+    cat = {name: np.concatenate([getattr(ld, name) for ld in parts])
+           for name in ("lines", "s", "E", "Y", "U", "w")}
+    groups = np.concatenate([np.full(ld.lines.size, i) for i, ld in enumerate(parts)])
+    return LineData(**cat, both=all(ld.both for ld in parts), window_samples=parts[0].window_samples,
+                    groups=groups)

@@ -81,6 +81,7 @@ from .lines import (  # noqa: F401
     line_data,
     line_snr,
     line_variances,
+    pooled_line_data,
     windowed,
 )
 
@@ -122,12 +123,25 @@ def _predict(params, model, cab, s, E, Y):
     return nm * (vis * E - ves * Y) / loop.return_difference(s, None)
 
 
-def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, w):
-    """Bounded least squares of the weighted complex residual; best of `starts`."""
+def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, w):
+    """Bounded least squares of the weighted complex residual; best of `starts`.
+
+    With `groups` (the run of each line, repeated runs pooled), the second and later runs'
+    predictions are each scaled by their own gain, solved in closed form at every step
+    (variable projection): a human's gains move by 5-15 % between runs.
+    """
+    runs = [] if groups is None else [groups == g for g in np.unique(groups)[1:]]
+
     def resid(x):
         p = dict(base)
         p.update(zip(free, x))
-        r = (U - _predict(p, model, cab, s, E, Y)) * w
+        pred = _predict(p, model, cab, s, E, Y)
+        for m in runs:
+            ww = w[m] ** 2
+            den = float(np.sum(ww * np.abs(pred[m]) ** 2))
+            if den > 0:
+                pred[m] = pred[m] * max(float(np.sum(ww * (np.conj(pred[m]) * U[m]).real)) / den, 0.0)
+        r = (U - pred) * w
         return np.concatenate([r.real, r.imag])
 
     rss, sol = best_least_squares(resid, starts, lo, hi, "motion test: no fit of the describing "
@@ -206,8 +220,12 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
 
     Parameters
     ----------
-    run : hesspipe.core.formats.Run
+    run : hesspipe.core.formats.Run or sequence of Run
         Time (s), disturbance, output, control, reference (e = reference − output).
+        Repeated runs of one pilot in one condition are pooled line by line
+        (:func:`~hesspipe.identification.lines.pooled_line_data`), the second and later
+        each with its own gain (a human's gains move by 5-15 % between runs; one degree
+        of freedom each).
     plants : hesspipe.core.formats.Plants
         Only ``motion_path`` is used (output → cab angular velocity; absent: the
         paper's platform × washout).
@@ -238,8 +256,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         :func:`_delay_bound`'s test of the original's delay against it).
     """
 
-    ld = line_data(run, band_hz)
+    ld = pooled_line_data(run, band_hz) if isinstance(run, (list, tuple)) else line_data(run, band_hz)
     lines = ld.lines
+    n_gains = 0 if ld.groups is None else int(np.unique(ld.groups).size) - 1
     if ld.reason:
         return {"available": False, "n_lines": int(lines.size), "reason": ld.reason}
     original, expanded = PilotModel(), PilotModel(("motion_feedback",))
@@ -257,7 +276,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     x_start = [base[name] for name in free]
     starts = [x_start] + [[*x_start[:3], tau, *x_start[4:]] for tau in (0.15, 0.25, 0.35)] \
         + [[*x_start[:-1], eq_start]]
-    data = (cab, ld.s, ld.E, ld.Y, ld.U)
+    data = (cab, ld.s, ld.E, ld.Y, ld.U, ld.groups)
 
     # An unweighted first fit serves as one more start (it no longer sets the weights).
     _, p0, _ = _fit(original, base, free, lo, hi, starts, *data, np.ones(lines.size))
@@ -269,7 +288,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                            [x[:n_core] for x in [[p_o[n_] for n_ in free]] + starts], *data, ld.w)
     if rss_n < rss_o:
         rss_o, p_o, sol_o = _fit(original, base, free, lo, hi, [[*sol_n.x, 0.0]], *data, ld.w)
-    dof_o = 2 * int(lines.size) - len(free)
+    dof_o = 2 * int(lines.size) - len(free) - n_gains
     delay_bound = None
     if max_delay is not None:
         delay_bound = _delay_bound(original, base, free, lo, hi, starts, [sol_o.x, [*sol_n.x, 0.0]],
@@ -280,7 +299,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     # the test sees their sum, and a free delay there cost a fifth of the named motion
     # runs of disturbance-only tasks for no gain.
     alternatives = (["Km"], ["Km", "tau_m"]) if ld.both else (["Km"],)
-    dof = 2 * int(lines.size) - len(free) - len(alternatives[-1])
+    dof = 2 * int(lines.size) - len(free) - len(alternatives[-1]) - n_gains
     if dof < 1:
         return {"available": False, "n_lines": int(lines.size),
                 "reason": f"{lines.size} forcing lines leave no degrees of freedom for the test"}
@@ -317,7 +336,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     tests = []
     for extra, rss_e, p_e, sol in fits:
         rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
-        q, dof_e = len(extra), 2 * int(lines.size) - len(free) - len(extra)
+        q, dof_e = len(extra), 2 * int(lines.size) - len(free) - len(extra) - n_gains
         lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
         tests.append((p, lr, rss_e, p_e, sol, extra))
     # With both line sets, two pre-planned alternatives - Km alone (the paper's path) and
