@@ -139,3 +139,15 @@ def test_a_repeat_of_the_condition_keeps_the_simulators_extra_delay():
     again = retest(spec, 3)
     assert again.pilot["extra_delay"] == spec.pilot["extra_delay"] > 0
     assert again.pilot["tau_v"] != spec.pilot["tau_v"]                   # the pilot's scatter
+
+
+def test_with_a_target_the_motion_test_keeps_to_the_diagnosed_run(tmp_path):
+    # Both line sets give one run's test its power; pooled, the pilot's run-to-run scatter
+    # of the shared dynamics became a misfit the vestibular path took (2 of 20 baseline sets
+    # named motion on the report seeds). The delay test still takes every run.
+    cond, base, plants, _ = _repeats(tmp_path, "none", 100, 2, task="both")
+    d = diagnose(cond[0], plants, baseline_run=base, repeat_runs=cond[1:],
+                 candidates=("motion_feedback", "extra_delay"))
+    assert d.motion_verdict["runs"] == 1 and d.motion_verdict["forcing"] == "disturbance and target"
+    assert d.delay_verdict["runs"] == 2 and d.delay_verdict["baseline_runs"] == 2
+    assert not set(d.named_effects) & {"motion_feedback", "extra_delay"}

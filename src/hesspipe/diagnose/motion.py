@@ -336,8 +336,9 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
         tested against its delay (:func:`paired_delay_test`) instead of against a human's
         longest.
     repeat_runs : sequence of Run
-        More runs of `run`'s pilot and condition: pooled with it in the motion test (each
-        run its own gain) and in the paired delay test.
+        More runs of `run`'s pilot and condition: pooled with it in the motion test when
+        the record has one forcing function (each run its own gain), and in the paired
+        delay test.
 
     Raises
     ------
@@ -346,8 +347,14 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
         delay from.
     """
 
-    pooled = [run, *repeat_runs] if repeat_runs else run
-    t = safe_motion_test(pooled, plants, start, k=k,
+    forcing = forcing_sets(run)
+    # Repeats join the motion test only where one run cannot tell: with one forcing function.
+    # With both line sets one run's test has the power (75 of 76 Hess motion runs named), and
+    # pooled, the pilot's run-to-run scatter of the shared dynamics (K1 5-15 %, wn 2-8 %)
+    # became a misfit the vestibular path took: motion named on 2 of 20 baseline sets with a
+    # target (bench_diagnose.py --paired --repeats 3, report seeds), 0 of 40 without.
+    pool = bool(repeat_runs) and forcing != "disturbance and target"
+    t = safe_motion_test([run, *repeat_runs] if pool else run, plants, start, k=k,
                          max_delay=cfg.max_pilot_delay if baseline_run is None else None)
     if not t.get("available"):
         if baseline_run is not None:
@@ -355,11 +362,10 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
                                 f"describing function for the paired delay test ({t.get('reason', '')})")
         return None
     named = bool(t["p_value"] < cfg.motion_alpha)
-    forcing = forcing_sets(run)
     mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
                        separable=forcing == "disturbance and target",
-                       verdict=motion_words(named, forcing), runs=1 + len(repeat_runs))
+                       verdict=motion_words(named, forcing), runs=1 + len(repeat_runs) if pool else 1)
     pars, se = _df_delay(t, mv.named)
     if baseline_run is None:
         bound = t.get("delay_bound")

@@ -162,9 +162,10 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         pilot's own, which a single record shows as one delay. A sequence: repeated
         baseline runs, whose mean delay is the pilot's.
     repeat_runs : sequence of Run
-        More runs of `run`'s pilot in `run`'s condition (the same forcing). The motion test
-        pools their describing-function lines with `run`'s, each run with its own gain
-        (a human's gains move by 5-15 % between runs); with `baseline_run` the delay test
+        More runs of `run`'s pilot in `run`'s condition (the same forcing). With one forcing
+        function the motion test pools their describing-function lines with `run`'s, each
+        run with its own gain (a human's gains move by 5-15 % between runs); with
+        `baseline_run` the delay test
         compares the condition's mean delay with the baseline's (the run-to-run spread
         allowed shrinks with the number of runs). The rest of the diagnosis is `run`'s.
 
