@@ -124,7 +124,7 @@ def test_the_allowed_spread_shrinks_with_the_runs_of_each_condition():
         pytest.approx(0.02 * np.sqrt((1 + 1 / 3) / 2))
 
 
-def test_a_record_given_twice_is_refused_by_name(tmp_path, capsys):
+def test_a_record_given_twice_or_another_forcing_is_refused_by_name(tmp_path, capsys):
     run, base, plants, _ = _pair(tmp_path, "none", 100)
     assert main(["diagnose", str(run.source), "--plants", str(tmp_path / "plants.json"),
                  "--baseline-run", str(base.source), str(base.source)]) == 1
@@ -132,6 +132,11 @@ def test_a_record_given_twice_is_refused_by_name(tmp_path, capsys):
     assert err.count("\n") == 0 and "the same record as" in err and str(base.source) in err
     with pytest.raises(HesspipeError, match="the same record as"):
         diagnose(run, plants, repeat_runs=[run])
+    cut = slice(0, len(base) - 500)
+    short = replace(base, time=base.time[cut], disturbance=base.disturbance[cut], output=base.output[cut],
+                    control=base.control[cut], reference=base.reference[cut])
+    with pytest.raises(HesspipeError, match="samples at .* analysed; expected .* repeats of its condition"):
+        diagnose(run, plants, repeat_runs=[short])
 
 
 def test_a_repeat_of_the_condition_keeps_the_simulators_extra_delay():

@@ -17,8 +17,9 @@ def register(sub) -> None:
                     "name the significant ones and report the gap before and after.")
     p.add_argument("run", metavar="RUN.csv", nargs="+",
                    help="measured run (time, disturbance, output, control); more runs of the same pilot "
-                        "and condition are repeats, pooled with it in the motion test and in the "
-                        "delay test against --baseline-run")
+                        "and condition (the same forcing) are repeats: pooled with it in the motion "
+                        "test when the forcing is the disturbance alone, and in the delay test "
+                        "against --baseline-run")
     p.add_argument("--plants", metavar="PLANTS.json", required=True, help="plants file (Yc, Yd)")
     p.add_argument("--model", default="original", help="baseline model: original or expanded "
                                                        "(default: %(default)s)")
