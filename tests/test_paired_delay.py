@@ -135,7 +135,7 @@ def test_a_record_given_twice_or_another_forcing_is_refused_by_name(tmp_path, ca
     cut = slice(0, len(base) - 500)
     short = replace(base, time=base.time[cut], disturbance=base.disturbance[cut], output=base.output[cut],
                     control=base.control[cut], reference=base.reference[cut])
-    with pytest.raises(HesspipeError, match="samples at .* analysed; expected .* repeats of its condition"):
+    with pytest.raises(HesspipeError, match="samples at .* analysed; expected .* repeated runs of one forcing"):
         diagnose(run, plants, repeat_runs=[short])
 
 

@@ -48,8 +48,7 @@ from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import check_control
-from ..identification.frf_average import check_distinct
-from ..identification.lines import analysis_window
+from ..identification.frf_average import check_distinct, check_same_forcing
 from ..pilot.effects import EFFECTS, get_effect
 from ..pilot.hess import PilotModel, model_from_name
 from ..plants.validation import residual_tests
@@ -135,18 +134,6 @@ def _resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ..
     return tuple(dict.fromkeys(c for c in chosen if c not in model.effects))
 
 
-def _check_repeats(run: Run, repeats: Sequence[Run]) -> None:
-    """Repeats of the condition must be runs of the same forcing: the same sampling interval
-    and analysed length (naming the first that is not)."""
-    n = analysis_window(run)[1]
-    for r in repeats:
-        m = analysis_window(r)[1]
-        if m != n or abs(r.dt - run.dt) > 1e-6 * run.dt:
-            raise HesspipeError(f"{r.source or r.id}: {m} samples at {r.dt:.6g} s analysed; expected "
-                                f"{n} at {run.dt:.6g} s like {run.source or run.id}: repeats of its "
-                                "condition (the same forcing)")
-
-
 def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence[str] | str | None = None,
              seed: int = 0, config: DiagnoseConfig | None = None,
              baseline_run: Run | Sequence[Run] | None = None,
@@ -207,7 +194,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         check_control(other)
         _check_inputs(other, plants, cfg)
     check_distinct([run, *repeats, *bases])
-    _check_repeats(run, repeats)
+    check_same_forcing([run, *repeats])
     check = plant_check(run, plants, max_lag=cfg.max_lag)
     # A failed plant check is a finding, never a refusal: the aircraft-side candidate that
     # closes it (or the file error it proves) is named and the pilot identified around it.

@@ -41,7 +41,7 @@ import numpy as np
 from ..core.errors import HesspipeError
 from .frf import Frf, Response, estimate_frf
 from .frf_crossover import FrfCrossover, nonparametric_crossover
-from .lines import line_variances, windowed
+from .lines import analysis_window, line_variances, windowed
 
 
 def _where(run, i: int) -> str:
@@ -66,6 +66,29 @@ def check_distinct(runs: Sequence) -> None:
             if np.array_equal(np.asarray(run.control), np.asarray(runs[j].control)):
                 raise HesspipeError(f"{_where(run, i)}: the same record as {_where(runs[j], j)}; "
                                     "expected distinct repeated runs")
+
+
+def check_same_forcing(runs: Sequence) -> None:
+    """Raise unless the runs are repeats of one forcing: the same sampling interval and
+    analysed length (:func:`hesspipe.identification.lines.analysis_window`) as the first.
+
+    Parameters
+    ----------
+    runs : sequence of hesspipe.core.formats.Run
+
+    Raises
+    ------
+    HesspipeError
+        Naming the first run that differs (its file, else its id) and the first run.
+    """
+    if not runs:
+        return
+    n, dt = analysis_window(runs[0])[1], runs[0].dt
+    for i, run in enumerate(runs[1:], start=1):
+        m = analysis_window(run)[1]
+        if m != n or abs(run.dt - dt) > 1e-6 * dt:
+            raise HesspipeError(f"{_where(run, i)}: {m} samples at {run.dt:.6g} s analysed; expected "
+                                f"{n} at {dt:.6g} s like {_where(runs[0], 0)}: repeated runs of one forcing")
 
 
 def _combine(responses: Sequence[Response], names: Sequence[str]) -> tuple[Response, float, int]:
@@ -155,16 +178,13 @@ def average_frf(runs: Sequence, plants=None, *, seed: int = 0) -> Frf:
         raise HesspipeError("average_frf: expected at least one run, got none")
     frfs, names = [], [_where(r, i) for i, r in enumerate(runs)]
     check_distinct(runs)
+    check_same_forcing(runs)
     for i, run in enumerate(runs):
         f = estimate_frf(run, seed=seed)
         first = frfs[0] if frfs else f
         if f.method != "multisine":
             raise HesspipeError(f"{names[i]}: no multisine lines (describing function by "
                                 f"{f.method!r}); expected lines to average over repeated runs")
-        if abs(f.dt - first.dt) > 1e-6 * first.dt or f.window[1] != first.window[1]:
-            raise HesspipeError(f"{names[i]}: {f.window[1]} samples at {f.dt:.6g} s analysed; "
-                                f"expected {first.window[1]} at {first.dt:.6g} s like "
-                                f"{names[0]}: repeated runs of one forcing")
         if (f.reference is None) != (first.reference is None):
             raise HesspipeError(f"{names[i]}: reference lines {'absent' if f.reference is None else 'present'}"
                                 f"; expected them as in {names[0]}: repeated runs of one forcing")
