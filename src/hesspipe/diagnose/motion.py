@@ -331,9 +331,9 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
     cfg : DiagnoseConfig
         ``motion_alpha``, ``alpha``, ``max_pilot_delay`` (s), ``retest_delay_sd`` (s),
         ``remnant_share``.
-    baseline_run : hesspipe.core.formats.Run or sequence of Run, optional
+    baseline_run : sequence of hesspipe.core.formats.Run, optional
         The same pilot in the baseline condition (one run or repeats): the delay is then
-        tested against its delay (:func:`paired_delay_test`) instead of against a human's
+        tested against theirs (:func:`paired_delay_test`) instead of against a human's
         longest.
     repeat_runs : sequence of Run
         More runs of `run`'s pilot and condition: pooled with it in the motion test when
@@ -375,7 +375,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
             delay = delay_test(pars["tau0"], se, cfg.max_pilot_delay, cfg.alpha)
         own = cfg.max_pilot_delay
     else:
-        bases = list(baseline_run) if isinstance(baseline_run, (list, tuple)) else [baseline_run]
+        bases = list(baseline_run)
         tb = safe_motion_test(bases[0], plants, start, k=k)
         if not tb.get("available"):
             raise HesspipeError(f"{bases[0].source or bases[0].id}: the baseline run has no "

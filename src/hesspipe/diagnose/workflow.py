@@ -165,9 +165,9 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         More runs of `run`'s pilot in `run`'s condition (the same forcing). With one forcing
         function the motion test pools their describing-function lines with `run`'s, each
         run with its own gain (a human's gains move by 5-15 % between runs); with
-        `baseline_run` the delay test
-        compares the condition's mean delay with the baseline's (the run-to-run spread
-        allowed shrinks with the number of runs). The rest of the diagnosis is `run`'s.
+        `baseline_run` the delay test compares the condition's mean delay with the
+        baseline's (the run-to-run spread allowed shrinks with the number of runs). The
+        rest of the diagnosis is `run`'s.
 
     Returns
     -------
