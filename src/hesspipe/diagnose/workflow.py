@@ -48,7 +48,7 @@ from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import check_control
-from ..identification.frf_average import check_distinct, check_same_forcing
+from ..identification.frf_average import check_repeats
 from ..pilot.effects import EFFECTS, get_effect
 from ..pilot.hess import PilotModel, model_from_name
 from ..plants.validation import residual_tests
@@ -193,8 +193,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     for other in bases + repeats:
         check_control(other)
         _check_inputs(other, plants, cfg)
-    check_distinct([run, *repeats, *bases])
-    check_same_forcing([run, *repeats])
+    check_repeats([run, *repeats], others=bases)
     check = plant_check(run, plants, max_lag=cfg.max_lag)
     # A failed plant check is a finding, never a refusal: the aircraft-side candidate that
     # closes it (or the file error it proves) is named and the pilot identified around it.

@@ -48,39 +48,30 @@ def _where(run, i: int) -> str:
     return getattr(run, "source", "") or getattr(run, "id", "") or f"run {i + 1}"
 
 
-def check_distinct(runs: Sequence) -> None:
-    """Raise if a record appears twice among repeated runs (the same control samples):
-    counted twice, it would shrink the errors and the allowed run-to-run spread for nothing.
+def check_repeats(runs: Sequence, others: Sequence = ()) -> None:
+    """Raise unless `runs` are distinct repeats of one forcing (the same sampling interval
+    and analysed length, :func:`hesspipe.identification.lines.analysis_window`) and no record
+    among them and `others` (e.g. another condition's runs) appears twice: counted twice, a
+    record would shrink the errors and the allowed run-to-run spread for nothing.
 
     Parameters
     ----------
     runs : sequence of hesspipe.core.formats.Run
+        Repeats of one condition.
+    others : sequence of hesspipe.core.formats.Run
+        Further records that must differ from them and from each other.
 
     Raises
     ------
     HesspipeError
-        Naming the repeated record (its file, else its id) and the first one it repeats.
+        Naming the offending record (its file, else its id) and the one it was compared with.
     """
-    for i, run in enumerate(runs):
+    every = [*runs, *others]
+    for i, run in enumerate(every):
         for j in range(i):
-            if np.array_equal(np.asarray(run.control), np.asarray(runs[j].control)):
-                raise HesspipeError(f"{_where(run, i)}: the same record as {_where(runs[j], j)}; "
+            if np.array_equal(np.asarray(run.control), np.asarray(every[j].control)):
+                raise HesspipeError(f"{_where(run, i)}: the same record as {_where(every[j], j)}; "
                                     "expected distinct repeated runs")
-
-
-def check_same_forcing(runs: Sequence) -> None:
-    """Raise unless the runs are repeats of one forcing: the same sampling interval and
-    analysed length (:func:`hesspipe.identification.lines.analysis_window`) as the first.
-
-    Parameters
-    ----------
-    runs : sequence of hesspipe.core.formats.Run
-
-    Raises
-    ------
-    HesspipeError
-        Naming the first run that differs (its file, else its id) and the first run.
-    """
     if not runs:
         return
     n, dt = analysis_window(runs[0])[1], runs[0].dt
@@ -177,8 +168,7 @@ def average_frf(runs: Sequence, plants=None, *, seed: int = 0) -> Frf:
     if not runs:
         raise HesspipeError("average_frf: expected at least one run, got none")
     frfs, names = [], [_where(r, i) for i, r in enumerate(runs)]
-    check_distinct(runs)
-    check_same_forcing(runs)
+    check_repeats(runs)
     for i, run in enumerate(runs):
         f = estimate_frf(run, seed=seed)
         first = frfs[0] if frfs else f
