@@ -258,7 +258,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
 
     ld = pooled_line_data(run, band_hz) if isinstance(run, (list, tuple)) else line_data(run, band_hz)
     lines = ld.lines
-    n_gains = 0 if ld.groups is None else int(np.unique(ld.groups).size) - 1
+    # Real residuals, less the later runs' own gains that every fit solves for.
+    n_res = 2 * int(lines.size) - (0 if ld.groups is None else int(np.unique(ld.groups).size) - 1)
     if ld.reason:
         return {"available": False, "n_lines": int(lines.size), "reason": ld.reason}
     original, expanded = PilotModel(), PilotModel(("motion_feedback",))
@@ -288,7 +289,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                            [x[:n_core] for x in [[p_o[n_] for n_ in free]] + starts], *data, ld.w)
     if rss_n < rss_o:
         rss_o, p_o, sol_o = _fit(original, base, free, lo, hi, [[*sol_n.x, 0.0]], *data, ld.w)
-    dof_o = 2 * int(lines.size) - len(free) - n_gains
+    dof_o = n_res - len(free)
     delay_bound = None
     if max_delay is not None:
         delay_bound = _delay_bound(original, base, free, lo, hi, starts, [sol_o.x, [*sol_n.x, 0.0]],
@@ -299,7 +300,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     # the test sees their sum, and a free delay there cost a fifth of the named motion
     # runs of disturbance-only tasks for no gain.
     alternatives = (["Km"], ["Km", "tau_m"]) if ld.both else (["Km"],)
-    dof = 2 * int(lines.size) - len(free) - len(alternatives[-1]) - n_gains
+    dof = n_res - len(free) - len(alternatives[-1])
     if dof < 1:
         return {"available": False, "n_lines": int(lines.size),
                 "reason": f"{lines.size} forcing lines leave no degrees of freedom for the test"}
@@ -336,7 +337,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     tests = []
     for extra, rss_e, p_e, sol in fits:
         rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
-        q, dof_e = len(extra), 2 * int(lines.size) - len(free) - len(extra) - n_gains
+        q, dof_e = len(extra), n_res - len(free) - len(extra)
         lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
         tests.append((p, lr, rss_e, p_e, sol, extra))
     # With both line sets, two pre-planned alternatives - Km alone (the paper's path) and
