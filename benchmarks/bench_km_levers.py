@@ -27,7 +27,6 @@ identification's linear FFT generator: the Cramer-Rao bound with the lines' true
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import statistics
 import time
 from dataclasses import replace
@@ -41,6 +40,7 @@ from hesspipe.flight.target import TWO_INPUT
 from hesspipe.identification import criteria as C
 from hesspipe.identification import motion_test as MT
 from hesspipe.identification.fit import identify
+from hesspipe.identification.frf_average import with_remnant_levels
 from hesspipe.pilot.crossover import crossover
 
 DESIGNS = {  # name: (forcing, analysed record s, record terrain ft or None)
@@ -56,21 +56,7 @@ class SmoothedDF(C.DFObjective):
     """df with each line's error from the smoothed remnant level (lever 2; benchmark only)."""
 
     def __init__(self, run, plants, model, base, frf, sim=None):
-        start, length = frf.window
-        cut = slice(start, start + length)
-        rc = dataclasses.replace(run, time=run.time[cut], disturbance=run.disturbance[cut],
-                                 output=run.output[cut], control=run.control[cut],
-                                 reference=run.reference[cut])
-        E = np.fft.rfft(np.asarray(rc.reference, float) - np.asarray(rc.output, float))
-        resps = [frf.feedback] + ([frf.reference] if frf.reference is not None else [])
-        bins = np.concatenate([r.bins for r in resps]).astype(int)
-        sig = np.sqrt(MT.line_variances(rc, bins)) / np.abs(E[bins])
-        new, i = [], 0
-        for r in resps:
-            new.append(dataclasses.replace(r, sigma=sig[i:i + r.H.size]))
-            i += r.H.size
-        frf = dataclasses.replace(frf, feedback=new[0], reference=new[1] if len(new) > 1 else None)
-        super().__init__(run, plants, model, base, frf, sim)
+        super().__init__(run, plants, model, base, with_remnant_levels(run, frf), sim)
 
 
 @contextlib.contextmanager

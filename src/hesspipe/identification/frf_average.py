@@ -121,8 +121,22 @@ def _combine(responses: Sequence[Response], names: Sequence[str]) -> tuple[Respo
             int((count < n).sum()))
 
 
-def _with_remnant_levels(run, frf: Frf) -> Frf:
-    """`frf` with each line's sigma from the smoothed remnant levels between the lines."""
+def with_remnant_levels(run, frf: Frf) -> Frf:
+    """`frf` with each line's sigma from the smoothed remnant levels between the lines
+    (:func:`hesspipe.identification.lines.line_variances`; module doc: why).
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The record `frf` was estimated from.
+    frf : Frf
+        Its describing function (:func:`~hesspipe.identification.frf.estimate_frf`).
+
+    Returns
+    -------
+    Frf
+        `frf` with each response's ``sigma`` (control units per unit of error) replaced.
+    """
     window = windowed(run)
     E = np.fft.rfft(np.asarray(window.reference, dtype=float) - np.asarray(window.output, dtype=float))
     sets = [frf.feedback] + ([frf.reference] if frf.reference is not None else [])
@@ -178,7 +192,7 @@ def average_frf(runs: Sequence, plants=None, *, seed: int = 0) -> Frf:
         if (f.reference is None) != (first.reference is None):
             raise HesspipeError(f"{names[i]}: reference lines {'absent' if f.reference is None else 'present'}"
                                 f"; expected them as in {names[0]}: repeated runs of one forcing")
-        frfs.append(_with_remnant_levels(run, f))
+        frfs.append(with_remnant_levels(run, f))
     feedback, birge_fb, gaps = _combine([f.feedback for f in frfs], names)
     reference, birge_ref = None, None
     if frfs[0].reference is not None:
