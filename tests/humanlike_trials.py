@@ -38,3 +38,26 @@ def bench_diagnose_trial(folder, plant, output, task, effect, seed):
                       output=output, **kw)
     path = write_trial(folder / "trial", simulate_trial(spec))
     return read_run(path), read_plants(folder / "trial" / "plants.json")
+
+
+def repeated_trials(folder, plant, output, task, effect, seed, n, *, baselines=False):
+    """(runs, baseline runs, plants, drawn trial) of n runs of one Hess pilot's condition and,
+    with `baselines`, n of its baseline condition, as benchmarks/bench_diagnose.py
+    [--paired] --repeats n draws them (the condition's repeats keep the simulator's extra
+    delay; every retest draws the pilot's run-to-run scatter), written as a logger writes
+    them and read back."""
+    from hesspipe.core.formats import read_plants, read_run
+    from hesspipe.core.seeds import derive_seed
+    from hesspipe.humanlike import retest, write_trial
+
+    effects = () if effect == "none" else (effect,)
+    s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
+    kw = dict(disturbance="wind") if plant == "paper" else {}
+    spec = draw_trial(plant, s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
+                      output=output, name="run", **kw)
+    cond = [spec] + [retest(spec, derive_seed(s, "repeat-run", str(j)), name=f"run-{j + 1}")
+                     for j in range(1, n)]
+    base = [retest(spec, derive_seed(s, "baseline-run", *([str(j)] if j else [])), effects=(),
+                   name=f"base-{j + 1}") for j in range(n if baselines else 0)]
+    read = [read_run(write_trial(folder / x.name, simulate_trial(x))) for x in cond + base]
+    return read[:n], read[n:], read_plants(folder / "run" / "plants.json"), spec

@@ -12,25 +12,17 @@ from __future__ import annotations
 import json
 
 from hesspipe.cli import main
-from hesspipe.core.formats import read_plants, read_run
-from hesspipe.core.seeds import derive_seed
-from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
 from hesspipe.identification.criteria import choose_k
 from hesspipe.identification.motion_test import motion_test
 from hesspipe.pilot.hess import PilotModel
+from humanlike_trials import repeated_trials
 
 
 def _repeats(folder, effect, seed, n=3):
-    """n runs of one Hess pilot on the paper's plants (roll rate, disturbance only), as
-    benchmarks/bench_diagnose.py --repeats n draws them."""
-    effects = () if effect == "none" else (effect,)
-    s = derive_seed(seed, "bench-diagnose", "paper", "rate", "disturbance", effect)
-    spec = draw_trial("paper", s, task="disturbance", pilot="hess", effects=effects, fs=50.0, T_m=70.0,
-                      output="rate", disturbance="wind", name="run")
-    specs = [spec] + [retest(spec, derive_seed(s, "repeat-run", str(j)), name=f"run-{j + 1}")
-                      for j in range(1, n)]
-    runs = [read_run(write_trial(folder / x.name, simulate_trial(x))) for x in specs]
-    return runs, read_plants(folder / "run" / "plants.json")
+    """n runs of one Hess pilot on the paper's plants, roll rate, disturbance only
+    (tests/humanlike_trials.py)."""
+    runs, _, plants, _ = repeated_trials(folder, "paper", "rate", "disturbance", effect, seed, n)
+    return runs, plants
 
 
 def test_repeats_name_a_motion_feedback_that_one_run_cannot_tell(tmp_path, capsys):

@@ -21,6 +21,7 @@ from hesspipe.diagnose.motion import paired_delay_test
 from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
+from humanlike_trials import repeated_trials
 
 
 def _pair(folder, effect, seed):
@@ -81,18 +82,9 @@ def test_a_baseline_run_without_forcing_lines_is_an_error_naming_it(tmp_path):
 
 
 def _repeats(folder, effect, seed, n, task="disturbance"):
-    """n runs of each condition (roll rate; the condition's repeats keep the simulator's extra
-    delay, every run draws the pilot's run-to-run scatter), as bench_diagnose.py --paired
-    --repeats n draws them."""
-    effects = () if effect == "none" else (effect,)
-    s = derive_seed(seed, "bench-diagnose", "roll", "rate", task, effect)
-    spec = draw_trial("roll", s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
-                      output="rate", name="run")
-    cond = [spec] + [retest(spec, derive_seed(s, "repeat-run", str(j)), name=f"run{j}") for j in range(1, n)]
-    base = [retest(spec, derive_seed(s, "baseline-run", *([str(j)] if j else [])), effects=(), name=f"base{j}")
-            for j in range(n)]
-    read = [read_run(write_trial(folder / x.name, simulate_trial(x))) for x in cond + base]
-    return read[:n], read[n:], read_plants(folder / "run" / "plants.json"), spec.pilot["extra_delay"]
+    """n runs of each condition, roll rate (tests/humanlike_trials.py), and the extra delay (s)."""
+    cond, base, plants, spec = repeated_trials(folder, "roll", "rate", task, effect, seed, n, baselines=True)
+    return cond, base, plants, spec.pilot["extra_delay"]
 
 
 def test_repeated_runs_name_an_extra_delay_that_one_pair_cannot(tmp_path):
