@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from hesspipe.core.errors import HesspipeError
-from hesspipe.core.formats import Plants, Run, read_plants, read_run, write_plants, write_run
+from hesspipe.core.formats import Plants, Run, as_runs, read_plants, read_run, write_plants, write_run
 from hesspipe.core.paper import EQ14, EQ16
 
 
@@ -280,3 +280,12 @@ def test_seed_rule_no_wrap_around():
     # Before: base & 0xFFFFFFFF made 2**64 + 1 and 1 (and -1 and 2**64 - 1) the same streams.
     assert derive_seed(1, "a") != derive_seed(2 ** 32 + 1, "a") != derive_seed(2 ** 33 + 1, "a")
     assert len({derive_seed(s, "a") for s in (0, 1, 2 ** 32, 2 ** 62, MAX_SEED)}) == 5
+
+
+def test_as_runs():
+    run = Run(*(np.zeros(3) for _ in range(5)))
+    assert as_runs(run) == [run]
+    assert as_runs((run, run)) == [run, run]
+    for bad in ("r1.csv", ["r1.csv"], None):
+        with pytest.raises(HesspipeError, match="expected a Run or a list of Runs"):
+            as_runs(bad)

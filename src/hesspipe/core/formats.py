@@ -102,6 +102,23 @@ class Run:
         return len(self.time)
 
 
+def as_runs(run_or_runs) -> list:
+    """One :class:`Run` or a sequence of repeated runs of a condition, as a list of runs.
+
+    Raises
+    ------
+    HesspipeError
+        If it is neither (a path, say: read it with :func:`read_run` first).
+    """
+    if isinstance(run_or_runs, Run):
+        return [run_or_runs]
+    runs = list(run_or_runs) if isinstance(run_or_runs, (list, tuple)) else None
+    if runs is None or not all(isinstance(r, Run) for r in runs):
+        raise HesspipeError(f"run: expected a Run or a list of Runs (read_run reads a file), "
+                            f"got {type(run_or_runs).__name__}")
+    return runs
+
+
 def _parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
     """Parse ``"control=stick,output=p"`` into ``{"control": "stick", ...}``."""
     if not spec:

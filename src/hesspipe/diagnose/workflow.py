@@ -43,7 +43,7 @@ import scipy.special
 import scipy.stats
 
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, Run
+from ..core.formats import Plants, Run, as_runs
 from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..identification.criteria import choose_k
@@ -187,8 +187,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     check_seed(seed)
     check_control(run)
     _check_inputs(run, plants, cfg)
-    bases = [] if baseline_run is None else (
-        list(baseline_run) if isinstance(baseline_run, (list, tuple)) else [baseline_run])
+    bases = [] if baseline_run is None else as_runs(baseline_run)
     repeats = list(repeat_runs)
     for other in bases + repeats:
         check_control(other)

@@ -30,7 +30,7 @@ from scipy.optimize import differential_evolution
 
 from ..core.choices import OPTIMIZERS  # one list, in a light module: the command line reads it too
 from ..core.errors import HesspipeError
-from ..core.formats import siso_coefficients
+from ..core.formats import Run, as_runs, siso_coefficients
 from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover, tracking_crossover
@@ -204,8 +204,8 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     model = model_from_name(model)
     criterion = check_criterion(criterion)
     runs = None
-    if isinstance(run, (list, tuple)):
-        runs = list(run)
+    if not isinstance(run, Run):
+        runs = as_runs(run)
         if criterion != "df" and len(runs) > 1:
             raise HesspipeError(f"criterion: {len(runs)} runs are fitted through their averaged "
                                 f"describing function, which only criterion 'df' uses; got {criterion!r}")

@@ -25,6 +25,7 @@ from typing import Mapping
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.formats import as_runs
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
 from ._lsq import best_least_squares, held_covariance
@@ -43,10 +44,6 @@ def _lines(run, band_hz):
     if ld.reason:
         raise HesspipeError(f"{run.source or run.id}: {ld.reason}")
     return ld.s, ld.E, ld.Y, ld.U, ld.w
-
-
-def _as_list(runs) -> list:
-    return list(runs) if isinstance(runs, (list, tuple)) else [runs]
 
 
 def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], Mapping[str, float]], *,
@@ -85,7 +82,7 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
     HesspipeError
         When a run has too few forcing lines or no unforced bins between them (naming it).
     """
-    runs, base_runs = _as_list(run), _as_list(baseline_run)
+    runs, base_runs = as_runs(run), as_runs(baseline_run)
     data = [_lines(r, band_hz) for r in runs + base_runs]
     side = [0] * len(runs) + [1] * len(base_runs)      # which start each run takes
     model = PilotModel()
