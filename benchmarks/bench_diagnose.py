@@ -34,7 +34,11 @@ Usage::
                                         [--outputs rate,angle] [--tasks disturbance,both]
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
                                         [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired] [--repeats 3]
-                                        [--pilot precision] [--remnant-at error]
+                                        [--pilot precision] [--remnant-at error] [--gain-drift 0.15]
+
+``--gain-drift CV``: the pilot's visual gain wanders within each run (coefficient of
+variation CV, correlation time 10 s), as a human's does; the describing function averages
+it and its sidebands add to the remnant between the lines.
 
 ``--pilot precision`` draws McRuer precision pilots instead of Hess-structured ones (with
 motion: the multimodal model of motion experiments, its own canal model; see
@@ -155,6 +159,9 @@ def main(argv=None) -> int:
     ap.add_argument("--remnant-at", choices=("control", "error"), default=None,
                     help="where the generator injects the remnant (default control; error: "
                          "perceptual noise shaped by the pilot's own dynamics, as Levison's)")
+    ap.add_argument("--gain-drift", type=float, default=None,
+                    help="the generator's within-run variation of the pilot's visual gain "
+                         "(coefficient of variation, correlation time 10 s; default 0: time-invariant)")
     ap.add_argument("--paired", action="store_true",
                     help="give diagnose a baseline run of the same pilot (humanlike.retest: no "
                          "pilot-side effect, the pilot's run-to-run scatter, another remnant)")
@@ -170,6 +177,8 @@ def main(argv=None) -> int:
         draw["fs"] = args.fs
     if args.T_m is not None:
         draw["T_m"] = args.T_m
+    if args.gain_drift is not None:
+        draw["gain_drift"] = args.gain_drift
     if args.remnant_at is not None:
         draw["remnant_at"] = args.remnant_at
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike "

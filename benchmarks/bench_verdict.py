@@ -14,7 +14,10 @@ contrast, the PSD-fitness improvement 1 - expanded/original of the paper's crite
                                        [--task disturbance] [--T 45] [--fs 60]
                                        [--output rate|angle] [--km-ratio 0.2,1.0]
                                        [--pilot precision] [--tau-m 0.15]
-                                       [--remnant-at error]
+                                       [--remnant-at error] [--gain-drift 0.15]
+
+``--gain-drift CV``: each pilot's visual gain wanders within its run (CV, correlation
+time 10 s).
 
 ``--pilot precision``: McRuer precision pilots (with motion, the multimodal model's
 vestibular path and canals), a structure other than the Hess model compare-pilots fits.
@@ -73,6 +76,9 @@ def main(argv=None) -> None:
     ap.add_argument("--tau-m", type=float, default=None, help="vestibular delay, s (default 0)")
     ap.add_argument("--remnant-at", choices=("control", "error"), default=None,
                     help="where the generator injects the remnant (default control)")
+    ap.add_argument("--gain-drift", type=float, default=None,
+                    help="the generator's within-run variation of the pilot's visual gain "
+                         "(coefficient of variation, correlation time 10 s; default 0: time-invariant)")
     args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
     print(f"SYNTHETIC data: independent generator hesspipe.humanlike, {args.pilot} pilots, task "
@@ -80,6 +86,8 @@ def main(argv=None) -> None:
     draw = {"output": args.output}
     if args.tau_m is not None:
         draw["tau_m"] = args.tau_m
+    if args.gain_drift is not None:
+        draw["gain_drift"] = args.gain_drift
     if args.remnant_at is not None:
         draw["remnant_at"] = args.remnant_at
     if args.km_ratio:

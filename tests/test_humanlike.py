@@ -12,7 +12,16 @@ import numpy as np
 import pytest
 
 from hesspipe.core.errors import HesspipeError
-from hesspipe.humanlike import closed_loop, csv_bytes, draw_trial, make_plant, make_trials, simulate_trial, write_trial
+from hesspipe.humanlike import (
+    closed_loop,
+    csv_bytes,
+    draw_trial,
+    make_plant,
+    make_trials,
+    retest,
+    simulate_trial,
+    write_trial,
+)
 from hesspipe.humanlike.pilots import loop_metrics
 
 SHORT = dict(T_m=15.0, run_in=10.0)     # 900 samples at 60 Hz: fast, whole periods
@@ -186,6 +195,37 @@ def test_bad_input():
         make_plant("no/such/plants.json")
     with pytest.raises(HesspipeError, match="T_m"):
         draw_trial("1/s", 1, T_m=45.01)
+    with pytest.raises(HesspipeError, match="gain_drift"):
+        draw_trial("1/s", 1, gain_drift=0.8)
+    with pytest.raises(HesspipeError, match="drift_tc"):
+        draw_trial("1/s", 1, gain_drift=0.1, drift_tc=0.0)
+
+
+def test_gain_drift():
+    # A pilot without equalisation on 1/s and no remnant: off the lines there is only what
+    # the wandering gain puts there (its sidebands).
+    pilot = {"structure": "precision", "tau": 0.2, "wn": 12.0, "zn": 0.3, "TL": 0.0,
+             "TI": 0.0, "Kp": 3.0}
+    kw = dict(task="disturbance", pilot_params=pilot, remnant_share=0.0, T_m=45.0, run_in=10.0)
+    steady = simulate_trial(draw_trial("1/s", 2, **kw))
+    assert steady.truth["gain_drift"]["realised_sd"] == 0.0
+    assert np.array_equal(steady.control, simulate_trial(draw_trial("1/s", 2, gain_drift=0.0, **kw)).control)
+    spec = draw_trial("1/s", 2, gain_drift=0.2, drift_tc=5.0, **kw)
+    tr = simulate_trial(spec)
+    gd = tr.truth["gain_drift"]
+    assert gd["cv"] == 0.2 and 0.1 < gd["realised_sd"] < 0.3
+    assert np.array_equal(tr.control, simulate_trial(spec).control)     # seeded
+    U = np.fft.rfft(tr.control)
+    off = np.ones(U.size, dtype=bool)
+    off[spec.disturbance.k] = off[0] = False
+    share = np.sum(np.abs(U[off]) ** 2) / np.sum(np.abs(U[1:]) ** 2)
+    # u ~ kv(t) u0(t) in open loop puts about sd^2 of the power off the lines; the loop
+    # rejects part of it below crossover.
+    assert 0.2 * gd["realised_sd"] ** 2 < share < 1.5 * gd["realised_sd"] ** 2
+    # A retest keeps the pilot's variability and draws another realisation of it.
+    again = simulate_trial(retest(spec, 7))
+    assert again.truth["gain_drift"]["cv"] == 0.2
+    assert again.truth["seeds"]["gain_drift"] != tr.truth["seeds"]["gain_drift"]
 
 
 def test_readable_by_hesspipe(tmp_path):

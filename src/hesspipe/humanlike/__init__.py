@@ -4,7 +4,8 @@ It stands in for real human recordings when testing hesspipe's identification
 and diagnosis: a fine-step, block-by-block time-domain simulation of
 compensatory disturbance-rejection / target-tracking tasks flown by
 human-like pilots whose parameters are drawn from literature ranges, with
-multisine forcing, shaped remnant, optional hidden effects (motion feedback,
+multisine forcing, shaped remnant, an optional within-run drift of the
+visual gain, optional hidden effects (motion feedback,
 extra delay, elevated remnant, Dutch roll, actuator lag, rate limit), written
 the way real loggers write files, each with a ``*.truth.json``.
 

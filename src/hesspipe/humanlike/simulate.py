@@ -49,6 +49,9 @@ class Wiring:
         Actuator rate limit, control units/s.
     disturbance : {"input", "wind"}
         Where the disturbance enters.
+    gain_drift : bool
+        The visual path's gain is multiplied by a per-step factor (``kv``, the pilot's
+        within-run gain variation); off, the stepper is the time-invariant one.
     """
 
     h: float
@@ -61,6 +64,7 @@ class Wiring:
     remnant_at: str = "control"
     rate_limit: float | None = None
     disturbance: str = "input"
+    gain_drift: bool = False
 
 
 def delay_steps(tau: float, h: float, holds: int) -> int:
@@ -132,6 +136,8 @@ def _source(wr: Wiring) -> str:
     body.append("e = rk - y")
     body.append("ep = e + n" if wr.remnant_at == "error" else "ep = e")
     body += ["ed = buf[bi]", "buf[bi] = ep", "bi += 1", f"if bi == {wr.delay_steps}: bi = 0"]
+    if wr.gain_drift:
+        body.append("ed = kv[k]*ed")
     updates = _update("rem", b["rem"], ["wk"])
     if hess:
         body.append(f"ue = {_lit(wr.Ke)}*ed")
@@ -160,7 +166,7 @@ def _source(wr: Wiring) -> str:
         updates += _update("act", b["act"], ["u"])
     updates += _update("plant", b["plant"], ["v", "wind"])
     body += ["ys[k] = y", "us[k] = u", "acts[k] = a"] + updates
-    lines = ["def run(r, d, w, g, N):"]
+    lines = ["def run(r, d, w, g, N, kv=None):"]
     lines += ["    " + s for s in init]
     lines += ["    rlp = 0.0", f"    buf = [0.0]*{wr.delay_steps}", "    bi = 0",
               f"    mbuf = [0.0]*{max(wr.motion_delay_steps, 1)}", "    mi = 0",
@@ -171,10 +177,11 @@ def _source(wr: Wiring) -> str:
 
 
 def compile_loop(wr: Wiring):
-    """Return ``run(r, d, w, g, N) -> (y, u, a)`` for this wiring.
+    """Return ``run(r, d, w, g, N, kv=None) -> (y, u, a)`` for this wiring.
 
     ``r``, ``d`` are target and disturbance at every fine step, ``w`` the unit
-    remnant noise at every fine step, ``g`` the remnant gain; ``y`` is the
+    remnant noise at every fine step, ``g`` the remnant gain, ``kv`` the visual
+    gain's factor at every fine step (read only with ``gain_drift``); ``y`` is the
     output, ``u`` the pilot's control (stick, remnant included when injected
     at the control), ``a`` the actuator output after the rate limit, at every
     fine step.

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.signal import lfilter
 
 from ..core.errors import HesspipeError
 from ..core.seeds import derive_seed
@@ -35,7 +36,7 @@ EFFECT_REMNANT = (0.40, 0.60)
 OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=10,
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
                remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
-               pilot_params=None)
+               pilot_params=None, gain_drift=0.0, drift_tc=10.0)
 
 
 @dataclass(frozen=True)
@@ -186,7 +187,11 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         ``remnant_at`` ("control"/"error"), ``tau_m`` (vestibular delay, s, 0),
         ``motion_path`` ((num, den)), ``name``, ``style`` (CSV style; see
         :mod:`hesspipe.humanlike.writer`), ``pilot_params`` (a complete pilot
-        dict: no pilot is drawn).
+        dict: no pilot is drawn), ``gain_drift`` (0: a time-invariant pilot; else the
+        coefficient of variation of the visual gain within the run, a first-order
+        Gauss-Markov process of correlation time ``drift_tc``, s, 10: humans' gains wander
+        over tens of seconds, which a describing function averages and its neighbours
+        see as remnant).
 
     Raises
     ------
@@ -210,6 +215,11 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         raise HesspipeError(f"task: expected 'disturbance', 'tracking' or 'both', got {task!r}")
     if pilot not in ("precision", "hess"):
         raise HesspipeError(f"pilot: expected 'precision' or 'hess', got {pilot!r}")
+    drift, drift_tc = float(opts["gain_drift"]), float(opts["drift_tc"])
+    if not 0.0 <= drift <= 0.5:
+        raise HesspipeError(f"gain_drift: expected a coefficient of variation in [0, 0.5], got {drift!r}")
+    if not drift_tc > 0.0:
+        raise HesspipeError(f"drift_tc: expected a correlation time > 0 s, got {drift_tc!r}")
     n_log = opts["fs"] * opts["T_m"]
     if abs(n_log - round(n_log)) > 1e-9 or n_log < 4:
         raise HesspipeError(f"T_m: fs*T_m must be a whole number of samples, got {n_log:g}")
@@ -305,7 +315,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     options = {k: opts[k] for k in ("fs", "T_m", "run_in", "fade", "fine_ratio", "n_lines",
                                     "output", "tau_m")}
     options.update(w_corner=corner, d_rms=dist.rms() if dist is not None else d_rms,
-                   pilot_sign=sign, plant_order=order)
+                   pilot_sign=sign, plant_order=order, gain_drift=drift, drift_tc=drift_tc,
+                   drift_seed=int(derive_seed(seed, "gain-drift")))
     return TrialSpec(name=name, seed=int(seed), plant=plant, task=task, pilot=p,
                      effects=effects, options=options, disturbance=dist, target=targ,
                      remnant=remnant, actuator=actuator, motion_tf=motion_tf, style=style)
@@ -337,7 +348,22 @@ def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
                   Ke=p.get("Ke", 0.0), Km=p.get("Km", 0.0),
                   motion_delay_steps=int(round(p.get("tau_m", 0.0) / h)),
                   remnant_at=spec.remnant["at"], rate_limit=rate_limit,
-                  disturbance=spec.plant.disturbance)
+                  disturbance=spec.plant.disturbance,
+                  gain_drift=spec.options.get("gain_drift", 0.0) > 0.0)
+
+
+def gain_factor(spec: TrialSpec, t: np.ndarray) -> np.ndarray:
+    """The visual gain's factor at times `t` (s; a regular grid): 1 without drift, else
+    ``1 + cv x(t)``, x a unit-variance first-order Gauss-Markov process of correlation time
+    ``drift_tc`` (exact discretisation), started in its stationary state and kept >= 0.2."""
+    cv = spec.options.get("gain_drift", 0.0)
+    if cv <= 0.0:
+        return np.ones(t.size)
+    a = float(np.exp(-(t[1] - t[0]) / spec.options["drift_tc"]))
+    z = np.random.default_rng(spec.options["drift_seed"]).standard_normal(t.size)
+    z[1:] *= np.sqrt(1.0 - a * a)
+    x = lfilter([1.0], [1.0, -a], z)
+    return np.maximum(1.0 + cv * x, 0.2)
 
 
 def _solve_gain(uf: np.ndarray, un: np.ndarray, share: float) -> float:
@@ -399,8 +425,10 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     zeros = np.zeros(n)
     idx = n_run * ratio + np.arange(n_log) * ratio
 
+    kv = gain_factor(spec, t).tolist()
+
     def sim(fn, rr, dd, ww, g):
-        ys, us, acts = fn(rr.tolist(), dd.tolist(), ww.tolist(), float(g), n)
+        ys, us, acts = fn(rr.tolist(), dd.tolist(), ww.tolist(), float(g), n, kv)
         sim.actuator = np.asarray(acts)
         return np.asarray(ys), np.asarray(us)
 
@@ -426,7 +454,7 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(u))) \
             or np.max(np.abs(y[idx])) > 1e6 * (np.max(np.abs(y_f[idx])) + 1e-12) + 1e6:
         raise HesspipeError(f"trial {spec.name}: the simulated loop diverged")
-    sim_info = {"fine_step_s": h,
+    sim_info = {"fine_step_s": h, "gain_factor": np.asarray(kv)[idx],
                 "remnant_gain": g, "rate_limit_per_s": rate,
                 "u_forcing": u_f[idx], "u": u[idx], "h": h, "ratio": ratio,
                 "rate_limited_fraction": (None if rate is None else float(

@@ -11,7 +11,9 @@ U/E measures at the disturbance lines (the target is zero there). At the
 target lines U/E measures ``A / (1 + B Yc)`` (equal to H_pe without motion);
 it is reported separately. Crossover: ``L = H_pe Yc`` with Yc the true
 control path (actuator lag and full aircraft included; the rate limit
-ignored); also with the nominal (plants-file) Yc.
+ignored); also with the nominal (plants-file) Yc. With ``gain_drift`` the pilot's
+visual gain wanders within the run; the describing function is that of its mean
+gain, and ``gain_drift`` reports the realised factor's spread over the logged window.
 """
 
 from __future__ import annotations
@@ -188,6 +190,13 @@ def build_truth(spec, sim: dict) -> dict:
                     "control_power_off_lines_share": off,
                     "Tn_s": spec.remnant["Tn"], "injected_at": spec.remnant["at"],
                     "gain": sim["remnant_gain"]},
-        "seeds": {"base": spec.seed, "remnant_noise": spec.remnant["noise_seed"]},
+        "gain_drift": {"cv": spec.options.get("gain_drift", 0.0),
+                       "correlation_time_s": spec.options.get("drift_tc"),
+                       "realised_mean": float(np.mean(sim["gain_factor"])),
+                       "realised_sd": float(np.std(sim["gain_factor"])),
+                       "realised_range": [float(np.min(sim["gain_factor"])),
+                                          float(np.max(sim["gain_factor"]))]},
+        "seeds": {"base": spec.seed, "remnant_noise": spec.remnant["noise_seed"],
+                  "gain_drift": spec.options.get("drift_seed")},
         "style": spec.style,
     }
