@@ -17,7 +17,7 @@ from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
-from hesspipe.diagnose.motion import paired_delay_test
+from hesspipe.diagnose.motion import observed_delay_variance, paired_delay_test
 from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
@@ -114,6 +114,24 @@ def test_the_allowed_spread_shrinks_with_the_runs_of_each_condition():
     assert many["spread_s"] == pytest.approx(0.01) and many["named"]              # z = 3
     assert paired_delay_test({**joint, "runs": 1, "baseline_runs": 3}, 0.02, 0.01)["spread_s"] == \
         pytest.approx(0.02 * np.sqrt((1 + 1 / 3) / 2))
+
+
+def test_the_runs_own_delays_set_a_floor_under_the_spread():
+    # Four runs each, tested difference 0.03 s: z = 3 on the allowed spread alone (above).
+    # Runs whose own delays scatter by 0.04 s about their condition's mean show a spread of
+    # the means' difference of 0.04 sqrt(1/4 + 1/4) = 0.028 s: z ~ 1, not named.
+    tight = [0.33, 0.33, 0.33, 0.33], [0.30, 0.30, 0.30, 0.30]
+    loose = [0.29, 0.37, 0.29, 0.37], [0.26, 0.34, 0.26, 0.34]
+    base = {"difference_s": 0.03, "se_s": 0.0, "delay_s": 0.33, "baseline_delay_s": 0.30,
+            "runs": 4, "baseline_runs": 4}
+    t = paired_delay_test({**base, "run_delays_s": tight[0], "baseline_run_delays_s": tight[1]}, 0.02, 0.01)
+    assert t["named"] and t["observed_spread_s"] == pytest.approx(0.0, abs=1e-12)
+    lo = paired_delay_test({**base, "run_delays_s": loose[0], "baseline_run_delays_s": loose[1]}, 0.02, 0.01)
+    sd = np.std(loose[0], ddof=1)
+    assert lo["observed_spread_s"] == pytest.approx(sd * np.sqrt(0.5))
+    assert not lo["named"] and lo["z"] == pytest.approx(0.03 / (sd * np.sqrt(0.5)))
+    # One run each: nothing to see the runs' scatter in.
+    assert observed_delay_variance({"run_delays_s": [0.3], "baseline_run_delays_s": [0.2]}) is None
 
 
 def test_a_record_given_twice_or_another_forcing_is_refused_by_name(tmp_path, capsys):

@@ -39,6 +39,8 @@ def format_report(d: Diagnosis) -> str:
     if dv is not None:
         runs = dv.get("runs", 1), dv.get("baseline_runs", 1)
         counted = "" if runs == (1, 1) else f" over {runs[0]} and {runs[1]} runs"
+        if dv.get("observed_spread_s") is not None:
+            counted += f"; the runs' own delays scatter {dv['observed_spread_s']:.3g} s"
         against = (f"against the same pilot's baseline run {dv['baseline_run']} "
                    f"({dv['baseline_delay_s']:.3f} s; difference {dv['difference_s']:.3f} s, run-to-run "
                    f"spread {dv.get('spread_s', dv['retest_sd_s']):.3g} s{counted})" if "baseline_run" in dv else

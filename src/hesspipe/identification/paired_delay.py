@@ -74,7 +74,8 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
     dict
         ``difference_s`` and ``se_s`` (its standard error from the joint fit, s),
         ``delay_s`` and ``baseline_delay_s`` (each condition's mean delay in the joint fit,
-        s), ``runs`` and ``baseline_runs`` (how many of each), ``shared`` (the shared
+        s), ``runs`` and ``baseline_runs`` (how many of each), ``run_delays_s`` and
+        ``baseline_run_delays_s`` (each run's own delay, s), ``shared`` (the shared
         parameters), ``n_lines`` (all runs), ``degrees_of_freedom``.
 
     Raises
@@ -138,5 +139,7 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
     mine, theirs = float(t[:len(runs)].mean()), float(t[len(runs):].mean())
     return {"difference_s": mine - theirs, "se_s": se, "delay_s": mine,
             "baseline_delay_s": theirs, "runs": len(runs), "baseline_runs": len(base_runs),
+            "run_delays_s": [float(v) for v in t[:len(runs)]],
+            "baseline_run_delays_s": [float(v) for v in t[len(runs):]],
             "shared": {n: float(v) for n, v in zip(shared, sol.x[:len(shared)])},
             "n_lines": int(sum(d[0].size for d in data)), "degrees_of_freedom": int(dof)}
