@@ -105,6 +105,10 @@ class Run:
 def as_runs(run_or_runs) -> list:
     """One :class:`Run` or a sequence of repeated runs of a condition, as a list of runs.
 
+    Parameters
+    ----------
+    run_or_runs : Run or list or tuple of Run
+
     Raises
     ------
     HesspipeError

@@ -355,7 +355,15 @@ def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
 def gain_factor(spec: TrialSpec, t: np.ndarray) -> np.ndarray:
     """The visual gain's factor at times `t` (s; a regular grid): 1 without drift, else
     ``1 + cv x(t)``, x a unit-variance first-order Gauss-Markov process of correlation time
-    ``drift_tc`` (exact discretisation), started in its stationary state and kept >= 0.2."""
+    ``drift_tc`` (exact discretisation), started in its stationary state and kept >= 0.2.
+
+    Parameters
+    ----------
+    spec : TrialSpec
+        Its options ``gain_drift``, ``drift_tc`` (s) and ``drift_seed``.
+    t : ndarray
+        Times, s, on a regular grid.
+    """
     cv = spec.options.get("gain_drift", 0.0)
     if cv <= 0.0:
         return np.ones(t.size)
