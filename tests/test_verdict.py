@@ -10,11 +10,15 @@ import math
 import numpy as np
 import pytest
 
+from hesspipe.cli import main
+from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
-from hesspipe.humanlike import make_trials
+from hesspipe.humanlike import draw_trial, make_trials, retest, simulate_trial, write_trial
 from hesspipe.pilot.crossover import gain_scale
 from hesspipe.pilot.hess import PilotModel
-from hesspipe.pilots.verdict import cohort_verdict, forcing_lines, motion_test
+from hesspipe.pilots.compare import compare_pilots
+from hesspipe.pilots.results import PilotComparison
+from hesspipe.pilots.verdict import cohort_verdict, forcing_lines, motion_test, pilot_groups, verdict_lines
 
 FAST = dict(T_m=30.0, fs=50.0, style="plain")
 
@@ -127,3 +131,67 @@ def test_undetermined_verdict_on_the_papers_task_says_how_to_answer(tmp_path):
                             seed=0).split("## ")[0]
         assert head.startswith("# hesspipe report") and "Undetermined" in head
         assert ('forcing = "two_input"' in head) is hint
+
+
+def test_pilot_groups_find_the_pilot_in_each_run_id():
+    ids = ["s01_motion_r1", "s01_motion_r2", "s12_motion_r1"]
+    assert pilot_groups(ids, None) is None
+    assert pilot_groups(ids, r"^(s\d+)_") == {"s01_motion_r1": "s01", "s01_motion_r2": "s01",
+                                              "s12_motion_r1": "s12"}
+    assert set(pilot_groups(ids, r"_(r\d)|^(?P<pilot>s\d+)").values()) == {"s01", "s12"}
+    assert pilot_groups(ids, r"s\d+") == pilot_groups(ids, r"^(s\d+)_")      # the whole match
+    with pytest.raises(HesspipeError, match=r"s12_motion_r1: pilot_id pattern '\^s0' does not match"):
+        pilot_groups(ids, r"^s0")
+    with pytest.raises(HesspipeError, match="not a regular expression"):
+        pilot_groups(ids, r"^(s\d+")
+
+
+def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
+    t = lambda p, km=1.0: {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": km,  # noqa: E731
+                           "Km_se": 0.1, "significant": p < 0.01}
+    tests = {"a1": t(0.02, 1.0), "a2": t(0.03, 3.0), "b1": t(0.6), "b2": t(0.7), "b3": {"available": False}}
+    groups = {"a1": "a", "a2": "a", "b1": "b", "b2": "b", "b3": "b"}
+    v = cohort_verdict(tests, groups=groups)
+    a = v["per_pilot"]["a"]
+    chi = -2 * np.log([0.02, 0.03]).sum()
+    assert a["p_value"] == pytest.approx(np.exp(-chi / 2) * (1 + chi / 2))     # Fisher, 2 runs
+    assert a["runs"] == 2 and a["significant"] and a["run_ids"] == ["a1", "a2"]
+    assert a["Km"] == pytest.approx(2.0) and a["Km_se"] == pytest.approx(1.0)    # mean, its se
+    assert v["per_pilot"]["b"]["untested_runs"] == ["b3"]
+    assert v["n_tested"] == 2 and v["n_significant"] == 1
+    assert "across the 2 pilots (4 runs" in v["sentence"] and "1 of 2 pilots" in v["sentence"]
+    assert "1 run(s) without forcing lines" in v["sentence"]
+    # Ungrouped, the same records would count four "pilots".
+    assert cohort_verdict({k: x for k, x in tests.items() if k != "b3"})["n_tested"] == 4
+    text = "\n".join(verdict_lines(v))
+    assert "  a (2 runs): misfit removed 50.0 %" in text
+
+
+def test_compare_pilots_groups_repeated_runs_by_pilot(tmp_path, capsys):
+    # Two SYNTHETIC pilots with motion feedback, three runs each (retests of the pilot).
+    folder = tmp_path / "runs"
+    plants_path = None
+    for i, seed in enumerate((5, 6)):
+        spec = draw_trial("roll", seed, task="disturbance", pilot="hess", effects=("motion_feedback",),
+                          km_ratio=(0.8, 1.0), name=f"s{i + 1:02d}_r1", **FAST)
+        specs = [spec] + [retest(spec, 100 + j, name=f"s{i + 1:02d}_r{j + 1}") for j in (1, 2)]
+        for sp in specs:
+            plants_path = write_trial(folder, simulate_trial(sp)).parent / "plants.json"
+    plants = read_plants(plants_path)
+    start = PilotModel().complete({}, 1, gain=gain_scale(plants, 1))
+
+    def job(run):
+        return PilotComparison(id=run.id, source=run.source, synthetic=True, original={},
+                               expanded_fixed={"parameters": {"Km": 0.1}}, expanded={}, improvement=math.nan,
+                               motion_test=motion_test(run, plants, start))
+
+    c = compare_pilots(folder, plants, workers=1, job=job, pilot_id=r"^(s\d+)_", progress=False)
+    v = c.verdict()
+    assert set(v["per_pilot"]) == {"s01", "s02"} and all(p["runs"] == 3 for p in v["per_pilot"].values())
+    assert c.to_dict(psd=False)["n_pilots"] == 2 and c.to_dict(psd=False)["n_runs"] == 6
+    with pytest.raises(HesspipeError, match="s01_r1: pilot_id pattern"):
+        compare_pilots(folder, plants, workers=1, job=job, pilot_id=r"^x", progress=False)
+    # The command line: a pattern that finds no pilot is one line naming the file and the flag.
+    code = main(["compare-pilots", str(folder), "--plants", str(plants_path), "--pilot-id", "^x"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and len(err) == 1 and "s01_r1: --pilot-id '^x' does not match" in err[0], err

@@ -24,11 +24,17 @@ def register(sub) -> None:
                    help="Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 (needs hesspipe[dask])")
     p.add_argument("--json", metavar="OUT.json", help="write the comparison as JSON")
     p.add_argument("--figures", metavar="DIR", help="write a PSD figure per pilot into DIR")
+    p.add_argument("--pilot-id", metavar="REGEX",
+                   help="when pilots flew several runs: a regular expression that finds the pilot in "
+                        "each file name (its group 'pilot', else its first group), e.g. '^(s[0-9]+)_'; "
+                        "the motion verdict then combines each pilot's runs and counts pilots "
+                        "(default: each file is a pilot)")
     from ._options import add_run_options, add_seed, add_terms, field_terms
 
     add_run_options(p)
     # The library names its settings (workers, scheduler); this command spells them as flags.
     add_terms(p, {r"(^|: )workers: ": r"\1--workers: ", r"(^|: )scheduler ": r"\1--scheduler ",
+                  r"pilot_id( pattern)?": "--pilot-id",
                   **field_terms("CompareSettings", {k: "--" + k for k in ("seed", "passes", "restarts", "optimizer",
                                                                         "start", "criterion")})})
     add_seed(p, 0, "base seed")
@@ -74,7 +80,7 @@ def _run(args) -> int:
         check_workers(args.workers)
     plants = read_plants(args.plants)
     result = compare_pilots(args.dir, plants, settings, workers=args.workers, scheduler=args.scheduler,
-                            **run_options(args))
+                            pilot_id=args.pilot_id, **run_options(args))
     print(result.table())
     if args.json:
         write_json(args.json, result.to_dict())

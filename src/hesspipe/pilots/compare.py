@@ -57,7 +57,7 @@ from .settings import (  # noqa: F401
     CompareSettings,
     PilotsConfig,
 )
-from .verdict import safe_motion_test
+from .verdict import pilot_groups, safe_motion_test
 
 # -- one pilot ------------------------------------------------------------------------------
 
@@ -354,7 +354,7 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
 def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | None = None, *,
                    workers: int | None = None, scheduler: str | None = None, columns=None,
                    resample: bool = False, progress: bool | None = None, job=None,
-                   **fields) -> Comparison:
+                   pilot_id: str | None = None, **fields) -> Comparison:
     """Identify original, expanded-fixed-Km and expanded models on each pilot's run.
 
     Parameters
@@ -379,6 +379,11 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     job : callable, optional
         ``job(run) -> PilotComparison`` replacing the identification (tests,
         custom studies); must be picklable for workers > 1.
+    pilot_id : str, optional
+        Regular expression that finds the pilot in each file stem when pilots flew
+        several runs (:func:`hesspipe.pilots.verdict.pilot_groups`, e.g. ``r"^(s\\d+)_"``):
+        each run is still identified on its own, and the motion verdict combines a pilot's
+        runs before counting pilots. Default: each file is a pilot.
 
     Returns
     -------
@@ -396,6 +401,7 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
         settings = replace(settings, km_fixed=_km_fixed(settings, plants))
     _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
     paths = list_runs(paths_or_dir)
+    groups = pilot_groups([p.stem for p in paths], pilot_id)   # before any work
     runs, failures = read_runs(paths, columns=columns, resample=resample)
     if job is None:
         job = functools.partial(compare_run, plants=plants, settings=settings)
@@ -406,7 +412,7 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     order = {str(p): i for i, p in enumerate(paths)}
     failures.sort(key=lambda f: order.get(f.source, len(order)))
 
-    return Comparison(pilots=pilots, failures=tuple(failures), settings=settings,
+    return Comparison(pilots=pilots, failures=tuple(failures), settings=settings, groups=groups,
                       plants={"control_to_output": tf_coefficients(plants.control_to_output),
                               "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)})
 

@@ -116,12 +116,16 @@ class Comparison:
     settings : CompareSettings
     plants : dict
         The plants' coefficients (for the record).
+    groups : dict or None
+        Run id → pilot id when pilots flew several runs
+        (:func:`hesspipe.pilots.verdict.pilot_groups`); None: each run is a pilot.
     """
 
     pilots: tuple[PilotComparison, ...]
     failures: tuple[PilotFailure, ...] = ()
     settings: CompareSettings = CompareSettings()
     plants: dict = field(default_factory=dict)
+    groups: dict | None = None
 
     @property
     def ok(self) -> bool:
@@ -155,7 +159,7 @@ class Comparison:
     def verdict(self) -> dict:
         """Does motion feedback improve the fit? :func:`hesspipe.pilots.verdict.cohort_verdict`."""
 
-        return cohort_verdict({p.id: p.motion_test for p in self.pilots})
+        return cohort_verdict({p.id: p.motion_test for p in self.pilots}, groups=self.groups)
 
     def to_dict(self, *, psd: bool = True) -> dict:
         """The comparison as a JSON-ready dict (the content of ``comparison.json``).
@@ -187,7 +191,10 @@ class Comparison:
             "std_improvement": stats["std"],
             "min_improvement": stats["min"],
             "max_improvement": stats["max"],
-            "n_pilots": len(self.pilots),
+            "n_pilots": len(self.pilots) if self.groups is None else
+            len({self.groups.get(p.id, p.id) for p in self.pilots}),
+            "n_runs": len(self.pilots),
+            "pilot_of_run": self.groups,
             "settings": {"seed": self.settings.seed, "optimizer": self.settings.optimizer,
                          "passes": self.settings.passes, "band_hz": list(self.settings.band),
                          "k": self.settings.k, "km_fixed": self.km_fixed_value(),

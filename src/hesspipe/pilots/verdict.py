@@ -17,6 +17,10 @@ seeds, gave one false "yes" from a pilot whose original fit had stopped in a
 local optimum: hence the exchange of optima in :func:`motion_test`. See
 benchmarks/bench_verdict.py and the README for the numbers.)
 
+Pilots who flew a condition several times (:func:`pilot_groups` maps run ids to pilots):
+each pilot's runs are combined first, by Fisher's rule over their p-values, so that the
+count and the cohort test are over pilots, not over runs of the same person.
+
 A pilot whose record has no separated multisine lines (gusts, as in the JSBSim
 pipeline's cohort) has no test ("not available", see the motion test), and the
 verdict says so instead of guessing from spectra.
@@ -25,24 +29,92 @@ verdict says so instead of guessing from spectra.
 from __future__ import annotations
 
 import math
-from typing import Mapping
+import re
+from typing import Mapping, Sequence
 
 import numpy as np
 from scipy import stats
+
+from ..core.errors import HesspipeError
 
 # The per-pilot test lives with identification so that diagnose uses the very same one.
 from ..identification.motion_test import ALPHA, analysis_window, forcing_lines, motion_test, safe_motion_test  # noqa: F401
 
 
-def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA) -> dict:
+def pilot_groups(run_ids: Sequence[str], pattern: str | None) -> dict[str, str] | None:
+    """Pilot id of each run id: the part of the id that `pattern` captures.
+
+    Parameters
+    ----------
+    run_ids : sequence of str
+        Run ids (file stems), e.g. ``["s01_motion_r1", "s01_motion_r2", "s02_motion_r1"]``.
+    pattern : str or None
+        Regular expression searched in each id; its group ``pilot`` (or else its first
+        group, or else the whole match) is the pilot id, e.g. ``r"^(s\\d+)"``. None: every
+        run is its own pilot.
+
+    Returns
+    -------
+    dict or None
+        Run id → pilot id (None when `pattern` is None).
+
+    Raises
+    ------
+    HesspipeError
+        For a pattern that is not a regular expression, or a run id it does not match.
+    """
+    if pattern is None:
+        return None
+    try:
+        rx = re.compile(pattern)
+    except re.error as exc:
+        raise HesspipeError(f"pilot_id: {pattern!r} is not a regular expression ({exc})") from None
+    out = {}
+    for rid in run_ids:
+        m = rx.search(rid)
+        if m is None:
+            raise HesspipeError(f"{rid}: pilot_id pattern {pattern!r} does not match this run id; "
+                                f"expected a pattern that finds the pilot in every file name")
+        key = m.group("pilot") if "pilot" in rx.groupindex else m.group(1) if rx.groups else m.group(0)
+        if not key:
+            raise HesspipeError(f"{rid}: pilot_id pattern {pattern!r} captures an empty pilot id")
+        out[rid] = key
+    return out
+
+
+def _per_pilot(done: Mapping[str, Mapping], groups: Mapping[str, str]) -> dict[str, dict]:
+    # Runs of one pilot are independent records: under "no motion" each p is uniform, so
+    # Fisher's combination is the pilot's own test; the cohort then counts pilots, not runs.
+    by = {}
+    for rid, t in done.items():
+        by.setdefault(groups.get(rid, rid), []).append(t)
+    out = {}
+    for pid, ts in by.items():
+        ps = [t["p_value"] for t in ts]
+        p = ps[0] if len(ps) == 1 else float(stats.combine_pvalues(ps, method="fisher").pvalue)
+        km = np.array([t["Km"] for t in ts], dtype=float)
+        out[pid] = {"p_value": p, "gain": float(np.median([t["gain"] for t in ts])),
+                    "lr": float(np.median([t["lr"] for t in ts])), "Km": float(np.mean(km)),
+                    "Km_se": (float(np.std(km, ddof=1) / math.sqrt(km.size)) if km.size > 1
+                              else ts[0]["Km_se"]), "runs": len(ts)}
+    return out
+
+
+def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
+                   groups: Mapping[str, str] | None = None) -> dict:
     """Paired verdict across pilots from their :func:`motion_test` results.
 
     Parameters
     ----------
     tests : mapping
-        Pilot id → :func:`motion_test` dict.
+        Run id → :func:`motion_test` dict (one run per pilot unless `groups`).
     alpha : float
         Significance level of the per-pilot tests and of the cohort test.
+    groups : mapping, optional
+        Run id → pilot id (:func:`pilot_groups`) when pilots flew several runs: a pilot's
+        runs are combined first (Fisher's combination of their p-values; median gain; Km
+        their mean, its error their standard error), so the count and the cohort test
+        are over pilots.
 
     Returns
     -------
@@ -64,28 +136,44 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA) -> dic
                 "sentence": "undetermined: no pilot's record has multisine forcing lines, so no "
                             "describing function could be tested for motion feedback",
                 "per_pilot": {pid: {"available": False} for pid in tests}}
-    n = len(done)
-    sig = sum(1 for t in done.values() if t["p_value"] < alpha)
+    n_runs = len(done)
+    pilots = _per_pilot(done, groups or {})
+    n = len(pilots)
+    sig = sum(1 for t in pilots.values() if t["p_value"] < alpha)
     binom_p = float(stats.binom.sf(sig - 1, n, alpha)) if sig > 0 else 1.0
-    fisher_p = float(stats.combine_pvalues([t["p_value"] for t in done.values()],
+    fisher_p = float(stats.combine_pvalues([t["p_value"] for t in pilots.values()],
                                            method="fisher").pvalue)
-    gains = np.array([t["gain"] for t in done.values()])
+    gains = np.array([t["gain"] for t in pilots.values()])
     yes = fisher_p < alpha
-    skipped = len(tests) - n
-    tail = f" ({skipped} pilot(s) without forcing lines not tested)" if skipped else ""
+    skipped = len(tests) - n_runs
+    unit = "run(s)" if groups else "pilot(s)"
+    tail = f" ({skipped} {unit} without forcing lines not tested)" if skipped else ""
+    of_runs = f" ({n_runs} runs; a pilot's runs combined by Fisher's rule)" if n_runs > n else ""
     claim = "improves" if yes else "does not significantly improve"
     sentence = (f"{'yes' if yes else 'no'}: motion feedback {claim} the describing-function "
-                f"fit across the {n} pilots (Fisher's combined p = {fisher_p:.2g}); individually "
+                f"fit across the {n} pilots{of_runs} (Fisher's combined p = {fisher_p:.2g}); individually "
                 f"significant for {sig} of {n} pilots (p < {alpha:g}; binomial p = {binom_p:.2g}); "
                 f"median share of the misfit removed {100 * float(np.median(gains)):.0f} %{tail}")
     return {"answer": "yes" if yes else "no", "sentence": sentence, "n_tested": n,
             "n_significant": sig, "binomial_p": binom_p, "fisher_p": fisher_p, "median_gain": float(np.median(gains)), "alpha": alpha,
-            "method": method,
-            "per_pilot": {pid: ({"gain": t["gain"], "p_value": t["p_value"], "lr": t["lr"],
-                                 "Km": t["Km"], "Km_se": t["Km_se"], "significant": t["significant"]}
-                                if t.get("available") else {"available": False,
-                                                            "reason": t.get("reason", "")})
-                          for pid, t in tests.items()}}
+            "method": method + (", a pilot's runs first combined by Fisher's rule" if groups else ""),
+            "per_pilot": _per_pilot_out(tests, pilots, groups, alpha)}
+
+
+def _per_pilot_out(tests, pilots, groups, alpha) -> dict:
+    if not groups:
+        return {pid: ({"gain": t["gain"], "p_value": t["p_value"], "lr": t["lr"],
+                       "Km": t["Km"], "Km_se": t["Km_se"], "significant": t["significant"]}
+                      if t.get("available") else {"available": False, "reason": t.get("reason", "")})
+                for pid, t in tests.items()}
+    out = {pid: {**t, "significant": t["p_value"] < alpha,
+                 "run_ids": [r for r in tests if groups.get(r, r) == pid and tests[r].get("available")]}
+           for pid, t in pilots.items()}
+    for rid, t in tests.items():
+        if not t.get("available"):
+            out.setdefault(groups.get(rid, rid), {"available": False, "reason": t.get("reason", "")}) \
+                .setdefault("untested_runs", []).append(rid)
+    return out
 
 
 def verdict_lines(verdict: Mapping) -> list[str]:
@@ -103,7 +191,8 @@ def verdict_lines(verdict: Mapping) -> list[str]:
             continue
         se = t.get("Km_se")
         km = f"Km {t['Km']:.3g}" + (f" +/- {se:.2g}" if se is not None and math.isfinite(se) else "")
-        out.append(f"  {pid}: misfit removed {100 * t['gain']:.1f} %, F = {t['lr']:.3g}, "
+        runs = f" ({t['runs']} runs)" if t.get("runs", 1) > 1 else ""
+        out.append(f"  {pid}{runs}: misfit removed {100 * t['gain']:.1f} %, F = {t['lr']:.3g}, "
                    f"p = {t['p_value']:.2g}{' *' if t['significant'] else ''}, {km}")
     out.append(f"  ({verdict['method']})")
     return out
