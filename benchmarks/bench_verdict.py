@@ -14,7 +14,10 @@ contrast, the PSD-fitness improvement 1 - expanded/original of the paper's crite
                                        [--task disturbance] [--T 45] [--fs 60]
                                        [--output rate|angle] [--km-ratio 0.2,1.0]
                                        [--pilot precision] [--tau-m 0.15]
-                                       [--remnant-at error] [--gain-drift 0.15]
+                                       [--remnant-at error] [--gain-drift 0.15] [--runs 3]
+
+``--runs N``: each pilot flies the condition N times (retests); the verdict combines a
+pilot's runs and counts pilots (``compare_pilots(pilot_id=...)``).
 
 ``--gain-drift CV``: each pilot's visual gain wanders within its run (CV, correlation
 time 10 s).
@@ -39,25 +42,31 @@ import numpy as np
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants
 from hesspipe.core.seeds import derive_seed
-from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
 from hesspipe.pilots.compare import compare_pilots
 
 
 def cohort(folder: Path, plant: str, n: int, seed: int, effects, task: str, T: float, fs: float,
-           pilot: str = "hess", **draw) -> int:
+           pilot: str = "hess", runs: int = 1, **draw) -> int:
     """Write `n` trials; a draw with no pilot meeting the generator's crossover/phase-margin
-    ranges is redrawn with the next sub-seed. Returns the number of redraws."""
+    ranges is redrawn with the next sub-seed. With `runs` > 1 each pilot flies the condition
+    that many times (``humanlike.retest``: its run-to-run scatter, its own remnant), files
+    ``pilotNN_rJ``. Returns the number of redraws."""
     redraws = 0
     for i in range(n):
         for attempt in range(50):
             s = derive_seed(seed, "bench_verdict", plant, task, ",".join(effects), str(i), str(attempt))
             try:
+                name = f"pilot{i + 1:02d}" + ("_r1" if runs > 1 else "")
                 spec = draw_trial(plant, s, task=task, pilot=pilot, effects=effects, T_m=T, fs=fs,
-                                  name=f"pilot{i + 1:02d}", **draw)
+                                  name=name, **draw)
             except HesspipeError:
                 redraws += 1
                 continue
             write_trial(folder, simulate_trial(spec))
+            for j in range(1, runs):
+                again = retest(spec, derive_seed(s, "repeat-run", str(j)), name=f"pilot{i + 1:02d}_r{j + 1}")
+                write_trial(folder, simulate_trial(again))
             break
     return redraws
 
@@ -79,6 +88,9 @@ def main(argv=None) -> None:
     ap.add_argument("--gain-drift", type=float, default=None,
                     help="the generator's within-run variation of the pilot's visual gain "
                          "(coefficient of variation, correlation time 10 s; default 0: time-invariant)")
+    ap.add_argument("--runs", type=int, default=1,
+                    help="runs per pilot (retests); the verdict then combines each pilot's runs "
+                         "(compare_pilots(pilot_id=...)) and counts pilots")
     args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
     print(f"SYNTHETIC data: independent generator hesspipe.humanlike, {args.pilot} pilots, task "
@@ -99,17 +111,19 @@ def main(argv=None) -> None:
                 with tempfile.TemporaryDirectory() as tmp:
                     folder = Path(tmp) / "runs"
                     cohort(folder, plant, args.n, seed, effects, args.task, args.T, args.fs, args.pilot,
-                           **draw)
+                           runs=args.runs, **draw)
                     t0 = time.perf_counter()
                     comp = compare_pilots(folder, read_plants(folder / "plants.json"), workers=1,
-                                          seed=seed, progress=False)
+                                          seed=seed, progress=False,
+                                          pilot_id=r"^(pilot\d+)_r" if args.runs > 1 else None)
                     dt = time.perf_counter() - t0
                 v = comp.verdict()
                 tally[label][0] += v["answer"] == ("yes" if label == "motion" else "no")
                 tally[label][1] += 1
                 print(f"\nplant {plant} seed {seed} cohort {label}: {v['sentence']}")
                 print(f"  binomial p {v.get('binomial_p', float('nan')):.3g}, Fisher p "
-                      f"{v.get('fisher_p', float('nan')):.3g}, {dt:.0f} s for {args.n} pilots")
+                      f"{v.get('fisher_p', float('nan')):.3g}, {dt:.0f} s for {args.n} pilots"
+                      + (f" x {args.runs} runs" if args.runs > 1 else ""))
                 for p in comp.pilots:
                     t = p.motion_test
                     if t.get("available"):

@@ -159,7 +159,8 @@ def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
     assert a["Km"] == pytest.approx(2.0) and a["Km_se"] == pytest.approx(1.0)    # mean, its se
     assert v["per_pilot"]["b"]["untested_runs"] == ["b3"]
     assert v["n_tested"] == 2 and v["n_significant"] == 1
-    assert "across the 2 pilots (4 runs" in v["sentence"] and "1 of 2 pilots" in v["sentence"]
+    assert "across the 2 pilots, 4 runs (each pilot's runs combined first; Fisher" in v["sentence"]
+    assert "1 of 2 pilots" in v["sentence"]
     assert "1 run(s) without forcing lines" in v["sentence"]
     # Ungrouped, the same records would count four "pilots".
     assert cohort_verdict({k: x for k, x in tests.items() if k != "b3"})["n_tested"] == 4

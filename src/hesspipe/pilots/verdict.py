@@ -148,10 +148,11 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     skipped = len(tests) - n_runs
     unit = "run(s)" if groups else "pilot(s)"
     tail = f" ({skipped} {unit} without forcing lines not tested)" if skipped else ""
-    of_runs = f" ({n_runs} runs; a pilot's runs combined by Fisher's rule)" if n_runs > n else ""
+    of_runs = f", {n_runs} runs" if n_runs > n else ""
+    first = "each pilot's runs combined first; " if n_runs > n else ""
     claim = "improves" if yes else "does not significantly improve"
     sentence = (f"{'yes' if yes else 'no'}: motion feedback {claim} the describing-function "
-                f"fit across the {n} pilots{of_runs} (Fisher's combined p = {fisher_p:.2g}); individually "
+                f"fit across the {n} pilots{of_runs} ({first}Fisher's combined p = {fisher_p:.2g}); individually "
                 f"significant for {sig} of {n} pilots (p < {alpha:g}; binomial p = {binom_p:.2g}); "
                 f"median share of the misfit removed {100 * float(np.median(gains)):.0f} %{tail}")
     return {"answer": "yes" if yes else "no", "sentence": sentence, "n_tested": n,
