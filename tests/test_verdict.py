@@ -164,6 +164,8 @@ def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
     assert "1 run(s) without forcing lines" in v["sentence"]
     # Ungrouped, the same records would count four "pilots".
     assert cohort_verdict({k: x for k, x in tests.items() if k != "b3"})["n_tested"] == 4
+    none = cohort_verdict({"b3": tests["b3"]}, groups=groups)
+    assert none["answer"] == "undetermined" and none["per_pilot"]["b"]["untested_runs"] == ["b3"]
     text = "\n".join(verdict_lines(v))
     assert "  a (2 runs): misfit removed 50.0 %" in text
 

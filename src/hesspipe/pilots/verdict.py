@@ -135,7 +135,7 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
         return {"answer": "undetermined", "n_tested": 0, "n_significant": 0, "method": method,
                 "sentence": "undetermined: no pilot's record has multisine forcing lines, so no "
                             "describing function could be tested for motion feedback",
-                "per_pilot": {pid: {"available": False} for pid in tests}}
+                "per_pilot": _per_pilot_out(tests, {}, groups, alpha)}
     n_runs = len(done)
     pilots = _per_pilot(done, groups or {})
     n = len(pilots)
