@@ -190,8 +190,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         dict: no pilot is drawn), ``gain_drift`` (0: a time-invariant pilot; else the
         coefficient of variation of the visual gain within the run, a first-order
         Gauss-Markov process of correlation time ``drift_tc``, s, 10: humans' gains wander
-        over tens of seconds, which a describing function averages and its neighbours
-        see as remnant).
+        over tens of seconds; a describing function averages the wander, whose sidebands
+        fall on the bins next to each line).
 
     Raises
     ------

@@ -343,8 +343,8 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
             failures.append(PilotFailure(Path(path).stem, str(path), str(exc)))
             continue
         if run.id in seen:
-            failures.append(PilotFailure(run.id, str(path), f"{path}: pilot id {run.id!r} repeats "
-                                         f"{seen[run.id]}; expected one file per pilot"))
+            failures.append(PilotFailure(run.id, str(path), f"{path}: run id {run.id!r} repeats "
+                                         f"{seen[run.id]}; expected each file name (the run's id) once"))
             continue
         seen[run.id] = Path(path)
         runs.append(run)
