@@ -16,7 +16,7 @@ from hesspipe.core.formats import read_plants, read_run
 from hesspipe.humanlike import draw_trial, make_trials, retest, simulate_trial, write_trial
 from hesspipe.pilot.crossover import gain_scale
 from hesspipe.pilot.hess import PilotModel
-from hesspipe.pilots.compare import compare_pilots
+from hesspipe.pilots.compare import compare_pilots, read_runs
 from hesspipe.pilots.results import PilotComparison
 from hesspipe.pilots.verdict import cohort_verdict, forcing_lines, motion_test, pilot_groups, verdict_lines
 
@@ -194,6 +194,11 @@ def test_compare_pilots_groups_repeated_runs_by_pilot(tmp_path, capsys):
     assert c.to_dict(psd=False)["n_pilots"] == 2 and c.to_dict(psd=False)["n_runs"] == 6
     with pytest.raises(HesspipeError, match="s01_r1: pilot_id pattern"):
         compare_pilots(folder, plants, workers=1, job=job, pilot_id=r"^x", progress=False)
+    # The same file name in two folders is one run id twice: refused, whatever the grouping.
+    (other := tmp_path / "other").mkdir()
+    (other / "s01_r1.csv").write_bytes((folder / "s01_r1.csv").read_bytes())
+    runs, failures = read_runs([folder / "s01_r1.csv", other / "s01_r1.csv"])
+    assert len(runs) == 1 and "run id 's01_r1' repeats" in failures[0].error
     # The command line: a pattern that finds no pilot is one line naming the file and the flag.
     code = main(["compare-pilots", str(folder), "--plants", str(plants_path), "--pilot-id", "^x"])
     err = capsys.readouterr().err.strip().splitlines()
