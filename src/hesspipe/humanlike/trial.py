@@ -433,7 +433,8 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     zeros = np.zeros(n)
     idx = n_run * ratio + np.arange(n_log) * ratio
 
-    kv = gain_factor(spec, t).tolist()
+    factor = gain_factor(spec, t)
+    kv = factor.tolist() if spec.options.get("gain_drift", 0.0) > 0.0 else None   # read only then
 
     def sim(fn, rr, dd, ww, g):
         ys, us, acts = fn(rr.tolist(), dd.tolist(), ww.tolist(), float(g), n, kv)
@@ -462,7 +463,7 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(u))) \
             or np.max(np.abs(y[idx])) > 1e6 * (np.max(np.abs(y_f[idx])) + 1e-12) + 1e6:
         raise HesspipeError(f"trial {spec.name}: the simulated loop diverged")
-    sim_info = {"fine_step_s": h, "gain_factor": np.asarray(kv)[idx],
+    sim_info = {"fine_step_s": h, "gain_factor": factor[idx],
                 "remnant_gain": g, "rate_limit_per_s": rate,
                 "u_forcing": u_f[idx], "u": u[idx], "h": h, "ratio": ratio,
                 "rate_limited_fraction": (None if rate is None else float(
