@@ -63,6 +63,7 @@ import numpy as np
 from scipy import stats
 
 from ..core.errors import HesspipeError
+from ..core.formats import as_runs
 from ..pilot.crossover import gain_scale
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block, with_motion_path
@@ -256,7 +257,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         :func:`_delay_bound`'s test of the original's delay against it).
     """
 
-    ld = pooled_line_data(run, band_hz) if isinstance(run, (list, tuple)) else line_data(run, band_hz)
+    runs = as_runs(run)
+    ld = line_data(runs[0], band_hz) if len(runs) == 1 else pooled_line_data(runs, band_hz)
     lines = ld.lines
     # Real residuals, less the later runs' own gains that every fit solves for.
     n_res = 2 * int(lines.size) - (0 if ld.groups is None else int(np.unique(ld.groups).size) - 1)
