@@ -20,10 +20,14 @@ def check_file_outputs(*, json: str | None = None, figure: str | None = None) ->
 
 def write_result_json(path: str, result, **inputs) -> None:
     """Write ``result.to_dict()`` to `path`, with the input files it came from (`inputs`: key →
-    path, or a list of paths)."""
+    path, or a list of paths; a list of one is written as that path)."""
     from ..core.io import write_json
 
+    def one_or_list(value):
+        if not isinstance(value, (list, tuple)):
+            return str(value)
+        return str(value[0]) if len(value) == 1 else [str(v) for v in value]
+
     obj = result.to_dict()
-    obj.update({key: [str(v) for v in value] if isinstance(value, (list, tuple)) else str(value)
-                for key, value in inputs.items()})
+    obj.update({key: one_or_list(value) for key, value in inputs.items()})
     write_json(path, obj)

@@ -98,8 +98,7 @@ def run(args) -> int:
               estimate_frf(recs[0], plants, seed=args.seed))
     print(format_table(result))
     if args.json:
-        write_result_json(args.json, result, run=args.run if len(args.run) > 1 else args.run[0],
-                          plants=args.plants)
+        write_result_json(args.json, result, run=args.run, plants=args.plants)
     if args.figure:
         from ..viz.frf import frf_figure
 

@@ -196,8 +196,7 @@ def run(args) -> int:
                       criterion=args.criterion)
     print(format_table(result))
     if args.json:
-        write_result_json(args.json, result, run=args.run if len(args.run) > 1 else args.run[0],
-                          plants=args.plants)
+        write_result_json(args.json, result, run=args.run, plants=args.plants)
     if args.figure and result.criterion == "paper":
         from ..viz.pilots import identification_figure
 
