@@ -30,7 +30,7 @@ from scipy.optimize import differential_evolution
 
 from ..core.choices import OPTIMIZERS  # one list, in a light module: the command line reads it too
 from ..core.errors import HesspipeError
-from ..core.formats import Run, as_runs, siso_coefficients
+from ..core.formats import as_runs, siso_coefficients
 from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover, tracking_crossover
@@ -203,19 +203,17 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
 
     model = model_from_name(model)
     criterion = check_criterion(criterion)
-    runs = None
-    if not isinstance(run, Run):
-        runs = as_runs(run)
-        if criterion != "df" and len(runs) > 1:
-            raise HesspipeError(f"criterion: {len(runs)} runs are fitted through their averaged "
-                                f"describing function, which only criterion 'df' uses; got {criterion!r}")
-        if not runs:
-            raise HesspipeError("run: expected at least one run, got none")
-        for one in runs:
-            check_control(one)
-        if len(runs) > 1 and frf is None:
-            frf = average_frf(runs, plants, seed=check_seed(seed))
-        run = runs[0]
+    runs = as_runs(run)
+    if not runs:
+        raise HesspipeError("run: expected at least one run, got none")
+    if criterion != "df" and len(runs) > 1:
+        raise HesspipeError(f"criterion: {len(runs)} runs are fitted through their averaged "
+                            f"describing function, which only criterion 'df' uses; got {criterion!r}")
+    for one in runs:
+        check_control(one)
+    if len(runs) > 1 and frf is None:
+        frf = average_frf(runs, plants, seed=check_seed(seed))
+    run = runs[0]
     if fixed and "k" in fixed:
         k_rule = f"k = {int(round(float(fixed['k'])))} (given)"
     elif k is None:
@@ -223,14 +221,13 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     else:
         k_rule = f"k = {k} (given)"
     seed = check_seed(seed)
-    check_control(run)
     if criterion != "paper":
         # The band and PSD method still define the control PSDs reported beside the fit.
         result = identify_phase_aware(run, plants, model, criterion=criterion, free=free, fixed=fixed,
                                       seed=seed, k=k, k_rule=k_rule, limits=limits,
                                       with_benchmark=with_benchmark, frf=frf, starts=restarts,
                                       initial=initial, fields=fields, band=band, psd_method=psd_method)
-        if runs is not None and len(runs) > 1:
+        if len(runs) > 1:
             result = dataclasses.replace(result, run_id=frf.run_id or result.run_id)
         return result
     if optimizer not in OPTIMIZERS:
