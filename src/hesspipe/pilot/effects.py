@@ -166,8 +166,9 @@ def _actuator_lag(loop: Loop, p) -> Loop:
 
 EFFECTS: dict[str, Effect] = {e.id: e for e in (
     Effect("motion_feedback", "pilot",
-           "Vestibular sensation of the simulator's roll: semicircular canals x motion platform x "
-           "washout acting on roll rate, gain Km, fed back beside the visual error (Cardullo 2006).",
+           "Vestibular sensation of the cab's rotation: semicircular canals x the plants' motion "
+           "path (default: the paper's platform x washout acting on roll rate), gain Km, fed back "
+           "beside the visual error (Cardullo 2006).",
            {"Km": (0.1, 0.0, 20.47)}, {"Km": (11, 100.0, 0.0)}, {"Km": "1"}, _motion),
     Effect("otoliths", "pilot",
            "Otolith sensation of the cab's washed-out tilt (lateral specific force, in g, from roll "
