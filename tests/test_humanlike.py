@@ -228,6 +228,24 @@ def test_gain_drift():
     assert again.truth["seeds"]["gain_drift"] != tr.truth["seeds"]["gain_drift"]
 
 
+def test_line_bins():
+    # A layout of one's own: the forcing sits on exactly those lines, and a retest keeps it.
+    kd, kt = [3, 7, 12, 20], [4, 9, 15, 26]
+    spec = draw_trial("1/s", 4, task="both", line_bins=(kd, kt), **SHORT)
+    assert spec.disturbance.k.tolist() == kd and spec.target.k.tolist() == kt
+    tr = simulate_trial(spec)
+    for sig, k in ((tr.disturbance, kd), (tr.reference, kt)):
+        P = np.abs(np.fft.rfft(sig)) ** 2
+        assert set(np.flatnonzero(P > 1e-9 * P.max())) == set(k)
+    assert retest(spec, 5).target.k.tolist() == kt
+    assert "line_bins" not in draw_trial("1/s", 4, **SHORT).options     # default layout unchanged
+    for bad, what in [(([3, 7], [7, 9]), "share line"), (([7, 3], [4, 9]), "increasing"),
+                      (([3, 7], [4, 450]), "from 1 to 449"), ((3, 4), "got 3$"),
+                      ((1, 2, 3), "pair")]:
+        with pytest.raises(HesspipeError, match=what):
+            draw_trial("1/s", 4, task="both", line_bins=bad, **SHORT)
+
+
 def test_readable_by_hesspipe(tmp_path):
     from hesspipe.core.formats import read_run
     tr = simulate_trial(draw_trial("1/s", 6, task="both", **SHORT))

@@ -53,6 +53,14 @@ class Multisine:
                 "amplitude": self.a.tolist(), "phase_rad": self.phase.tolist()}
 
 
+SPARSE_LAYOUT = dict(fs=100.0, T_m=81.92, line_bins=((5, 11, 23, 37, 51, 71, 101, 137, 171, 226),
+                                                     (6, 13, 27, 41, 53, 73, 103, 139, 194, 229)))
+"""A sparser two-input layout than :func:`line_sets`' (``draw_trial`` options): 81.92 s at
+100 Hz, ten lines per set from 0.38 to 17.6 rad/s, each target line 1-23 bins from its
+disturbance line. Modelled on the designs of two-input tracking experiments, not copied
+from one; few of a line's neighbouring bins hold the other set's lines."""
+
+
 def line_sets(T_m: float, n_lines: int, w_lo: float = 0.1, w_hi: float = 20.0):
     """Disturbance and interleaved target line numbers.
 

@@ -36,7 +36,7 @@ EFFECT_REMNANT = (0.40, 0.60)
 OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=10,
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
                remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
-               pilot_params=None, gain_drift=0.0, drift_tc=10.0)
+               pilot_params=None, gain_drift=0.0, drift_tc=10.0, line_bins=None)
 
 
 @dataclass(frozen=True)
@@ -137,6 +137,26 @@ def _slope_order(yc, w: float) -> int:
     return int(min(max(round(-np.log(m2 / m1) / np.log(4.0)), 0), 2))
 
 
+def _check_line_bins(bins, n_log: int):
+    """The `line_bins` option as two int arrays, or None; one-line errors otherwise."""
+    if bins is None:
+        return None
+    try:
+        k_d, k_t = (np.asarray(b, dtype=float) for b in bins)
+    except (TypeError, ValueError):
+        raise HesspipeError("line_bins: expected a pair of line-number lists (disturbance, target), "
+                            f"got {bins!r}") from None
+    for name, k, given in (("disturbance", k_d, bins[0]), ("target", k_t, bins[1])):
+        if k.ndim != 1 or k.size < 2 or np.any(k != np.round(k)) or np.any(np.diff(k) <= 0) \
+                or k[0] < 1 or k[-1] >= n_log // 2:
+            raise HesspipeError(f"line_bins: the {name} lines must be at least two increasing whole "
+                                f"numbers from 1 to {n_log // 2 - 1}, got {given!r}")
+    if np.intersect1d(k_d, k_t).size:
+        raise HesspipeError(f"line_bins: the sets share line(s) {np.intersect1d(k_d, k_t).astype(int).tolist()}; "
+                            "expected disjoint disturbance and target lines")
+    return k_d.astype(int), k_t.astype(int)
+
+
 def _range(overrides: dict, key: str, default) -> tuple:
     v = overrides.pop(key, None)
     if v is None:
@@ -191,7 +211,11 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         coefficient of variation of the visual gain within the run, a first-order
         Gauss-Markov process of correlation time ``drift_tc``, s, 10: humans' gains wander
         over tens of seconds; a describing function averages the wander, whose sidebands
-        fall on the bins next to each line).
+        fall on the bins next to each line), ``line_bins`` (None: :func:`~.forcing.line_sets`'
+        log-spaced disturbance lines with each target line one bin above; else a pair of
+        increasing line numbers, disturbance then target, multiples of ``1 / T_m`` Hz:
+        a sparser layout of one's own, as two-input experiments use; a tracking-only task
+        takes the first set).
 
     Raises
     ------
@@ -223,6 +247,7 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     n_log = opts["fs"] * opts["T_m"]
     if abs(n_log - round(n_log)) > 1e-9 or n_log < 4:
         raise HesspipeError(f"T_m: fs*T_m must be a whole number of samples, got {n_log:g}")
+    line_bins = _check_line_bins(opts["line_bins"], int(round(n_log)))
     if "remnant" in effects and "remnant_share" not in overrides:
         ranges["remnant_share"] = EFFECT_REMNANT
     if not isinstance(plant, Plant):
@@ -270,7 +295,7 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
                             f"with delay {ranges['tau']} s (+{extra:.3g} s extra)")
     p["extra_delay"] = extra
     p["km_ratio"] = km_ratio
-    k_d, k_t = forcing.line_sets(opts["T_m"], int(opts["n_lines"]))
+    k_d, k_t = line_bins or forcing.line_sets(opts["T_m"], int(opts["n_lines"]))
     g_f = rng["forcing"]
     corner = float(g_f.uniform(*ranges["w_corner"]))
     d_rms = opts["d_rms"] if opts["d_rms"] is not None else plant.d_rms
@@ -317,6 +342,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     options.update(w_corner=corner, d_rms=dist.rms() if dist is not None else d_rms,
                    pilot_sign=sign, plant_order=order, gain_drift=drift, drift_tc=drift_tc,
                    drift_seed=int(derive_seed(seed, "gain-drift")))
+    if line_bins is not None:
+        options["line_bins"] = [k.tolist() for k in line_bins]
     return TrialSpec(name=name, seed=int(seed), plant=plant, task=task, pilot=p,
                      effects=effects, options=options, disturbance=dist, target=targ,
                      remnant=remnant, actuator=actuator, motion_tf=motion_tf, style=style)
