@@ -35,6 +35,11 @@ Usage::
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
                                         [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired] [--repeats 3]
                                         [--pilot precision] [--remnant-at error] [--gain-drift 0.15]
+                                        [--layout sparse]
+
+``--layout sparse``: the forcing on :data:`hesspipe.humanlike.forcing.SPARSE_LAYOUT` (81.92 s
+at 100 Hz, ten lines per set, target lines 1-23 bins from the disturbance's) instead of the
+generator's adjacent sets at 70 s and 50 Hz.
 
 ``--gain-drift CV``: the pilot's visual gain wanders within each run (coefficient of
 variation CV, correlation time 10 s), as a human's does; the describing function averages
@@ -71,6 +76,7 @@ from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
+from hesspipe.humanlike.forcing import SPARSE_LAYOUT
 
 EFFECTS = ("none", "motion_feedback", "extra_delay", "remnant", "dutch_roll", "actuator_lag",
            "extra_delay+dutch_roll", "motion_feedback+dutch_roll")
@@ -168,6 +174,9 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=1,
                     help="runs of the condition (pooled by the motion test; with --paired also of the "
                          "baseline, and the delay test compares their means)")
+    ap.add_argument("--layout", choices=("adjacent", "sparse"), default="adjacent",
+                    help="sparse: hesspipe.humanlike.forcing.SPARSE_LAYOUT (81.92 s at 100 Hz, "
+                         "target lines 1-23 bins from the disturbance's; overrides --fs and --T-m)")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])
     draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}
@@ -181,6 +190,8 @@ def main(argv=None) -> int:
         draw["gain_drift"] = args.gain_drift
     if args.remnant_at is not None:
         draw["remnant_at"] = args.remnant_at
+    if args.layout == "sparse":
+        draw.update(SPARSE_LAYOUT)
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike "
           f"({args.pilot} pilots).")
     rows, times, failures, skipped = {}, [], [], []

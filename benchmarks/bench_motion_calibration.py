@@ -17,6 +17,11 @@ Usage::
 
     python benchmarks/bench_motion_calibration.py [--seeds 10] [--seed-start 0]
         [--cases paper:rate:disturbance,...] [--effects none,motion_feedback] [--tau-m 0.15] [--pilot precision]
+        [--gain-drift 0.15] [--layout sparse]
+
+``--gain-drift CV`` lets the pilot's visual gain wander within each run (the generator's
+``gain_drift``, correlation time 10 s). ``--layout sparse`` draws the forcing on a sparser
+two-input layout (81.92 s at 100 Hz; :data:`LAYOUTS`) instead of the generator's default.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.humanlike.forcing import SPARSE_LAYOUT
 from hesspipe.identification.criteria import choose_k
 from hesspipe.identification.motion_test import motion_test
 from hesspipe.pilot.hess import PilotModel
@@ -41,15 +47,23 @@ CASES = ",".join([f"{p}:{o}:{t}" for p in ("paper", "roll") for o in ("rate", "a
                   for t in ("disturbance", "both")] + ["1/s:angle:both", "K/s2:angle:both"])
 
 
-def p_value(folder, plant, output, task, effect, seed, tau_m=0.0, pilot="hess"):
+LAYOUTS = {"adjacent": dict(fs=50.0, T_m=70.0), "sparse": SPARSE_LAYOUT}
+"""Forcing layouts: the generator's default (each target line one bin above a disturbance
+line, 70 s at 50 Hz, as ``bench_diagnose.py``) and a sparser one
+(:data:`hesspipe.humanlike.forcing.SPARSE_LAYOUT`)."""
+
+
+def p_value(folder, plant, output, task, effect, seed, tau_m=0.0, pilot="hess", gain_drift=0.0,
+            layout="adjacent"):
     """The motion test's p-value on one generated run, or None (not generated / no lines)."""
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind") if plant == "paper" else {}
     name = f"{plant}-{output}-{task}-{effect}-{seed}".replace("/", "_")
     try:
-        spec = draw_trial(plant, s, task=task, pilot=pilot, effects=effects, fs=50.0, T_m=70.0,
-                          output=output, name=name, tau_m=tau_m, **kw)
+        spec = draw_trial(plant, s, task=task, pilot=pilot, effects=effects, **LAYOUTS[layout],
+                          output=output, name=name, tau_m=tau_m,
+                          gain_drift=gain_drift, **kw)
     except HesspipeError:
         return None
     try:
@@ -73,6 +87,10 @@ def main(argv=None) -> int:
     ap.add_argument("--tau-m", type=float, default=0.0, help="generator's vestibular delay, s")
     ap.add_argument("--pilot", choices=("hess", "precision"), default="hess",
                     help="generator pilot structure (precision: McRuer's, not the one fitted)")
+    ap.add_argument("--gain-drift", type=float, default=0.0,
+                    help="coefficient of variation of the pilot's wandering visual gain (0: steady)")
+    ap.add_argument("--layout", choices=tuple(LAYOUTS), default="adjacent",
+                    help="forcing layout (sparse: 81.92 s at 100 Hz, lines 1-23 bins apart)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     total = {}
@@ -81,7 +99,8 @@ def main(argv=None) -> int:
         for case in args.cases.split(","):
             plant, output, task = case.split(":")
             for effect in args.effects.split(","):
-                ps = [p for p in (p_value(tmp, plant, output, task, effect, seed, args.tau_m, args.pilot)
+                ps = [p for p in (p_value(tmp, plant, output, task, effect, seed, args.tau_m, args.pilot,
+                                                  args.gain_drift, args.layout)
                                   for seed in range(args.seed_start, args.seed_start + args.seeds))
                       if p is not None]
                 total.setdefault(effect, []).extend(ps)

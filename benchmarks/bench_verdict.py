@@ -15,12 +15,17 @@ contrast, the PSD-fitness improvement 1 - expanded/original of the paper's crite
                                        [--output rate|angle] [--km-ratio 0.2,1.0]
                                        [--pilot precision] [--tau-m 0.15]
                                        [--remnant-at error] [--gain-drift 0.15] [--runs 3]
+                                       [--layout sparse]
 
 ``--runs N``: each pilot flies the condition N times (retests); the verdict combines a
 pilot's runs and counts pilots (``compare_pilots(pilot_id=...)``).
 
 ``--gain-drift CV``: each pilot's visual gain wanders within its run (CV, correlation
 time 10 s).
+
+``--layout sparse``: the forcing on :data:`hesspipe.humanlike.forcing.SPARSE_LAYOUT`
+(81.92 s at 100 Hz, target lines 1-23 bins from the disturbance's) instead of the
+generator's adjacent sets.
 
 ``--pilot precision``: McRuer precision pilots (with motion, the multimodal model's
 vestibular path and canals), a structure other than the Hess model compare-pilots fits.
@@ -43,6 +48,7 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
+from hesspipe.humanlike.forcing import SPARSE_LAYOUT
 from hesspipe.pilots.compare import compare_pilots
 
 
@@ -91,11 +97,18 @@ def main(argv=None) -> None:
     ap.add_argument("--runs", type=int, default=1,
                     help="runs per pilot (retests); the verdict then combines each pilot's runs "
                          "(compare_pilots(pilot_id=...)) and counts pilots")
+    ap.add_argument("--layout", choices=("adjacent", "sparse"), default="adjacent",
+                    help="sparse: hesspipe.humanlike.forcing.SPARSE_LAYOUT (81.92 s at 100 Hz; "
+                         "overrides --T and --fs)")
     args = ap.parse_args(argv)
+    if args.layout == "sparse":
+        args.T, args.fs = SPARSE_LAYOUT["T_m"], SPARSE_LAYOUT["fs"]
     seeds = [int(s) for s in args.seeds.split(",")]
     print(f"SYNTHETIC data: independent generator hesspipe.humanlike, {args.pilot} pilots, task "
           f"{args.task}, output {args.output}, {args.n} pilots per cohort, {args.T:g} s at {args.fs:g} Hz")
     draw = {"output": args.output}
+    if args.layout == "sparse":
+        draw["line_bins"] = SPARSE_LAYOUT["line_bins"]
     if args.tau_m is not None:
         draw["tau_m"] = args.tau_m
     if args.gain_drift is not None:

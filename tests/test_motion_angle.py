@@ -105,3 +105,26 @@ def test_expanded_fit_is_not_trapped_in_the_original_models_corner(tmp_path):
     run, plants = bench_diagnose_trial(tmp_path, "roll", "angle", "both", "motion_feedback", 101)
     t = motion_test(run, plants, PilotModel().defaults(k=2), k=2)
     assert t["p_value"] < 0.01 and t["rss_expanded"] < 0.5 * t["rss_original"], t["p_value"]
+
+
+@pytest.mark.parametrize("effects", [("motion_feedback",), ()])
+def test_sparse_two_input_layout_with_a_wandering_gain(tmp_path, effects):
+    # Real yaw trials as the stand-in draws them on a layout unlike the generator's default:
+    # 81.92 s at 100 Hz, target lines 1-23 bins from the disturbance's (SPARSE_LAYOUT),
+    # a precision pilot with a vestibular delay whose visual gain wanders (CV 0.15), logged
+    # with ms stamps, a BOM and CRLF. Motion is named only where the pilot has it (seed 101:
+    # p ~ 2e-14 with, 0.69 without; benchmarks/bench_diagnose.py --layout sparse: 18/19 and
+    # 0/20 over report seeds 0-9).
+    from hesspipe.humanlike.forcing import SPARSE_LAYOUT
+    from hesspipe.identification.lines import forcing_lines
+    from hesspipe.identification.motion_test import motion_test
+    from hesspipe.pilot.hess import PilotModel
+
+    spec = draw_trial("K/s2", 101, task="both", pilot="precision", effects=effects, output="angle",
+                      tau_m=0.15, gain_drift=0.15, name="s01", **SPARSE_LAYOUT,
+                      style={"time": "ms", "bom": True, "newline": "\r\n", "epoch0": 1.7e9})
+    path = write_trial(tmp_path, simulate_trial(spec))
+    run, plants = read_run(path), read_plants(tmp_path / "plants.json")
+    assert len(run.control) == 8192 and forcing_lines(run).size == 20
+    t = motion_test(run, plants, PilotModel().defaults(k=2), k=2)
+    assert t["significant"] == bool(effects), t["p_value"]
