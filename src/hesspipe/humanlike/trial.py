@@ -142,11 +142,12 @@ def _check_line_bins(bins, n_log: int):
     if bins is None:
         return None
     try:
-        k_d, k_t = (np.asarray(b, dtype=float) for b in bins)
+        pair = tuple(bins)
+        k_d, k_t = (np.asarray(b, dtype=float) for b in pair)
     except (TypeError, ValueError):
         raise HesspipeError("line_bins: expected a pair of line-number lists (disturbance, target), "
                             f"got {bins!r}") from None
-    for name, k, given in (("disturbance", k_d, bins[0]), ("target", k_t, bins[1])):
+    for name, k, given in (("disturbance", k_d, pair[0]), ("target", k_t, pair[1])):
         if k.ndim != 1 or k.size < 2 or np.any(k != np.round(k)) or np.any(np.diff(k) <= 0) \
                 or k[0] < 1 or k[-1] >= n_log // 2:
             raise HesspipeError(f"line_bins: the {name} lines must be at least two increasing whole "
