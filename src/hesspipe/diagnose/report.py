@@ -104,7 +104,8 @@ def format_report(d: Diagnosis) -> str:
                    "parameters)")
     red = 100.0 * d.gap_reduction
     out.append(f"Gap (Eq. 10 fitness, 0-{d.config.band_hz[1]:g} Hz): before {d.gap_before:.4g}, after "
-               f"{d.gap_after:.4g} ({red:.0f} % smaller); log-spectral RMS {d.log_rms_db_before:.1f} dB -> "
+               f"{d.gap_after:.4g} ({abs(red):.0f} % {'smaller' if red >= 0 else 'larger'}); "
+               f"log-spectral RMS {d.log_rms_db_before:.1f} dB -> "
                f"{d.log_rms_db_after:.1f} dB")
     closed = d.closed_bands
     out.append("Bands closed: " + (", ".join(f"{lo:g}-{hi:g} Hz" for lo, hi in closed) if closed else "none"))
