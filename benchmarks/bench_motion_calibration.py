@@ -17,7 +17,7 @@ Usage::
 
     python benchmarks/bench_motion_calibration.py [--seeds 10] [--seed-start 0]
         [--cases paper:rate:disturbance,...] [--effects none,motion_feedback] [--tau-m 0.15] [--pilot precision]
-        [--gain-drift 0.15] [--layout sparse]
+        [--gain-drift 0.15] [--layout sparse|sparse-70s]
 
 ``--gain-drift CV`` lets the pilot's visual gain wander within each run (the generator's
 ``gain_drift``, correlation time 10 s). ``--layout sparse`` draws the forcing on a sparser
@@ -47,10 +47,12 @@ CASES = ",".join([f"{p}:{o}:{t}" for p in ("paper", "roll") for o in ("rate", "a
                   for t in ("disturbance", "both")] + ["1/s:angle:both", "K/s2:angle:both"])
 
 
-LAYOUTS = {"adjacent": dict(fs=50.0, T_m=70.0), "sparse": SPARSE_LAYOUT}
+LAYOUTS = {"adjacent": dict(fs=50.0, T_m=70.0), "sparse": SPARSE_LAYOUT,
+           "sparse-70s": dict(fs=50.0, T_m=70.0, line_bins=SPARSE_LAYOUT["line_bins"])}
 """Forcing layouts: the generator's default (each target line one bin above a disturbance
-line, 70 s at 50 Hz, as ``bench_diagnose.py``) and a sparser one
-(:data:`hesspipe.humanlike.forcing.SPARSE_LAYOUT`)."""
+line, 70 s at 50 Hz, as ``bench_diagnose.py``), a sparser one
+(:data:`hesspipe.humanlike.forcing.SPARSE_LAYOUT`, 81.92 s at 100 Hz) and the sparser
+line numbers at the default's length and rate (the spacing alone)."""
 
 
 def p_value(folder, plant, output, task, effect, seed, tau_m=0.0, pilot="hess", gain_drift=0.0,
@@ -90,7 +92,8 @@ def main(argv=None) -> int:
     ap.add_argument("--gain-drift", type=float, default=0.0,
                     help="coefficient of variation of the pilot's wandering visual gain (0: steady)")
     ap.add_argument("--layout", choices=tuple(LAYOUTS), default="adjacent",
-                    help="forcing layout (sparse: 81.92 s at 100 Hz, lines 1-23 bins apart)")
+                    help="forcing layout (sparse: 81.92 s at 100 Hz, lines 1-23 bins apart; "
+                         "sparse-70s: the same line numbers at 70 s and 50 Hz)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     total = {}
