@@ -35,11 +35,15 @@ Usage::
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
                                         [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired] [--repeats 3]
                                         [--pilot precision] [--remnant-at error] [--gain-drift 0.15]
-                                        [--layout sparse]
+                                        [--layout sparse] [--motion-path NUM;DEN]
 
 ``--layout sparse``: the forcing on :data:`hesspipe.humanlike.forcing.SPARSE_LAYOUT` (81.92 s
 at 100 Hz, ten lines per set, target lines 1-23 bins from the disturbance's) instead of the
 generator's adjacent sets at 70 s and 50 Hz.
+
+``--motion-path NUM;DEN``: the simulator's motion path from the output to the cab's angular
+velocity (e.g. a yaw washout), which the generator's pilot feels and plants.json carries,
+instead of the plant's own (s/(0.01 s + 1) on an angle display).
 
 ``--gain-drift CV``: the pilot's visual gain wanders within each run (coefficient of
 variation CV, correlation time 10 s), as a human's does; the describing function averages
@@ -177,6 +181,9 @@ def main(argv=None) -> int:
     ap.add_argument("--layout", choices=("adjacent", "sparse"), default="adjacent",
                     help="sparse: hesspipe.humanlike.forcing.SPARSE_LAYOUT (81.92 s at 100 Hz, "
                          "target lines 1-23 bins from the disturbance's; overrides --fs and --T-m)")
+    ap.add_argument("--motion-path", default=None, metavar="NUM;DEN",
+                    help="the simulator's motion path (output -> cab angular velocity), polynomial "
+                         "coefficients, highest power first, e.g. a washout; written to plants.json")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])
     draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}
@@ -192,6 +199,12 @@ def main(argv=None) -> int:
         draw["remnant_at"] = args.remnant_at
     if args.layout == "sparse":
         draw.update(SPARSE_LAYOUT)
+    if args.motion_path:
+        try:
+            num, den = ([float(x) for x in part.split(",")] for part in args.motion_path.split(";"))
+        except ValueError:
+            ap.error(f"--motion-path: expected 'NUM;DEN' (comma-separated coefficients), got {args.motion_path!r}")
+        draw["motion_path"] = (num, den)
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike "
           f"({args.pilot} pilots).")
     rows, times, failures, skipped = {}, [], [], []
