@@ -5,7 +5,7 @@ A human's visual gain wanders within a run. The generator (:mod:`hesspipe.humanl
 the Fourier coefficients of ``delta(t) e(t)`` are exactly the circular convolution of
 ``delta``'s coefficients Delta_k with E's. This script draws one trial per seed as
 ``bench_diagnose.py`` does (70 s at 50 Hz, no remnant to speak of), takes the logged error
-and the generator's own gain factor at the logged samples, and prints:
+and the generator's own gain factor at the logged samples (``Trial.gain_factor``), and prints:
 
 * ``|Delta_k| / N`` for k = 1..6 (how fast the wander's coefficients fall off), and
 * the share of ``DFT(delta e)`` at the forcing lines that offsets ``|k| <= K`` explain, for
@@ -30,7 +30,6 @@ import numpy as np
 
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial
-from hesspipe.humanlike.trial import gain_factor
 
 OFFSETS = (1, 2, 4, 8, 20)
 
@@ -42,14 +41,9 @@ def spread(plant: str, output: str, task: str, seed: int, cv: float) -> tuple[np
     spec = draw_trial(plant, s, task=task, pilot="hess", fs=50.0, T_m=70.0, output=output,
                       gain_drift=cv, remnant_share=0.001, **kw)
     tr = simulate_trial(spec)
-    o = spec.options
-    ratio = int(o["fine_ratio"])
-    h = 1.0 / (o["fs"] * ratio)
-    n_run, n_log = int(round(o["run_in"] * o["fs"])), int(round(o["T_m"] * o["fs"]))
-    t = (np.arange((n_run + n_log) * ratio) - n_run * ratio) * h
-    f = gain_factor(spec, t)[n_run * ratio + np.arange(n_log) * ratio]   # the logged instants
+    n_log = tr.time.size
     e = tr.reference - tr.output
-    delta = f - f.mean()
+    delta = tr.gain_factor - tr.gain_factor.mean()
     lines = np.concatenate([m.k for m in (spec.disturbance, spec.target) if m is not None])
     D, Ef = np.fft.fft(delta), np.fft.fft(e)
     exact = np.fft.fft(delta * e)[lines]

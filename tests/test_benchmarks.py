@@ -2,8 +2,8 @@
 
 ``bench_motion_limit`` and ``bench_flown_motion_limit`` call ``motion_test``'s private
 ``_fit`` and ``_predict`` to build their oracle; a change of those signatures broke both
-once without any test noticing. ``bench_drift_sidebands`` rebuilds the generator's time
-grid to read its gain factor. One seed each, the cheapest case.
+once without any test noticing. ``bench_drift_sidebands`` reads the generator's realised gain
+wander. One seed each, the cheapest case.
 """
 
 from __future__ import annotations
@@ -41,9 +41,8 @@ def test_flown_motion_limit_oracle_runs(capsys):
 
 
 def test_drift_sidebands_runs():
-    # bench_drift_sidebands reads the generator's gain factor at the logged samples (its
-    # private time grid). The DFT of the product is the full circular convolution, so the
-    # truncated sums must approach it: a wrong index or normalisation would not.
+    # The DFT of the product is the full circular convolution, so the truncated sums must
+    # approach it: a wrong index or normalisation would not.
     d, share = _load("bench_drift_sidebands").spread("roll", "angle", "both", 108, 0.15)
     assert d.shape == (6,) and d[0] > 0.0
     assert share[20] > 0.95 and share[20] >= share[1]

@@ -120,6 +120,9 @@ class Trial:
         The logged signals (see above).
     truth : dict
         The true pilot, plant and responses (JSON-ready).
+    gain_factor : ndarray
+        The visual gain's factor at the logged instants (ones for a steady pilot; not
+        written to files: the wander's realisation, for studies of it).
     """
 
     spec: TrialSpec
@@ -129,6 +132,7 @@ class Trial:
     control: np.ndarray
     reference: np.ndarray
     truth: dict = field(repr=False)
+    gain_factor: np.ndarray | None = field(default=None, repr=False)
 
 
 def _slope_order(yc, w: float) -> int:
@@ -498,4 +502,4 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
                     np.mean(np.abs(np.diff(sim.actuator[idx[0]:])) >= rate * h * (1 - 1e-6))))}
     truth = build_truth(spec, sim_info)
     return Trial(spec=spec, time=np.arange(n_log) / fs, disturbance=d_log[idx], output=y[idx],
-                 control=u[idx], reference=r[idx], truth=truth)
+                 control=u[idx], reference=r[idx], truth=truth, gain_factor=factor[idx])
