@@ -132,7 +132,8 @@ def test_too_few_samples_for_spectra(tmp_path):
 
 @pytest.mark.parametrize("content, words", [
     (None, "file not found"),
-    (b"\xff\xfe\x00\x81binary", "not a UTF-8 text file"),
+    (b"\xff\xfe\x00\x81binary", "not a text file"),
+    (bytes(range(256)) * 4, "not a text file"),
     (b"", "not a readable CSV"),
 ])
 def test_unreadable_files(tmp_path, content, words):

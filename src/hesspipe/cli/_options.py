@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 
 from ..core.errors import HesspipeError
 from ..core.seeds import check_seed
@@ -57,6 +58,22 @@ def add_run_options(parser: argparse.ArgumentParser) -> None:
 def run_options(args: argparse.Namespace) -> dict:
     """Keyword arguments of :func:`hesspipe.core.formats.read_run` from :func:`add_run_options`."""
     return {"columns": args.columns, "resample": bool(args.resample)}
+
+
+def print_reading(reading) -> None:
+    """On stderr, what reading each run did beyond the plain format (file → notes)."""
+    for source, notes in reading.items():
+        for note in notes:
+            print(f"hesspipe: note: {source}: {note}", file=sys.stderr)
+
+
+def read_cli_run(path, args: argparse.Namespace, **kwargs):
+    """:func:`hesspipe.core.formats.read_run` with the command's run options, its notes on stderr."""
+    from ..core.formats import read_run
+
+    run = read_run(path, **run_options(args), **kwargs)
+    print_reading({run.source: run.notes})
+    return run
 
 
 def seed_arg(text: str) -> int:

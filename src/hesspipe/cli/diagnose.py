@@ -43,7 +43,7 @@ def register(sub) -> None:
 
 def _diagnose(args) -> int:
     from ..core.errors import HesspipeError
-    from ..core.formats import read_plants, read_run
+    from ..core.formats import read_plants
     from ..core.io import write_json
     from ..core.paper import WELCH_SEGMENT
     from ..diagnose.report import format_report
@@ -61,11 +61,11 @@ def _diagnose(args) -> int:
         if not candidates:
             raise HesspipeError("--candidates: expected effect ids separated by commas, got nothing")
     plants = read_plants(args.plants)
-    from ._options import run_options
+    from ._options import read_cli_run
 
-    run, *repeats = (read_run(path, min_samples=WELCH_SEGMENT, **run_options(args)) for path in args.run)
+    run, *repeats = (read_cli_run(path, args, min_samples=WELCH_SEGMENT) for path in args.run)
     base = None if args.baseline_run is None else \
-        [read_run(path, min_samples=WELCH_SEGMENT, **run_options(args)) for path in args.baseline_run]
+        [read_cli_run(path, args, min_samples=WELCH_SEGMENT) for path in args.baseline_run]
     result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
                       baseline_run=base, repeat_runs=repeats)
     print(format_report(result))

@@ -9,7 +9,7 @@ import math
 
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.errors import HesspipeError
-from ._options import add_run_options, add_seed, add_terms, run_options
+from ._options import add_run_options, add_seed, add_terms, read_cli_run
 
 #: The library's names of identify's settings → this command's options.
 TERMS = {r"(^|: )free: ": r"\1--free: ", r"(^|: )fixed: ": r"\1--fix: ",
@@ -166,14 +166,14 @@ def format_table(result) -> str:
 
 
 def run(args) -> int:
-    from ..core.formats import read_plants, read_run
+    from ..core.formats import read_plants
     from ..identification.fit import identify
     from ..identification.spectra import PaperWelch
     from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
-    recs = [read_run(path, min_samples=PaperWelch().nperseg, **run_options(args)) for path in args.run]
+    recs = [read_cli_run(path, args, min_samples=PaperWelch().nperseg) for path in args.run]
     rec = recs[0]
     free = None
     if args.free is not None:

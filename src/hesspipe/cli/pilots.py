@@ -61,7 +61,7 @@ def _run(args) -> int:
     from ..pilots.batch import check_scheduler_address
     from ..pilots.compare import compare_pilots
     from ..pilots.settings import CompareSettings
-    from ._options import cli_message, run_options
+    from ._options import cli_message, print_reading, run_options
 
     # Every output and the scheduler address are checked before any work.
     if args.json:
@@ -81,6 +81,7 @@ def _run(args) -> int:
     plants = read_plants(args.plants)
     result = compare_pilots(args.dir, plants, settings, workers=args.workers, scheduler=args.scheduler,
                             pilot_id=args.pilot_id, **run_options(args))
+    print_reading(result.reading)
     print(result.table())
     if args.json:
         write_json(args.json, result.to_dict())

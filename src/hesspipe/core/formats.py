@@ -17,7 +17,6 @@ Plants
 
 from __future__ import annotations
 
-import io as _io
 import json
 import math
 from dataclasses import dataclass, field
@@ -28,11 +27,15 @@ import control as ct
 import numpy as np
 import pandas as pd
 
+from ._csv import decode, read_table
 from .errors import HesspipeError
 from .io import write_json, write_text
 from .paper import WELCH_SEGMENT
 
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
+#: File endings of measured runs when a folder is a set of pilots (tab-separated files
+#: are the same table; :func:`read_run` reads either).
+RUN_SUFFIXES = (".csv", ".tsv")
 OPTIONAL_COLUMNS = ("reference",)
 
 #: "Uniform" sampling (SPEC.md "Time"): every interval within this fraction of the
@@ -67,6 +70,11 @@ class Run:
         The file's ``#`` comment lines, without the ``#``.
     source : str
         Where the run was read from ("" if built in memory).
+    interval : float
+        Sample interval, s, as the reader estimated it over the whole record (0: from `time`).
+    notes : tuple of str
+        What the reader did beyond the plain format (an encoding, a delimiter, a unit
+        converted), one sentence each.
     """
 
     time: np.ndarray
@@ -79,6 +87,7 @@ class Run:
     comments: tuple[str, ...] = ()
     source: str = ""
     interval: float = 0.0
+    notes: tuple[str, ...] = ()
 
     @property
     def dt(self) -> float:
@@ -159,8 +168,12 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     Parameters
     ----------
     path : path
-        CSV file in the measured-run format (UTF-8 with or without a byte-order
-        mark, LF or CRLF line ends).
+        CSV file in the measured-run format, as laboratories write it: UTF-8 (with or
+        without a byte-order mark), UTF-16 or Windows-1252; LF, CRLF or CR line ends;
+        comma-, tab- or semicolon-separated (decimal commas with semicolons); headers
+        matched ignoring case and a unit in brackets, whose units are converted to
+        SPEC.md's (``time [ms]``, ``output [deg/s]``; :data:`hesspipe.core._csv.UNIT_FACTORS`).
+        What was converted is in :attr:`Run.notes`.
     columns : str or mapping, optional
         Role → column-name mapping for files with other names, e.g.
         ``"control=stick,output=p"``.
@@ -181,8 +194,9 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     path = Path(path)
     mapping = _parse_columns(columns)
     names = {role: mapping.get(role, role) for role in RUN_COLUMNS + OPTIONAL_COLUMNS}
-    data, comments = read_csv_columns(path, names, optional=OPTIONAL_COLUMNS,
-                                      what="a measured-run CSV", hint="columns")
+    table = read_table(path, names, optional=OPTIONAL_COLUMNS, what="a measured-run CSV",
+                       hint="columns")
+    data, comments = table.data, table.comments
     n = len(data["time"])
     if n < max(min_samples, 2):
         raise HesspipeError(f"{path}: {n} samples; expected at least {max(min_samples, 2)}")
@@ -192,11 +206,11 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     for role, values in data.items():
         big = float(np.max(np.abs(values)))
         if big > MAX_MAGNITUDE:
-            raise HesspipeError(f"{path}: column '{names[role]}': values up to {big:.3g} overflow a "
+            raise HesspipeError(f"{path}: column '{table.columns[role]}': values up to {big:.3g} overflow a "
                                 f"power spectrum; expected magnitudes below {MAX_MAGNITUDE:g} "
                                 "(check the column's units)")
     t = data["time"]
-    tcol = names["time"]
+    tcol = table.columns["time"]
     dt, uniform = sample_interval(path, t, tcol, rtol=rtol)
     if not uniform:
         steps = np.diff(t - t[0])
@@ -216,7 +230,7 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     return Run(time=data["time"], disturbance=data["disturbance"], output=data["output"],
                control=data["control"], reference=ref, id=path.stem,
                synthetic=any("synthetic" in c.lower() for c in comments),
-               comments=comments, source=str(path), interval=dt)
+               comments=comments, source=str(path), interval=dt, notes=table.notes)
 
 
 def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = WELCH_SEGMENT,
@@ -267,9 +281,10 @@ def _check_plausible(path, column: str, dt: float) -> None:
 
 def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
                      what: str = "a CSV", hint: str | None = None) -> tuple[dict, tuple[str, ...]]:
-    """Read numeric columns of a CSV with ``#`` comment lines.
+    """Read numeric columns of a CSV with ``#`` comment lines: ``(data, comments)``.
 
-    UTF-8 with or without a byte-order mark; LF or CRLF line ends.
+    :func:`hesspipe.core._csv.read_table` without its notes: any text encoding,
+    delimiter and header style it reads, units converted to SPEC.md's.
 
     Parameters
     ----------
@@ -281,8 +296,7 @@ def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
     what : str
         What the file should be, for messages ("a measured-run CSV").
     hint : str, optional
-        Name of the setting that maps other column names (named in the message,
-        e.g. "columns": "map other names with columns control=NAME").
+        Name of the setting that maps other column names.
 
     Returns
     -------
@@ -296,42 +310,8 @@ def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
     HesspipeError
         Naming the file, the column and the problem.
     """
-    path = Path(path)
-    try:
-        # utf-8-sig: a byte-order mark (Excel, Notepad) must not hide the first line.
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise HesspipeError(f"{path}: file not found; expected {what}") from None
-    except IsADirectoryError:
-        raise HesspipeError(f"{path}: is a folder, expected {what}") from None
-    except UnicodeDecodeError:
-        raise HesspipeError(f"{path}: not a UTF-8 text file, expected {what}") from None
-    except OSError as exc:
-        raise HesspipeError(f"{path}: cannot be read ({exc.strerror or exc}); expected {what}") from None
-    comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
-                     if line.lstrip().startswith("#"))
-    try:
-        df = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
-    df.columns = [str(c).strip() for c in df.columns]
-    data = {}
-    for role, name in names.items():
-        if name not in df.columns:
-            if role in optional:
-                continue
-            tail = f"; map other names with {hint} {role}=NAME" if hint else ""
-            label = f" (role {role})" if role != name else ""
-            raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
-                                f"{', '.join(df.columns)}{tail}")
-        values = pd.to_numeric(df[name], errors="coerce").to_numpy(dtype=float)
-        bad = ~np.isfinite(values)
-        if bad.any():
-            row = int(np.argmax(bad))
-            raise HesspipeError(f"{path}: column '{name}': expected finite numbers, got "
-                                f"{df[name].iloc[row]!r} in data row {row + 1}")
-        data[role] = values
-    return data, comments
+    table = read_table(path, names, optional=optional, what=what, hint=hint)
+    return table.data, table.comments
 
 
 def _written_resolution(t: np.ndarray) -> np.ndarray:
@@ -562,12 +542,8 @@ def read_plants(path: str | Path) -> Plants:
     """
     path = Path(path)
     try:
-        obj = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise HesspipeError(f"{path}: file not found") from None
-    except IsADirectoryError:
-        raise HesspipeError(f"{path}: is a folder, expected a plants JSON file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        obj = json.loads(decode(path, "a plants JSON file")[0])
+    except json.JSONDecodeError as exc:
         raise HesspipeError(f"{path}: not valid JSON ({exc})") from None
     if not isinstance(obj, Mapping):
         raise HesspipeError(f"{path}: expected a JSON object with 'control_to_output' and "

@@ -33,7 +33,7 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, Run, _parse_columns, read_run, tf_coefficients
+from ..core.formats import RUN_SUFFIXES, Plants, Run, _parse_columns, read_run, tf_coefficients
 from ..core.seeds import derive_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import benchmark as mcruer_benchmark
@@ -295,7 +295,7 @@ def _guarded(job, run: Run):
 # -- many pilots ------------------------------------------------------------------------------
 
 def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
-    """The run files of a folder (``*.csv``, sorted) or of an explicit list.
+    """The run files of a folder (``*.csv`` and ``*.tsv``, sorted) or of an explicit list.
 
     ``*.truth.json`` and other non-CSV files beside the runs are ignored.
 
@@ -308,9 +308,9 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
     if isinstance(paths_or_dir, (str, Path)):
         path = Path(paths_or_dir)
         if path.is_dir():
-            files = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() == ".csv")
+            files = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in RUN_SUFFIXES)
             if not files:
-                raise HesspipeError(f"{path}: no run files (*.csv) in this folder")
+                raise HesspipeError(f"{path}: no run files (*.csv, *.tsv) in this folder")
             return files
         if not path.exists():
             raise HesspipeError(f"{path}: not found; expected a folder of run CSV files or a CSV file")
@@ -413,6 +413,7 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     failures.sort(key=lambda f: order.get(f.source, len(order)))
 
     return Comparison(pilots=pilots, failures=tuple(failures), settings=settings, groups=groups,
+                      reading={r.source: r.notes for r in runs if r.notes},
                       plants={"control_to_output": tf_coefficients(plants.control_to_output),
                               "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)})
 

@@ -119,6 +119,9 @@ class Comparison:
     groups : dict or None
         Run id → pilot id when pilots flew several runs
         (:func:`hesspipe.pilots.verdict.pilot_groups`); None: each run is a pilot.
+    reading : dict
+        Run file → what reading it did beyond the plain format (units converted, a
+        separator, an encoding; :attr:`hesspipe.core.formats.Run.notes`), files with none left out.
     """
 
     pilots: tuple[PilotComparison, ...]
@@ -126,6 +129,7 @@ class Comparison:
     settings: CompareSettings = CompareSettings()
     plants: dict = field(default_factory=dict)
     groups: dict | None = None
+    reading: dict = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -203,6 +207,7 @@ class Comparison:
             "plants": self.plants,
             "pilots": [p.to_dict(psd=psd) for p in self.pilots],
             "failures": [f.to_dict() for f in self.failures],
+            "reading": {k: list(v) for k, v in self.reading.items()},
         }
 
     def km_fixed_value(self) -> float | None:

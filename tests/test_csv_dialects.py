@@ -1,0 +1,180 @@
+"""Measured runs as laboratories write them: encodings, separators, headers with units
+(:mod:`hesspipe.core._csv`). Each file holds the same run; reading must give the same arrays."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hesspipe.core._csv import UNIT_FACTORS
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_plants, read_run
+
+N, DT = 300, 0.02
+
+
+def _signals():
+    t = DT * np.arange(N)
+    return t, np.sin(0.7 * t), 0.1 * np.cos(1.3 * t), np.sin(2.1 * t), 0.05 * np.sin(0.4 * t)
+
+
+def _text(header, sep=",", decimal=".", scale=(1, 1, 1, 1, 1)):
+    cols = _signals()
+    lines = [sep.join(header)]
+    for row in zip(*cols):
+        lines.append(sep.join(f"{v * k:.9g}".replace(".", decimal) for v, k in zip(row, scale)))
+    return "\n".join(lines) + "\n"
+
+
+PLAIN = ("time", "disturbance", "output", "control", "reference")
+
+
+@pytest.mark.parametrize("name, data, note", [
+    ("plain.csv", _text(PLAIN).encode(), None),
+    ("capitals.csv", _text([h.capitalize() for h in PLAIN]).encode(), None),
+    ("tab.tsv", _text(PLAIN, "\t").encode(), "tab-separated"),
+    ("semicolon.csv", _text(PLAIN, ";").encode(), "semicolon-separated"),
+    ("european.csv", _text(PLAIN, ";", ",").encode(), "decimal commas"),
+    ("spaces.txt", _text(PLAIN, "   ").encode(), "whitespace-separated"),
+    ("excel-unicode.csv", _text(PLAIN, "\t").replace("\n", "\r\n").encode("utf-16"), "utf-16"),
+    ("windows.csv", ("# Versuch 3, 21 °C, Pilot Müller\n" + _text(PLAIN)).encode("cp1252"), "cp1252"),
+    ("old-mac.csv", _text(PLAIN).replace("\n", "\r").encode(), None),
+    ("si-units.csv", _text(["time [s]", "disturbance (ft/s)", "output [rad/s]", "control [-]",
+                            "reference [rad/s]"]).encode(), None),
+    ("lab-units.csv", _text(["Time [ms]", "Disturbance [m/s]", "Output [deg/s]", "Control [N]",
+                             "Reference [deg/s]"],
+                            scale=(1000, 0.3048, 180 / math.pi, 1, 180 / math.pi)).encode(), "converted"),
+])
+def test_same_run_whatever_the_writer(tmp_path, name, data, note):
+    path = tmp_path / name
+    path.write_bytes(data)
+    run = read_run(path)
+    t, d, y, u, r = _signals()
+    assert run.dt == pytest.approx(DT, rel=1e-9)
+    for got, want in ((run.time, t), (run.disturbance, d), (run.output, y), (run.control, u),
+                      (run.reference, r)):
+        np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-9)
+    if note is None:
+        assert not any("converted" in n or "separated" in n for n in run.notes)
+    else:
+        assert any(note in n for n in run.notes), run.notes
+
+
+def test_unknown_unit_is_taken_as_written_and_said(tmp_path):
+    path = tmp_path / "u.csv"
+    path.write_text(_text(["time", "disturbance [deg]", "output", "control [N]", "reference"]))
+    run = read_run(path)
+    np.testing.assert_allclose(run.disturbance, _signals()[1], rtol=1e-6, atol=1e-9)
+    assert any("'disturbance [deg]'" in n and "taken as written" in n for n in run.notes)
+    assert any("'control [N]'" in n for n in run.notes)
+
+
+def test_units_known_for_every_role_convert_to_spec():
+    assert UNIT_FACTORS["time"]["ms"] == 1e-3
+    assert UNIT_FACTORS["output"]["deg/s"] == pytest.approx(math.pi / 180)
+    assert UNIT_FACTORS["disturbance"]["m/s"] == pytest.approx(1 / 0.3048)
+    assert UNIT_FACTORS["disturbance"]["kt"] == pytest.approx(1.6878099, rel=1e-6)
+
+
+def test_mapped_column_keeps_its_unit(tmp_path):
+    path = tmp_path / "m.csv"
+    path.write_text(_text(["t [ms]", "wind", "p [deg/s]", "stick", "r"], scale=(1000, 1, 180 / math.pi, 1, 1)))
+    run = read_run(path, columns="time=t [ms],disturbance=wind,output=p [deg/s],control=stick")
+    np.testing.assert_allclose(run.output, _signals()[2], rtol=1e-6, atol=1e-9)
+    assert run.dt == pytest.approx(DT)
+    assert not run.reference.any()  # 'r' is not 'reference'
+
+
+def test_two_headers_for_one_role_are_refused(tmp_path):
+    path = tmp_path / "two.csv"
+    path.write_text(_text(["time", "Output [rad/s]", "output (deg/s)", "control", "disturbance"]))
+    with pytest.raises(HesspipeError, match=r"two.csv: columns 'Output \[rad/s\]', 'output \(deg/s\)' "
+                                            r"all read as 'output' \(role output\); expected one"):
+        read_run(path)
+
+
+def test_empty_optional_column_is_absent_but_a_gap_is_an_error(tmp_path):
+    t, d, y, u, _ = _signals()
+    rows = [f"{a:.9g},{b:.9g},{c:.9g},{e:.9g}," for a, b, c, e in zip(t, d, y, u)]
+    empty = tmp_path / "empty.csv"
+    empty.write_text("time,disturbance,output,control,reference\n" + "\n".join(rows) + "\n")
+    assert not read_run(empty).reference.any()
+    rows[5] = rows[5] + "0.1"
+    rows[6] = rows[6] + "0.2"
+    gap = tmp_path / "gap.csv"
+    gap.write_text("time,disturbance,output,control,reference\n" + "\n".join(rows) + "\n")
+    with pytest.raises(HesspipeError, match="gap.csv: column 'reference': expected finite numbers"):
+        read_run(gap)
+
+
+def test_plants_json_with_a_byte_order_mark(tmp_path):
+    path = tmp_path / "plants.json"
+    path.write_bytes(b"\xef\xbb\xbf" + b'{"control_to_output": {"num": [1], "den": [1, 0]}, '
+                     b'"disturbance_to_output": {"num": [1], "den": [1, 1]}}')
+    assert read_plants(path).control_to_output.den[0][0].tolist() == [1, 0]
+
+
+def test_a_separator_ending_every_data_line_shifts_nothing(tmp_path):
+    # pandas alone reads such a file with the first column as its index: 'time' would
+    # then hold the disturbance.
+    path = tmp_path / "logger.csv"
+    path.write_text(_text(PLAIN).replace("\n", ",\n").replace("reference,\n", "reference\n", 1))
+    run = read_run(path)
+    np.testing.assert_allclose(run.disturbance, _signals()[1], rtol=1e-6, atol=1e-9)
+    assert run.dt == pytest.approx(DT)
+
+
+def test_more_values_than_names_is_refused(tmp_path):
+    path = tmp_path / "extra.csv"
+    path.write_text(_text(PLAIN).replace("\n", ",7\n").replace("reference,7\n", "reference\n", 1))
+    with pytest.raises(HesspipeError, match="extra.csv: data rows hold more values than the header has names"):
+        read_run(path)
+
+
+def test_the_digits_written_do_not_change_a_diagnosis(tmp_path):
+    """SYNTHETIC (independent generator): one motion trial written with six significant
+    digits (the generator's logger) and with four decimals (a fixed-point export). The plant
+    check's independence test swings with the digits (the residual of exact plants is the
+    simulator's integration between samples); the names must not, and the report must not
+    leave a failed test unexplained beside a matching plant finding."""
+    import json
+
+    from hesspipe.core.seeds import derive_seed
+    from hesspipe.diagnose.report import format_report
+    from hesspipe.diagnose.workflow import diagnose
+    from hesspipe.humanlike import draw_trial, simulate_trial
+    from hesspipe.humanlike.writer import csv_bytes, plants_dict
+
+    spec = draw_trial("paper", derive_seed(0, "quant", "paper", "rate", "both", "motion_feedback"),
+                      task="both", pilot="hess", effects=("motion_feedback",), output="rate", name="t")
+    trial = simulate_trial(spec)
+    (tmp_path / "plants.json").write_text(json.dumps(plants_dict(spec)))
+    plants = read_plants(tmp_path / "plants.json")
+    results = []
+    for fmt in ("%.6g", "%.4f"):
+        path = tmp_path / f"t{len(results)}.csv"
+        path.write_bytes(csv_bytes(trial, {"values": fmt}))
+        results.append(diagnose(read_run(path), plants, seed=0))
+    assert results[0].named_effects == results[1].named_effects
+    assert "motion_feedback" in results[0].named_effects
+    unexplained = [d for d in results if not d.plant_check.passes]
+    assert unexplained, "expected the digits to fail one run's independence test (p ~ 0 with %.6g)"
+    for d in unexplained:
+        assert d.plant_finding["verdict"] == "match"
+        assert "is not an aircraft-side effect any candidate explains" in format_report(d)
+
+
+def test_a_folder_mapping_leaves_plain_files_readable(tmp_path):
+    from hesspipe.pilots.compare import list_runs
+
+    (tmp_path / "a.tsv").write_text(_text(["Zeit [ms]", "disturbance", "output", "control", "reference"], "\t",
+                                          scale=(1000, 1, 1, 1, 1)))
+    (tmp_path / "b.csv").write_text(_text(PLAIN))
+    (tmp_path / "notes.txt").write_text("not a run")
+    files = list_runs(tmp_path)
+    assert [f.name for f in files] == ["a.tsv", "b.csv"]
+    runs = [read_run(f, columns="time=Zeit [ms]") for f in files]
+    for run in runs:
+        np.testing.assert_allclose(run.time, _signals()[0], atol=1e-9)
