@@ -178,3 +178,19 @@ def test_a_folder_mapping_leaves_plain_files_readable(tmp_path):
     runs = [read_run(f, columns="time=Zeit [ms]") for f in files]
     for run in runs:
         np.testing.assert_allclose(run.time, _signals()[0], atol=1e-9)
+
+
+def test_incomplete_rows_at_the_edges_are_dropped_and_said(tmp_path):
+    lines = _text(PLAIN).splitlines()
+    lines.insert(1, "0,,,,")                              # a recorder's empty first row
+    lines.append(lines[-1].rsplit(",", 2)[0])             # a last line cut short
+    lines.append("end of record")
+    path = tmp_path / "edges.csv"
+    path.write_text("\n".join(lines) + "\n")
+    run = read_run(path)
+    np.testing.assert_allclose(run.output, _signals()[2], rtol=1e-6, atol=1e-9)
+    assert any("dropped 1 incomplete row(s) at the start and 2 at the end" in n for n in run.notes)
+    lines.insert(100, lines[100].rsplit(",", 1)[0] + ",")   # a gap inside: refused, row named
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(HesspipeError, match="column 'reference': expected finite numbers, got an empty or NaN cell in data row 100"):
+        read_run(path)

@@ -229,12 +229,22 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
             label = f" (role {role})" if role != name else ""
             raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
                                 f"{', '.join(headers)}{tail}")
-        values = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float)
-        bad = ~np.isfinite(values)
-        if bad.any():
-            row = int(np.argmax(bad))
-            raise HesspipeError(f"{path}: column '{col}': expected finite numbers, got "
-                                f"{df[col].iloc[row]!r} in data row {row + 1}")
+        data[role], used[role] = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float), col
+    first, stop = _complete_rows(data)
+    bad = {role: first + int(np.argmax(~np.isfinite(v[first:stop]))) for role, v in data.items()
+           if not np.isfinite(v[first:stop]).all()}
+    if bad:
+        role = min(bad, key=lambda r: bad[r])   # the earliest bad value in the file
+        col, row = used[role], bad[role]
+        value = df[col].iloc[row]
+        got = "an empty or NaN cell" if pd.isna(value) else repr(value)
+        raise HesspipeError(f"{path}: column '{col}': expected finite numbers, got {got} "
+                            f"in data row {row + 1}")
+    if (first, stop) != (0, len(df)):
+        notes.append(f"dropped {first} incomplete row(s) at the start and {len(df) - stop} at the end "
+                     f"(a value missing or not a number); data rows {first + 1}-{stop} read")
+    for role, col in used.items():
+        values = data[role][first:stop]
         unit = _split_unit(col)[1]
         if unit:
             factor = UNIT_FACTORS.get(role, {}).get(unit.lower().replace(" ", ""))
@@ -243,5 +253,21 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
             elif factor is not None and factor != 1.0:
                 values = values * factor
                 notes.append(f"column '{col}' ({role}): {unit} converted to SPEC.md's units (x {factor:.6g})")
-        data[role], used[role] = values, col
+        data[role] = values
     return Table(data, comments, used, tuple(notes))
+
+
+def _complete_rows(data: Mapping[str, np.ndarray]) -> tuple[int, int]:
+    """(first, stop) of the rows to read: incomplete rows (a value missing or not a number)
+    at the start and end of a record are dropped, as a recorder's empty first row or a last
+    line cut short leave them, while at least 90 % of the rows remain; otherwise every row.
+    A bad value between complete rows stays for the caller to name."""
+    if not data:
+        return 0, 0
+    ok = np.logical_and.reduce([np.isfinite(v) for v in data.values()])
+    n = ok.size
+    if ok.all() or not ok.any():
+        return 0, n
+    first = int(np.argmax(ok))
+    stop = n - int(np.argmax(ok[::-1]))
+    return (first, stop) if stop - first >= 0.9 * n else (0, n)

@@ -215,8 +215,65 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
             "bounded_tau0": float(p_b["tau0"])}
 
 
+def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: float, rss_zero: float,
+                dof: int, level: float, km_small: float, data, w) -> tuple[float, float]:
+    """Profile-likelihood interval of Km at confidence `level`: the Km whose best fit of the
+    other parameters stays within the F test's critical value of the optimum.
+
+    Consistent with the test (its lower end is above 0 exactly when the nested F at Km = 0,
+    from ``rss_zero``, exceeds the critical value), and honest in a valley: where Km trades
+    with the proprioceptive loop or the delay the curvature at the optimum gives standard
+    errors of 10^3-10^4 for a Km significant at p ~ 1e-25 (generator trials), while the
+    profile follows the valley. The upper end is ``inf`` when Km's search bound is reached.
+    """
+    i = free.index("Km")
+    names = free[:i] + free[i + 1:]
+    lo_r, hi_r = np.delete(lo, i), np.delete(hi, i)
+    crit = float(stats.f.ppf(level, 1, dof))
+    scale = rss_best / dof
+
+    def f_at(km, start):
+        rss, p, _ = _fit(model, {**base, **best, "Km": km}, names, lo_r, hi_r, [start], *data, w)
+        return (max(rss, rss_best) - rss_best) / scale, [p[n] for n in names]
+
+    km_hat, start = float(best["Km"]), [best[n] for n in names]
+    ends = []
+    for factor, limit in ((1 / 3, None), (3.0, float(hi[i]))):
+        if factor < 1 and ((rss_zero - rss_best) / scale <= crit or km_hat <= 0):
+            ends.append(0.0)
+            continue
+        inside, x_in, outside = km_hat, start, None
+        for _ in range(24):   # bracket: geometric steps until the fit is worse than crit
+            # From Km on its bound of 0 the upward steps start at km_small.
+            km = inside * factor if inside > 0 else km_small
+            if limit is not None and km >= limit:
+                f, x = f_at(limit, x_in)
+                if f <= crit:
+                    break
+                km = limit
+            else:
+                f, x = f_at(km, x_in)
+            if f > crit:
+                outside = km
+                break
+            inside, x_in = km, x
+        if outside is None:
+            ends.append(0.0 if factor < 1 else math.inf)
+            continue
+        for _ in range(6):    # bisection in ln Km: about 2 % of Km
+            mid = math.sqrt(inside * outside) if inside > 0 else 0.5 * outside
+            f, x = f_at(mid, x_in)
+            if f > crit:
+                outside = mid
+            else:
+                inside, x_in = mid, x
+        ends.append(inside)
+    return float(ends[0]), float(ends[1])
+
+
 def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
-                band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None) -> dict:
+                band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
+                interval: float | None = None) -> dict:
     """Likelihood-ratio test of motion feedback on one pilot's describing-function lines.
 
     Parameters
@@ -240,6 +297,10 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     max_delay : float, optional
         Also test the original model's visual delay against this bound, s
         (:func:`_delay_bound`; diagnose's extra delay).
+    interval : float, optional
+        Confidence level (e.g. 0.95) of a profile-likelihood interval of Km
+        (:func:`_km_profile`; about twenty more fits, so compare-pilots asks for it and
+        diagnose does not).
 
     Returns
     -------
@@ -248,8 +309,10 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         forcing lines), ``n_lines``, ``rss_original``, ``rss_expanded`` (weighted
         residual sums, dimensionless: remnant variance units), ``lr`` (LR
         statistic, the F of the nested test), ``p_value``, ``gain`` (1 − rss_expanded / rss_original),
-        ``Km`` and ``Km_se`` (its standard error from the fit's Jacobian, same
-        units as the pilot model's Km), ``significant`` (p < :data:`ALPHA`),
+        ``Km`` and ``Km_se`` (its standard error from the fit's Jacobian with the residual
+        variance rss/dof and parameters on a bound held, same units as the pilot model's
+        Km; NaN with Km on its bound of 0), ``Km_interval`` (with `interval`: the profile
+        interval ``[lo, hi]``, ``hi`` inf when unbounded), ``significant`` (p < :data:`ALPHA`),
         ``parameters_original`` / ``parameters_expanded`` (the two fits' pilot
         parameters), ``standard_errors_original`` (of the original's free
         parameters; diagnose reads the pilot's own delay from them) and
@@ -335,24 +398,27 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], *data, ld.w)
         if rss_o2 < rss_o:
             rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
-        fits.append((extra, rss_e, p_e, sol))
+        fits.append((extra, rss_e, p_e, sol, (base_e, free_e, lo_e, hi_e)))
     tests = []
-    for extra, rss_e, p_e, sol in fits:
+    for extra, rss_e, p_e, sol, problem in fits:
         rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
         q, dof_e = len(extra), n_res - len(free) - len(extra)
         lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
-        tests.append((p, lr, rss_e, p_e, sol, extra))
+        tests.append((p, lr, rss_e, p_e, sol, extra, problem))
     # With both line sets, two pre-planned alternatives - Km alone (the paper's path) and
     # Km with a vestibular delay - and the smaller p, Bonferroni-corrected: the delay alone
     # cost JSBSim-flown motion runs (tau_m = 0) their power, Km alone lost half the
     # generator's runs drawn with tau_m = 0.15 s.
-    p_value, lr, rss_e, p_e, sol, extra = min(tests, key=lambda t: t[0])
+    p_value, lr, rss_e, p_e, sol, extra, (base_e, free_e, lo_e, hi_e) = min(tests, key=lambda t: t[0])
     p_value = min(1.0, p_value * len(tests))
-    try:
-        cov = np.linalg.pinv(sol.jac.T @ sol.jac)
-        km_se = float(math.sqrt(max(cov[len(core), len(core)], 0.0)))
-    except np.linalg.LinAlgError:
-        km_se = math.nan
+    dof_e = n_res - len(free_e)
+    # Scaled by the residual variance and with bound-held parameters out, as every other
+    # standard error here (it was the unscaled inverse, with a flat held column in it).
+    km_se = _standard_errors(sol, free_e, rss_e, dof_e)["Km"]
+    km_interval = None
+    if interval is not None:
+        km_interval = list(_km_profile(expanded, base_e, free_e, lo_e, hi_e, p_e, rss_e, rss_o, dof_e,
+                                       float(interval), 1e-3 * km0, data, ld.w))
     return {"available": True, "n_lines": int(lines.size), "window_samples": ld.window_samples,
             "parameters_original": {n_: float(v) for n_, v in p_o.items()},
             "parameters_expanded": {n_: float(v) for n_, v in p_e.items()},
@@ -361,20 +427,22 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
             "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": float(p_e["Km"]),
             "tau_m": float(p_e.get("tau_m", 0.0)),
-            "Km_se": km_se, "significant": bool(p_value < ALPHA),
+            "Km_se": km_se, "Km_interval": km_interval, "interval_level": interval,
+            "significant": bool(p_value < ALPHA),
             "alternatives": {"+".join(t[5]): t[0] for t in tests},
             "delay_bound": delay_bound,
             "degrees_of_freedom": dof}
 
 
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
-                     band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None) -> dict:
+                     band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
+                     interval: float | None = None) -> dict:
     """:func:`motion_test`, with a failure of the test reported in the result, not raised
     (a pilot's identification stays valid when its describing function cannot be tested).
 
     Parameters
     ----------
-    run, plants, start, k, band_hz, max_delay
+    run, plants, start, k, band_hz, max_delay, interval
         As :func:`motion_test`.
 
     Returns
@@ -383,6 +451,7 @@ def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         :func:`motion_test`'s result, or ``{"available": False, "reason": ...}``.
     """
     try:
-        return motion_test(run, plants, start, k=k, band_hz=band_hz, max_delay=max_delay)
+        return motion_test(run, plants, start, k=k, band_hz=band_hz, max_delay=max_delay,
+                           interval=interval)
     except (HesspipeError, ValueError, np.linalg.LinAlgError) as exc:
         return {"available": False, "reason": f"motion test failed: {exc}"}

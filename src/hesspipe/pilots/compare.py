@@ -127,6 +127,9 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
 
 #: Round trips of :func:`_exchange` (each: one climb per model); pathological pilots whose
 #: climbs run out of passes would otherwise ping-pong for long.
+KM_INTERVAL = 0.95
+"""Confidence level of each pilot's profile-likelihood interval of Km in the motion verdict
+(:func:`hesspipe.identification.motion_test.motion_test`'s ``interval``)."""
 EXCHANGE_ROUNDS = 3
 
 
@@ -272,7 +275,7 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
         id=run.id, source=run.source, synthetic=run.synthetic,
         original=original_d, expanded_fixed=fixed, expanded=expanded_d, improvement=float(improvement),
         motion_test=safe_motion_test(run, plants, original.parameters, k=settings.k,
-                                     band_hz=tuple(settings.band)),
+                                     band_hz=tuple(settings.band), interval=KM_INTERVAL),
         freq_hz=np.asarray(original.freq_hz)[mask], measured_psd=np.asarray(original.measured_psd)[mask],
         simulated_psd={"original": np.asarray(original.simulated_psd)[mask],
                        "expanded_fixed": np.asarray(fixed_psd)[mask],

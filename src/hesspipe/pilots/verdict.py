@@ -164,7 +164,8 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
 def _per_pilot_out(tests, pilots, groups, alpha) -> dict:
     if not groups:
         return {pid: ({"gain": t["gain"], "p_value": t["p_value"], "lr": t["lr"],
-                       "Km": t["Km"], "Km_se": t["Km_se"], "significant": t["significant"]}
+                       "Km": t["Km"], "Km_se": t["Km_se"], "Km_interval": t.get("Km_interval"),
+                       "interval_level": t.get("interval_level"), "significant": t["significant"]}
                       if t.get("available") else {"available": False, "reason": t.get("reason", "")})
                 for pid, t in tests.items()}
     out = {pid: {**t, "significant": t["p_value"] < alpha,
@@ -190,8 +191,15 @@ def verdict_lines(verdict: Mapping) -> list[str]:
         if t.get("available", True) is False:
             out.append(f"  {pid}: not tested ({t.get('reason', 'no forcing lines')})")
             continue
-        se = t.get("Km_se")
-        km = f"Km {t['Km']:.3g}" + (f" +/- {se:.2g}" if se is not None and math.isfinite(se) else "")
+        se, ci = t.get("Km_se"), t.get("Km_interval")
+        if ci:
+            # The profile follows the valley in which Km trades with the other gains; the
+            # curvature at the optimum (Km_se) can be 10^3 times the estimate there.
+            hi = "unbounded" if not math.isfinite(ci[1]) else f"{ci[1]:.3g}"
+            km = (f"Km {t['Km']:.3g} ({100 * (t.get('interval_level') or 0.95):g} % profile interval "
+                  f"{ci[0]:.3g} to {hi})")
+        else:
+            km = f"Km {t['Km']:.3g}" + (f" +/- {se:.2g}" if se is not None and math.isfinite(se) else "")
         runs = f" ({t['runs']} runs)" if t.get("runs", 1) > 1 else ""
         out.append(f"  {pid}{runs}: misfit removed {100 * t['gain']:.1f} %, F = {t['lr']:.3g}, "
                    f"p = {t['p_value']:.2g}{' *' if t['significant'] else ''}, {km}")

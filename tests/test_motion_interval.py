@@ -1,0 +1,61 @@
+"""The motion verdict's Km interval (SYNTHETIC: independent generator trials, read back from
+the files its logger writes).
+
+A Km significant at p ~ 1e-10 had a Jacobian standard error 5-10^4 times the estimate: Km
+trades with the visual and proprioceptive gains along a valley the curvature at the optimum
+does not follow. The profile likelihood does.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from hesspipe.core.formats import read_plants, read_run
+from hesspipe.core.seeds import derive_seed
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.identification.criteria import choose_k
+from hesspipe.identification.motion_test import motion_test
+from hesspipe.pilot.hess import table1
+from hesspipe.pilots.verdict import cohort_verdict, verdict_lines
+
+
+def _trial(folder, effects, seed, plant="roll", output="rate"):
+    spec = draw_trial(plant, derive_seed(seed, "kmcov", plant, output, "both"), task="both", pilot="hess",
+                      effects=effects, output=output, name="t")
+    trial = simulate_trial(spec)
+    run = read_run(write_trial(folder, trial))
+    plants = read_plants(folder / "plants.json")
+    return run, plants, trial.truth["pilot"].get("Km", 0.0)
+
+
+@pytest.mark.parametrize("seed", [1, 9])
+def test_profile_interval_of_a_named_motion_path_excludes_zero_and_covers_the_truth(tmp_path, seed):
+    run, plants, km_true = _trial(tmp_path, ("motion_feedback",), seed)
+    k = choose_k(plants)[0]
+    r = motion_test(run, plants, table1(k), k=k, interval=0.95)
+    lo, hi = r["Km_interval"]
+    assert r["p_value"] < 0.01
+    assert 0 < lo < r["Km"] < hi < math.inf
+    assert lo <= km_true <= hi
+    v = cohort_verdict({"t": r})
+    assert "Km" in v["per_pilot"]["t"] and v["per_pilot"]["t"]["Km_interval"] == [lo, hi]
+    assert "95 % profile interval" in "\n".join(verdict_lines(v))
+
+
+def test_no_motion_interval_starts_at_zero_and_the_bound_has_no_standard_error(tmp_path):
+    run, plants, _ = _trial(tmp_path, (), 0)
+    k = choose_k(plants)[0]
+    r = motion_test(run, plants, table1(k), k=k, interval=0.95)
+    assert r["p_value"] > 0.05
+    assert r["Km_interval"][0] == 0.0
+    assert r["Km"] < 1e-6 and math.isnan(r["Km_se"])   # Km held on its bound of 0
+    assert "unbounded" in "\n".join(verdict_lines(cohort_verdict({"t": r})))
+
+
+def test_no_interval_unless_asked(tmp_path):
+    run, plants, _ = _trial(tmp_path, ("motion_feedback",), 1)
+    k = choose_k(plants)[0]
+    r = motion_test(run, plants, table1(k), k=k)
+    assert r["Km_interval"] is None and "profile" not in "\n".join(verdict_lines(cohort_verdict({"t": r})))
