@@ -169,8 +169,8 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
     path : path
     names : mapping
         Role → column name (matched exactly, else ignoring case and a unit in brackets; a
-        file without that name may use the role's own, e.g. ``time``); every role is
-        required unless listed in `optional`.
+        file without that name may use the role's own, e.g. ``time``; ``-NAME`` reads
+        NAME with its sign flipped); every role is required unless listed in `optional`.
     optional : sequence of str
         Roles that may be missing (left out of the result); an optional column left empty
         in every row counts as missing.
@@ -215,8 +215,15 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
     df.columns = [str(c).strip() for c in df.columns]
     headers = list(df.columns)
     data, used = {}, {}
+    flipped = set()
     for role, name in names.items():
         col = _match(path, headers, role, name)
+        if col is None and name.startswith("-") and name[1:].strip():
+            # "-NAME": the column NAME with its sign flipped (a stick convention opposite
+            # to the plants').
+            col = _match(path, headers, role, name[1:].strip())
+            if col is not None:
+                flipped.add(role)
         if col is None and name != role:
             # A mapping written for some files of a folder: the others keep the plain names.
             col = _match(path, headers, role, role)
@@ -245,6 +252,9 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
                      f"(a value missing or not a number); data rows {first + 1}-{stop} read")
     for role, col in used.items():
         values = data[role][first:stop]
+        if role in flipped:
+            values = -values
+            notes.append(f"column '{col}' ({role}): sign flipped, as mapped")
         unit = _split_unit(col)[1]
         if unit:
             factor = UNIT_FACTORS.get(role, {}).get(unit.lower().replace(" ", ""))

@@ -176,7 +176,8 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
         What was converted is in :attr:`Run.notes`.
     columns : str or mapping, optional
         Role → column-name mapping for files with other names, e.g.
-        ``"control=stick,output=p"``.
+        ``"control=stick,output=p"``; ``"control=-stick"`` flips the sign of a column
+        logged with the opposite convention to the plants'.
     resample : bool
         If the time column is not uniform, resample all signals linearly to
         the median interval instead of failing.

@@ -37,6 +37,7 @@ from ..pilot.crossover import CrossoverLimits, loop_crossover, tracking_crossove
 from ..pilot.hess import PilotModel, model_from_name
 from ..pilot.mcruer import bounded_powell, fit_precision
 from ..pilot.simulation import unstable_fitness
+from ..plants.consistency import check_consistent
 from .apid import Field, bit_climb
 from .criteria import check_criterion, choose_k, identify_phase_aware
 from .frf import estimate_frf
@@ -143,7 +144,8 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
              with_benchmark: bool = True, with_identifiability: bool = True,
              limits: CrossoverLimits = CrossoverLimits(),
              initial: Mapping[str, float] | None = None, restarts: int = 4,
-             coding: str = "gray", criterion: str = "paper", frf=None) -> Identification:
+             coding: str = "gray", criterion: str = "paper", frf=None,
+             check_plants: bool = True) -> Identification:
     """Identify pilot parameters from a measured run by matching control PSDs.
 
     Parameters
@@ -193,11 +195,16 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         least squares (`restarts` starts); tau0, wn, zn free by default.
     frf : hesspipe.identification.frf.Frf, optional
         The run's nonparametric describing function (estimated if None).
+    check_plants : bool
+        Refuse a run whose columns' sign or units the plants show to be wrong
+        (:func:`hesspipe.plants.consistency.check_consistent`); callers that checked already
+        pass False.
 
     Raises
     ------
     HesspipeError
-        Unknown parameter, bad field, record shorter than one segment, unstable Yd.
+        Unknown parameter, bad field, record shorter than one segment, unstable Yd, a
+        column's sign or units at odds with the plants.
         Never for unstable parameter sets.
     """
 
@@ -211,6 +218,8 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
                             f"describing function, which only criterion 'df' uses; got {criterion!r}")
     for one in runs:
         check_control(one)
+        if check_plants:
+            check_consistent(one, plants)
     if len(runs) > 1 and frf is None:
         frf = average_frf(runs, plants, seed=check_seed(seed))
     run = runs[0]

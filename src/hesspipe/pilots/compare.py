@@ -41,6 +41,7 @@ from ..identification.fit import identify
 from ..identification.problem import SpectralObjective
 from ..pilot.crossover import gain_scale, loop_crossover, tracking_crossover
 from ..pilot.hess import PilotModel, model_from_name
+from ..plants.consistency import check_consistent
 from .batch import run_batch
 from .cohort import cohort_spec, synth_cohort
 
@@ -101,7 +102,7 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
 
         res = identify(run, plants, model, free=(), fixed=complete, k=k, band=band,
                        with_benchmark=benchmark, with_identifiability=False, criterion=criterion,
-                       frf=frf)
+                       frf=frf, check_plants=False)
         out = res.to_dict(spectra=False)
         out.update(free=[], evaluations=1,
                    identifiability={"method": "not computed: nothing identified"},
@@ -227,8 +228,10 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
     PilotComparison
     """
     settings = _with_k(settings, plants)
+    check_consistent(run, plants)   # once here; the searches below skip it
     common = dict(optimizer=settings.optimizer, passes=settings.passes, band=tuple(settings.band),
-                  k=settings.k, restarts=settings.restarts, with_benchmark=settings.benchmark)
+                  k=settings.k, restarts=settings.restarts, with_benchmark=settings.benchmark,
+                  check_plants=False)
     frf = None
     if settings.criterion != "paper":
         # Looked up at call time, like identify above.
