@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import HesspipeError
+from .io import read_bytes
 
 _DEG = math.pi / 180.0
 _FT = 0.3048  # m per ft
@@ -91,14 +92,7 @@ def decode(path: str | Path, what: str) -> tuple[str, str]:
         Naming the file and what it should be.
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise HesspipeError(f"{path}: file not found; expected {what}") from None
-    except IsADirectoryError:
-        raise HesspipeError(f"{path}: is a folder, expected {what}") from None
-    except OSError as exc:
-        raise HesspipeError(f"{path}: cannot be read ({exc.strerror or exc}); expected {what}") from None
+    raw = read_bytes(path, what)
     if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
         candidates = ("utf-16",)
     else:

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from .errors import HesspipeError
+from .io import read_bytes
 
 #: Root of the source tree (holds ``aircraft/`` and ``pipeline/``) when hesspipe runs
 #: from a checkout (an editable install); meaningless for an installed wheel.
@@ -90,14 +91,7 @@ def load_toml(path: str | Path) -> dict:
         Its tables and values.
     """
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise HesspipeError(f"{path}: file not found") from None
-    except IsADirectoryError:
-        raise HesspipeError(f"{path}: is a folder, expected a TOML file") from None
-    except OSError as exc:
-        raise HesspipeError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    data = read_bytes(path, "a TOML file")
     # Editors on Windows start UTF-8 files with a byte-order mark; TOML itself has none.
     data = data.removeprefix(b"\xef\xbb\xbf")
     try:

@@ -36,6 +36,32 @@ _WRITE_ERRORS = {errno.EACCES, errno.EPERM, errno.EROFS, errno.ENOSPC, errno.EDQ
                  errno.ENOTDIR, errno.EEXIST, errno.EFBIG, errno.ENAMETOOLONG}
 
 
+def read_bytes(path: str | os.PathLike, what: str) -> bytes:
+    """The bytes of an input file, or a one-line error naming it and what it should be.
+
+    Parameters
+    ----------
+    path : path
+        The file.
+    what : str
+        What it should be, for messages ("a TOML file", "a measured-run CSV").
+
+    Raises
+    ------
+    HesspipeError
+        Missing, a folder, or unreadable.
+    """
+    path = Path(path)
+    try:
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise HesspipeError(f"{path}: file not found; expected {what}") from None
+    except IsADirectoryError:
+        raise HesspipeError(f"{path}: is a folder, expected {what}") from None
+    except OSError as exc:
+        raise HesspipeError(f"{path}: cannot be read ({exc.strerror or exc}); expected {what}") from None
+
+
 def _cannot_write(path, exc: OSError) -> HesspipeError:
     return HesspipeError(f"{path}: cannot write ({exc.strerror or exc}); choose a location you can "
                          "write to")
