@@ -64,11 +64,20 @@ def test_same_run_whatever_the_writer(tmp_path, name, data, note):
 
 def test_unknown_unit_is_taken_as_written_and_said(tmp_path):
     path = tmp_path / "u.csv"
-    path.write_text(_text(["time", "disturbance [deg]", "output", "control [N]", "reference"]))
+    path.write_text(_text(["time", "disturbance [N m]", "output", "control [N]", "reference"]))
     run = read_run(path)
     np.testing.assert_allclose(run.disturbance, _signals()[1], rtol=1e-6, atol=1e-9)
-    assert any("'disturbance [deg]'" in n and "taken as written" in n for n in run.notes)
+    assert any("'disturbance [N m]'" in n and "taken as written" in n for n in run.notes)
     assert any("'control [N]'" in n for n in run.notes)
+
+
+def test_angles_are_radians_on_every_signal(tmp_path):
+    path = tmp_path / "a.csv"
+    path.write_text(_text(["time", "disturbance [deg/s]", "output [deg]", "control [deg]", "reference [deg]"],
+                          scale=(1, 180 / math.pi, 180 / math.pi, 180 / math.pi, 180 / math.pi)))
+    run = read_run(path)
+    for got, want in zip((run.disturbance, run.output, run.control, run.reference), _signals()[1:]):
+        np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-9)
 
 
 def test_units_known_for_every_role_convert_to_spec():

@@ -27,16 +27,20 @@ from .io import read_bytes
 
 _DEG = math.pi / 180.0
 _FT = 0.3048  # m per ft
+_ANGLES = {"rad": 1.0, "rad/s": 1.0, "rad/s2": 1.0, "rad/s^2": 1.0,
+           "deg": _DEG, "deg/s": _DEG, "deg/s2": _DEG, "deg/s^2": _DEG, "°": _DEG, "°/s": _DEG}
 UNIT_FACTORS: dict[str, dict[str, float]] = {
     "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3},
-    "output": {"rad": 1.0, "rad/s": 1.0, "deg": _DEG, "deg/s": _DEG, "°": _DEG, "°/s": _DEG},
-    "reference": {"rad": 1.0, "rad/s": 1.0, "deg": _DEG, "deg/s": _DEG, "°": _DEG, "°/s": _DEG},
-    "disturbance": {"ft/s": 1.0, "fps": 1.0, "m/s": 1.0 / _FT, "kt": 1852.0 / 3600.0 / _FT,
-                    "kn": 1852.0 / 3600.0 / _FT},
+    "output": dict(_ANGLES),
+    "reference": dict(_ANGLES),
+    "control": dict(_ANGLES),
+    "disturbance": {**_ANGLES, "ft/s": 1.0, "fps": 1.0, "m/s": 1.0 / _FT,
+                    "kt": 1852.0 / 3600.0 / _FT, "kn": 1852.0 / 3600.0 / _FT},
 }
-"""Role → unit written in a header → factor to SPEC.md's unit (time s; output and reference
-rad or rad/s, the plants' radian convention; disturbance ft/s). A unit not listed is taken as
-written (the control is in the plants' input units, whatever they are) and noted."""
+"""Role → unit written in a header → factor to SPEC.md's unit: time s; angles and their rates
+in radians on every signal (hesspipe's convention, as the plants' roll rate in rad/s); a
+wind disturbance in ft/s. A unit not listed (a stick's N, a normalised command) is taken as
+written, in the plants' units, and noted."""
 
 _DIMENSIONLESS = ("", "-", "1", "none", "n/a", "norm", "normalised", "normalized")
 _UNIT = re.compile(r"^(?P<name>.*?)\s*(?:\[(?P<u1>[^\]]*)\]|\((?P<u2>[^)]*)\))\s*$")

@@ -18,8 +18,6 @@ import tempfile
 from pathlib import Path
 from typing import Any, Iterator
 
-import numpy as np
-
 from .errors import HesspipeError
 
 #: Name prefixes of the temporary files and folders hesspipe makes beside its outputs; with
@@ -126,6 +124,8 @@ def write_text(path: str | os.PathLike, text: str) -> Path:
 
 
 def _json_default(obj: Any):
+    import numpy as np  # here, not at import: the command line starts without numpy
+
     if isinstance(obj, np.generic):
         return obj.item()
     if isinstance(obj, np.ndarray):
@@ -147,19 +147,20 @@ def to_json(obj: Any) -> str:
     obj : object
         Dicts, lists, numbers, strings, numpy scalars and arrays, Paths.
     """
-    return json.dumps(_finite(obj), indent=2, default=_json_default, allow_nan=False) + "\n"
+    import numpy as np  # here, not at import: the command line starts without numpy
 
+    def finite(obj: Any) -> Any:
+        if isinstance(obj, (float, np.floating)):
+            return float(obj) if np.isfinite(obj) else None
+        if isinstance(obj, dict):
+            return {str(k): finite(v) for k, v in obj.items()}
+        if isinstance(obj, (list, tuple)):
+            return [finite(v) for v in obj]
+        if isinstance(obj, np.ndarray):
+            return finite(obj.tolist())
+        return obj
 
-def _finite(obj: Any) -> Any:
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if np.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {str(k): _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _finite(obj.tolist())
-    return obj
+    return json.dumps(finite(obj), indent=2, default=_json_default, allow_nan=False) + "\n"
 
 
 def write_json(path: str | os.PathLike, obj: Any) -> Path:

@@ -195,7 +195,7 @@ def verdict_lines(verdict: Mapping) -> list[str]:
         if ci:
             # The profile follows the valley in which Km trades with the other gains; the
             # curvature at the optimum (Km_se) can be 10^3 times the estimate there.
-            hi = "unbounded" if not math.isfinite(ci[1]) else f"{ci[1]:.3g}"
+            hi = "unbounded" if ci[1] is None or not math.isfinite(ci[1]) else f"{ci[1]:.3g}"
             km = (f"Km {t['Km']:.3g} ({100 * (t.get('interval_level') or 0.95):g} % profile interval "
                   f"{ci[0]:.3g} to {hi})")
         else:
