@@ -78,6 +78,7 @@ import numpy as np
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
+from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
@@ -87,7 +88,8 @@ EFFECTS = ("none", "motion_feedback", "extra_delay", "remnant", "dutch_roll", "a
 PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 
 
-def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hess", repeats=1, **draw):
+def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hess", repeats=1, config=None,
+             **draw):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind", fs=50.0, T_m=70.0) if plant == "paper" else dict(fs=50.0, T_m=70.0)
@@ -124,7 +126,7 @@ def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hes
         except HesspipeError as exc:
             return None, f"baseline run: {exc}"
     t = time.process_time()
-    d = diagnose(run, plants, seed=seed, baseline_run=base or None, repeat_runs=more)
+    d = diagnose(run, plants, seed=seed, baseline_run=base or None, repeat_runs=more, config=config)
     return d, time.process_time() - t
 
 
@@ -184,6 +186,11 @@ def main(argv=None) -> int:
     ap.add_argument("--motion-path", default=None, metavar="NUM;DEN",
                     help="the simulator's motion path (output -> cab angular velocity), polynomial "
                          "coefficients, highest power first, e.g. a washout; written to plants.json")
+    ap.add_argument("--feedforward", type=float, default=None, metavar="KFF",
+                    help="a pursuit display: the generator's precision pilots add a feedforward path on "
+                         "the target, KFF times the controlled element's inverse (tasks with a target)")
+    ap.add_argument("--display", choices=("compensatory", "pursuit"), default="compensatory",
+                    help="what diagnose is told the pilot saw (DiagnoseConfig.display)")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])
     draw = {"km_ratio": tuple(float(x) for x in split(args.km_ratio))} if args.km_ratio else {}
@@ -197,6 +204,8 @@ def main(argv=None) -> int:
         draw["gain_drift"] = args.gain_drift
     if args.remnant_at is not None:
         draw["remnant_at"] = args.remnant_at
+    if args.feedforward is not None:
+        draw["feedforward"] = args.feedforward
     if args.layout == "sparse":
         draw.update(SPARSE_LAYOUT)
     if args.motion_path:
@@ -219,7 +228,7 @@ def main(argv=None) -> int:
             for seed in range(args.seed_start, args.seed_start + args.seeds):
                 try:
                     d, cpu = run_case(tmp, plant, output, task, effect, seed, args.paired,
-                                      args.pilot, args.repeats, **draw)
+                                      args.pilot, args.repeats, DiagnoseConfig(display=args.display), **draw)
                 except HesspipeError as exc:
                     failures.append(f"{plant}/{output}/{task}/{effect}/{seed}: {exc}")
                     print("  REFUSED", failures[-1], flush=True)

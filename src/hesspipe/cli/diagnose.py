@@ -6,6 +6,8 @@ from __future__ import annotations
 # (tests/test_api.py), and each command loads only its own stage.
 from dataclasses import replace
 
+from ..core.choices import DISPLAYS
+
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -31,6 +33,9 @@ def register(sub) -> None:
                    help="the same pilot's run(s) in the baseline condition (same aircraft and columns): "
                         "the visual delay is tested against theirs, so a simulator's extra delay can be "
                         "told from the pilot's own")
+    p.add_argument("--display", choices=DISPLAYS, default="compensatory",
+                   help="what the pilot saw: compensatory (default; the error alone) or pursuit "
+                        "(target and output apart: the motion test fits the feedforward humans add)")
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
     from ._options import add_run_options, add_seed, add_terms, field_terms
@@ -53,8 +58,8 @@ def _diagnose(args) -> int:
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     # The library checks its settings (DiagnoseConfig); cli_message names the flags.
-    cfg = replace(DiagnoseConfig(), **{k: v for k, v in (("alpha", args.alpha),
-                                                         ("max_effects", args.max_effects)) if v is not None})
+    cfg = replace(DiagnoseConfig(), display=args.display,
+                  **{k: v for k, v in (("alpha", args.alpha), ("max_effects", args.max_effects)) if v is not None})
     candidates = None
     if args.candidates is not None:
         candidates = [c.strip() for c in args.candidates.split(",") if c.strip()]

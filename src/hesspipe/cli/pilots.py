@@ -6,7 +6,7 @@ from __future__ import annotations
 # (tests/test_api.py), and each command loads only its own stage.
 import sys
 
-from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
+from ..core.choices import CRITERIA, DEFAULT_CRITERION, DISPLAYS, OPTIMIZERS
 
 
 def register(sub) -> None:
@@ -48,6 +48,9 @@ def register(sub) -> None:
     p.add_argument("--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
                    help=f"fit criterion (default {DEFAULT_CRITERION}, as identify): paper = Eq. 10 "
                         "control PSD; df = describing-function error; output = control output error")
+    p.add_argument("--display", choices=DISPLAYS, default="compensatory",
+                   help="what the pilots saw: compensatory (default; the error alone) or pursuit "
+                        "(target and output apart: the motion test fits the feedforward humans add)")
     p.add_argument("--start", choices=("warm", "random"), default="warm",
                    help="warm (default): the expanded search starts from the original's optimum "
                         "plus fixed Km and the models exchange optima, so improvements measure Km, "
@@ -73,7 +76,8 @@ def _run(args) -> int:
     # The library checks the settings (CompareSettings) and workers (run_batch); cli_message
     # names the flags. Both are checked before any run is read.
     settings = CompareSettings(seed=args.seed, optimizer=args.optimizer, passes=args.passes, start=args.start,
-                               restarts=args.restarts, benchmark=args.benchmark, criterion=args.criterion)
+                               restarts=args.restarts, benchmark=args.benchmark, criterion=args.criterion,
+                               display=args.display)
     if args.workers is not None:
         from ..pilots.batch import check_workers
 

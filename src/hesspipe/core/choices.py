@@ -13,3 +13,8 @@ DEFAULT_CRITERION = "df"
 
 OPTIMIZERS = ("apid", "scipy", "differential_evolution")
 """Optimizers of :func:`hesspipe.identification.fit.identify` (the paper's APID first)."""
+
+DISPLAYS = ("compensatory", "pursuit")
+"""What the pilot saw: the error alone (the paper's task), or the target and the output apart,
+where humans add a feedforward path on the target (the motion test's nuisance,
+:data:`hesspipe.identification.motion_test.FEEDFORWARD`)."""

@@ -383,7 +383,8 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
     # target (bench_diagnose.py --paired --repeats 3, report seeds), 0 of 40 without.
     pool = bool(repeat_runs) and forcing != "disturbance and target"
     t = safe_motion_test([run, *repeat_runs] if pool else run, plants, start, k=k,
-                         max_delay=cfg.max_pilot_delay if baseline_run is None else None)
+                         max_delay=cfg.max_pilot_delay if baseline_run is None else None,
+                         display=cfg.display)
     if not t.get("available"):
         if baseline_run is not None:
             raise HesspipeError(f"{run.source or run.id}: a baseline run was given, but this run has no "
@@ -404,7 +405,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
         own = cfg.max_pilot_delay
     else:
         bases = list(baseline_run)
-        tb = safe_motion_test(bases[0], plants, start, k=k)
+        tb = safe_motion_test(bases[0], plants, start, k=k, display=cfg.display)
         if not tb.get("available"):
             raise HesspipeError(f"{bases[0].source or bases[0].id}: the baseline run has no "
                                 f"describing function to read the pilot's delay from "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..core.choices import DISPLAYS
 from ..core.config import Fields, Settings
 from ..identification.motion_test import ALPHA as MOTION_ALPHA
 
@@ -70,6 +71,10 @@ class DiagnoseConfig(Settings):
     motion_alpha : float
         Significance level of the describing-function test of motion feedback
         (:mod:`hesspipe.diagnose.motion`).
+    display : {"compensatory", "pursuit"}
+        What the pilot saw: the error alone, or target and output apart (the motion test
+        then fits the feedforward humans add on the target;
+        :func:`hesspipe.identification.motion_test.motion_test`).
     """
 
     TABLE = "diagnose"
@@ -113,6 +118,7 @@ class DiagnoseConfig(Settings):
     retest_delay_sd: float = 0.02
     #: Share of the control power between multisine lines from which the remnant is named.
     remnant_share: float = 0.01
+    display: str = "compensatory"
 
     def _checked(self, f: Fields) -> dict:
         # Validated on construction (Python, the command line and TOML alike); from_table maps.
@@ -144,7 +150,8 @@ class DiagnoseConfig(Settings):
                     motion_alpha=f.number("motion_alpha", min=0.0, max=0.5, strict_min=True),
                     max_pilot_delay=f.number("max_pilot_delay", min=0.0, max=2.0),
                     retest_delay_sd=f.number("retest_delay_sd", min=0.0, max=1.0),
-                    remnant_share=f.number("remnant_share", min=0.0, max=1.0))
+                    remnant_share=f.number("remnant_share", min=0.0, max=1.0),
+                    display=f.string("display", choices=DISPLAYS))
 
 
 

@@ -117,6 +117,38 @@ def vestibular_nm_tf(motion_tf, p: dict) -> tuple:
     return series(tuple(motion_tf), SCC_MULTIMODAL, nm_tf(p["wn"], p["zn"]))
 
 
+FF_LAG_S = 0.2
+"""Time constant of the feedforward path's second-order low-pass, s (Drop et al.'s pursuit
+model: a smoothed inverse of the controlled element, 0.1-0.3 s)."""
+
+
+def feedforward_nm_tf(plant_yc, kff: float, p: dict) -> tuple:
+    """Pursuit feedforward on the target without delay: ``Kff Yc^-1 Y_NM / (1 + T s)^2``
+    (one block; T = :data:`FF_LAG_S`).
+
+    A pursuit display shows the target beside the output, and humans then add a path from
+    the target that approximates the controlled element's inverse (Wasicko et al. 1966;
+    Drop et al. 2013). Compensatory displays (the error alone) have none.
+
+    Parameters
+    ----------
+    plant_yc : (num, den)
+        The controlled element the pilot inverts (its nominal model), descending powers of s.
+    kff : float
+        Feedforward gain, a share of the full inverse (1: perfect inversion).
+    p : dict
+        ``wn`` (rad/s), ``zn``.
+
+    Returns
+    -------
+    (num, den)
+        Descending powers of s, control per unit target.
+    """
+    num, den = (np.atleast_1d(np.asarray(c, float)) for c in plant_yc)
+    lag = np.polymul([FF_LAG_S, 1.0], [FF_LAG_S, 1.0])
+    return series((kff * den, num), nm_tf(p["wn"], p["zn"]), ([1.0], lag))
+
+
 def inner_loop(p: dict, w) -> np.ndarray:
     """``G = Y_NM / (1 + Y_NM Y_PF)`` of the hess pilot at `w`.
 

@@ -52,6 +52,9 @@ class Wiring:
     gain_drift : bool
         The visual path's gain is multiplied by a per-step factor (``kv``, the pilot's
         within-run gain variation); off, the stepper is the time-invariant one.
+
+    A precision pilot on a pursuit display has block ``ffnm`` too: the feedforward path on
+    the target, delayed like the error.
     """
 
     h: float
@@ -119,6 +122,10 @@ def _source(wr: Wiring) -> str:
     pilot_block = "nm" if hess else "eqnm"
     body.append(f"delta = {_output(pilot_block, b[pilot_block], ['0.0'])}")
     vestibular = not hess and b.get("vnm") is not None
+    feedforward = not hess and b.get("ffnm") is not None
+    if feedforward:
+        # Strictly proper like the vestibular block: its state alone gives its output.
+        body.append(f"delta = delta + ({_output('ffnm', b['ffnm'], ['0.0'])})")
     if vestibular:
         # Strictly proper: its output is its state's, so the current y is not needed yet.
         body.append(f"delta = delta - {_lit(wr.Km)}*({_output('vnm', b['vnm'], ['0.0'])})")
@@ -135,7 +142,10 @@ def _source(wr: Wiring) -> str:
     body.append(f"y = {_output('plant', b['plant'], ['v', 'wind'])}")
     body.append("e = rk - y")
     body.append("ep = e + n" if wr.remnant_at == "error" else "ep = e")
-    body += ["ed = buf[bi]", "buf[bi] = ep", "bi += 1", f"if bi == {wr.delay_steps}: bi = 0"]
+    body += ["ed = buf[bi]", "buf[bi] = ep"]
+    if feedforward:
+        body += ["rd = rbuf[bi]", "rbuf[bi] = rk"]
+    body += ["bi += 1", f"if bi == {wr.delay_steps}: bi = 0"]
     if wr.gain_drift:
         body.append("ed = kv[k]*ed")
     updates = _update("rem", b["rem"], ["wk"])
@@ -155,6 +165,8 @@ def _source(wr: Wiring) -> str:
         updates += _update("nm", b["nm"], ["nmin"]) + _update("pf", b["pf"], ["delta"])
     else:
         updates += _update("eqnm", b["eqnm"], ["ed"])
+        if feedforward:
+            updates += _update("ffnm", b["ffnm"], ["rd"])
         if vestibular:
             if wr.motion_delay_steps:
                 body += ["yv = mbuf[mi]", "mbuf[mi] = y", "mi += 1",
@@ -168,7 +180,10 @@ def _source(wr: Wiring) -> str:
     body += ["ys[k] = y", "us[k] = u", "acts[k] = a"] + updates
     lines = ["def run(r, d, w, g, N, kv=None):"]
     lines += ["    " + s for s in init]
-    lines += ["    rlp = 0.0", f"    buf = [0.0]*{wr.delay_steps}", "    bi = 0",
+    lines += ["    rlp = 0.0", f"    buf = [0.0]*{wr.delay_steps}", "    bi = 0"]
+    if feedforward:
+        lines.append(f"    rbuf = [0.0]*{wr.delay_steps}")
+    lines += [
               f"    mbuf = [0.0]*{max(wr.motion_delay_steps, 1)}", "    mi = 0",
               "    ys = [0.0]*N", "    us = [0.0]*N", "    acts = [0.0]*N", "    for k in range(N):"]
     lines += ["        " + s for s in body]

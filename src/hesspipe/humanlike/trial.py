@@ -36,7 +36,7 @@ EFFECT_REMNANT = (0.40, 0.60)
 OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=10,
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
                remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
-               pilot_params=None, gain_drift=0.0, drift_tc=10.0, line_bins=None)
+               pilot_params=None, gain_drift=0.0, drift_tc=10.0, line_bins=None, feedforward=0.0)
 
 
 @dataclass(frozen=True)
@@ -220,7 +220,10 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         log-spaced disturbance lines with each target line one bin above; else a pair of
         increasing line numbers, disturbance then target, multiples of ``1 / T_m`` Hz:
         a sparser layout of one's own, as two-input experiments use; a tracking-only task
-        takes the first set).
+        takes the first set), ``feedforward`` (0: a compensatory display; else a pursuit
+        display's feedforward gain on the target, a share of the controlled element's
+        inverse, :func:`~.pilots.feedforward_nm_tf`; precision pilots with a target only;
+        the truth's describing function and crossover leave it out).
 
     Raises
     ------
@@ -344,6 +347,15 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     name = opts["name"] or f"trial-{seed}"
     options = {k: opts[k] for k in ("fs", "T_m", "run_in", "fade", "fine_ratio", "n_lines",
                                     "output", "tau_m")}
+    kff = opts["feedforward"]
+    if kff:   # only when asked: the default draws stay byte-identical
+        if isinstance(kff, bool) or not isinstance(kff, (int, float)) or not 0.0 < kff <= 1.5:
+            raise HesspipeError(f"feedforward: expected a gain in (0, 1.5] (share of the inverse "
+                                f"controlled element), got {kff!r}")
+        if p["structure"] != "precision" or task == "disturbance":
+            raise HesspipeError("feedforward: a pursuit path needs a precision pilot and a target "
+                                "(task 'tracking' or 'both')")
+        options["feedforward"] = float(kff)
     options.update(w_corner=corner, d_rms=dist.rms() if dist is not None else d_rms,
                    pilot_sign=sign, plant_order=order, gain_drift=drift, drift_tc=drift_tc,
                    drift_seed=int(derive_seed(seed, "gain-drift")))
@@ -370,6 +382,9 @@ def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
                                     "neuromuscular must be strictly proper; the motion path "
                                     "has too many zeros")
             blocks["vnm"] = zoh(ss_from_tf(num, den), h)
+        if spec.options.get("feedforward"):
+            ff = pilots.feedforward_nm_tf(spec.plant.nominal_yc, spec.options["feedforward"], p)
+            blocks["ffnm"] = zoh(ss_from_tf(*ff), h)
     else:
         blocks["nm"] = zoh(ss_from_tf(*pilots.nm_tf(p["wn"], p["zn"])), h)
         blocks["pf"] = discretise(ss_from_tf(*pilots.pf_tf(p)), h)

@@ -62,8 +62,10 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy import stats
 
+from ..core.choices import DISPLAYS
 from ..core.errors import HesspipeError
 from ..core.formats import as_runs
+from ..pilot.blocks import from_tf
 from ..pilot.crossover import gain_scale
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block, with_motion_path
@@ -100,6 +102,18 @@ the visual delay; SPEC.md "Describing functions"). At 0.4 s the delayed path abs
 error of JSBSim-flown baselines: motion named on 2 of 16 static pilots, both with the delay
 on its bound (0 of 16 at 0.25 s; benchmarks/bench_fly_pilot.py, two-input forcing)."""
 
+FEEDFORWARD = {"Kff": (2.0, 0.0, 20.0), "T_ff": (0.15, 0.05, 0.5)}
+"""A pursuit display's feedforward nuisance, name: (start, lower, upper): the path
+``Kff Yc^-1 e^(-tau0 s) / (1 + T_ff s)^2`` from the target through the neuromuscular system
+(Wasicko et al. 1966; Drop et al. 2013: a smoothed inverse of the controlled element, gain
+0.5-1, time constant 0.1-0.3 s, the visual delay). Kff's bound is wide because the Hess
+loop's proprioceptive return difference divides the path. On the independent generator's
+pursuit pilots (feedforward 0.7 of the inverse, double integrator, yaw angle, seeds 0-19)
+diagnose with the compensatory test named motion on 5 of 20 no-motion runs and 15 of 20
+motion runs, with this one on 0 of 20 and 12 of 20 (benchmarks/bench_diagnose.py
+--feedforward 0.7 [--display pursuit]); on compensatory pilots it costs nothing there (18/19
+and 0/20 either way, seeds 0-9)."""
+
 VISUAL_EQUALISER = {1: ("TI_v", 0.2, 1.0), 2: ("TL_v", 1.0, 5.0)}
 """The test's visual equaliser by Hess order k: (name, start, upper bound in s) of a lag
 ``1/(1 + TI_v s)`` (k = 1) or a lead ``1 + TL_v s`` (k = 2) on the visual path, a
@@ -112,31 +126,38 @@ no-motion runs of the generator's precision pilots (single and double integrator
 display, development seeds 100-109), and a lag's phase was read as 0.1 s of extra delay."""
 
 
-def _predict(params, model, cab, s, E, Y):
+def _predict(params, model, cab, s, E, Y, yc_inv=None):
     # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
     # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model),
-    # the visual path with the test's equaliser (VISUAL_EQUALISER; 0 when absent).
+    # the visual path with the test's equaliser (VISUAL_EQUALISER; 0 when absent); on a
+    # pursuit display (yc_inv, the controlled element's inverse at s) also + NM FF R with
+    # R = E + Y (FEEDFORWARD).
     loop = with_motion_path(model.loop(params), cab)
     nm = loop.neuromuscular.response(s)
     ves = loop.vestibular.response(s) * np.exp(-s * params.get("tau_m", 0.0))
     vis = loop.visual.response(s) * (1.0 + s * params.get("TL_v", 0.0)) \
         / (1.0 + s * params.get("TI_v", 0.0))
-    return nm * (vis * E - ves * Y) / loop.return_difference(s, None)
+    drive = vis * E - ves * Y
+    if yc_inv is not None:
+        drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("tau0", 0.0)) \
+            / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
+    return nm * drive / loop.return_difference(s, None)
 
 
-def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, w):
+def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w):
     """Bounded least squares of the weighted complex residual; best of `starts`.
 
     With `groups` (the run of each line, repeated runs pooled), the second and later runs'
     predictions are each scaled by their own gain, solved in closed form at every step
-    (variable projection): a human's gains move by 5-15 % between runs.
+    (variable projection): a human's gains move by 5-15 % between runs. `yc_inv` (the
+    controlled element's inverse at the lines, or None) adds a pursuit display's feedforward.
     """
     runs = [] if groups is None else [groups == g for g in np.unique(groups)[1:]]
 
     def resid(x):
         p = dict(base)
         p.update(zip(free, x))
-        pred = _predict(p, model, cab, s, E, Y)
+        pred = _predict(p, model, cab, s, E, Y, yc_inv)
         for m in runs:
             ww = w[m] ** 2
             den = float(np.sum(ww * np.abs(pred[m]) ** 2))
@@ -273,7 +294,7 @@ def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: 
 
 def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                 band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
-                interval: float | None = None) -> dict:
+                interval: float | None = None, display: str = "compensatory") -> dict:
     """Likelihood-ratio test of motion feedback on one pilot's describing-function lines.
 
     Parameters
@@ -301,6 +322,10 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         Confidence level (e.g. 0.95) of a profile-likelihood interval of Km
         (:func:`_km_profile`; about twenty more fits, so compare-pilots asks for it and
         diagnose does not).
+    display : {"compensatory", "pursuit"}
+        What the pilot saw. "pursuit" (target and output shown apart) adds the feedforward
+        path humans then use on the target (:data:`FEEDFORWARD`), fitted with the original
+        model and held by the expanded, on records with target lines.
 
     Returns
     -------
@@ -317,7 +342,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         parameters), ``standard_errors_original`` (of the original's free
         parameters; diagnose reads the pilot's own delay from them) and
         ``delay_bound`` (None without `max_delay`; else
-        :func:`_delay_bound`'s test of the original's delay against it).
+        :func:`_delay_bound`'s test of the original's delay against it), ``display`` and
+        ``feedforward`` (the fitted ``Kff`` and ``T_ff``; None unless a pursuit display
+        with target lines).
     """
 
     runs = as_runs(run)
@@ -342,7 +369,25 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     x_start = [base[name] for name in free]
     starts = [x_start] + [[*x_start[:3], tau, *x_start[4:]] for tau in (0.15, 0.25, 0.35)] \
         + [[*x_start[:-1], eq_start]]
-    data = (cab, ld.s, ld.E, ld.Y, ld.U, ld.groups)
+    yc_inv = None
+    if display not in DISPLAYS:
+        raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
+    R = ld.E + ld.Y
+    if display == "pursuit" and float(np.sum(np.abs(R) ** 2)) > 1e-6 * float(np.sum(np.abs(ld.E) ** 2)):
+        # The feedforward is free in every fit, original and expanded alike (inserted before
+        # the equaliser, which stays last): held at the original's optimum, as the
+        # equaliser is, it took up the vestibular path of 4 of 10 double-integrator motion
+        # runs (generator, pursuit pilots, seed tag "ff": p 0.03-1).
+        yc_inv = 1.0 / from_tf(plants.control_to_output).response(ld.s)
+        at = len(free) - 1
+        free[at:at] = list(FEEDFORWARD)
+        lo = np.insert(lo, at, [FEEDFORWARD[n_][1] for n_ in FEEDFORWARD])
+        hi = np.insert(hi, at, [FEEDFORWARD[n_][2] for n_ in FEEDFORWARD])
+        base.update({n_: FEEDFORWARD[n_][0] for n_ in FEEDFORWARD})
+        x_start = [base[name] for name in free]
+        starts = [x_start] + [[*x_start[:3], tau, *x_start[4:]] for tau in (0.15, 0.25, 0.35)] \
+            + [[*x_start[:-1], eq_start]] + [[*x_start[:at], 0.0, *x_start[at + 1:]]]
+    data = (cab, ld.s, ld.E, ld.Y, ld.U, ld.groups, yc_inv)
 
     # An unweighted first fit serves as one more start (it no longer sets the weights).
     _, p0, _ = _fit(original, base, free, lo, hi, starts, *data, np.ones(lines.size))
@@ -430,19 +475,20 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
             "Km_se": km_se, "Km_interval": km_interval, "interval_level": interval,
             "significant": bool(p_value < ALPHA),
             "alternatives": {"+".join(t[5]): t[0] for t in tests},
-            "delay_bound": delay_bound,
+            "delay_bound": delay_bound, "display": display,
+            "feedforward": None if yc_inv is None else {n_: float(p_e[n_]) for n_ in FEEDFORWARD},
             "degrees_of_freedom": dof}
 
 
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                      band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
-                     interval: float | None = None) -> dict:
+                     interval: float | None = None, display: str = "compensatory") -> dict:
     """:func:`motion_test`, with a failure of the test reported in the result, not raised
     (a pilot's identification stays valid when its describing function cannot be tested).
 
     Parameters
     ----------
-    run, plants, start, k, band_hz, max_delay, interval
+    run, plants, start, k, band_hz, max_delay, interval, display
         As :func:`motion_test`.
 
     Returns
@@ -452,6 +498,6 @@ def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     """
     try:
         return motion_test(run, plants, start, k=k, band_hz=band_hz, max_delay=max_delay,
-                           interval=interval)
+                           interval=interval, display=display)
     except (HesspipeError, ValueError, np.linalg.LinAlgError) as exc:
         return {"available": False, "reason": f"motion test failed: {exc}"}

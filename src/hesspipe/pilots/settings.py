@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
+from ..core.choices import CRITERIA, DEFAULT_CRITERION, DISPLAYS, OPTIMIZERS
 from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
 from ..core.formats import _parse_columns, record_samples
@@ -32,7 +32,7 @@ SIMULATORS = ("jsbsim", "fft")
 #: (kept so that their studies repeat).
 COHORT_DRAWS = ("crossover_model", "table1")
 #: Identification settings that :class:`PilotsConfig` and :class:`CompareSettings` share by name.
-_SHARED = ("optimizer", "passes", "km_fixed", "start", "restarts", "benchmark", "criterion")
+_SHARED = ("optimizer", "passes", "km_fixed", "start", "restarts", "benchmark", "criterion", "display")
 
 
 def _seed(f: Fields, key: str) -> int:
@@ -47,7 +47,8 @@ def _identification(f: Fields, band: str) -> dict:
     return {band: lo_hi, "optimizer": f.string("optimizer", choices=OPTIMIZERS),
             "passes": f.integer("passes", min=1), "km_fixed": f.number("km_fixed", None, min=0.0),
             "start": f.string("start", choices=STARTS), "restarts": f.integer("restarts", min=1),
-            "benchmark": f.boolean("benchmark"), "criterion": f.string("criterion", choices=CRITERIA)}
+            "benchmark": f.boolean("benchmark"), "criterion": f.string("criterion", choices=CRITERIA),
+            "display": f.string("display", choices=DISPLAYS)}
 
 
 @dataclass(frozen=True)
@@ -99,6 +100,10 @@ class CompareSettings(Settings):
         Fit criterion of every identification (:data:`hesspipe.identification.criteria.CRITERIA`):
         "paper" (Eq. 10; the library's default, the paper's study) or a phase-aware
         one ("df", the command line's and the pipeline's default).
+    display : str
+        What the pilots saw (:data:`hesspipe.core.choices.DISPLAYS`): "compensatory" (the
+        error alone) or "pursuit" (target and output apart: the motion test fits the
+        feedforward humans then add, :func:`hesspipe.identification.motion_test.motion_test`).
     """
 
     seed: int = 0
@@ -111,6 +116,7 @@ class CompareSettings(Settings):
     restarts: int = 2
     benchmark: bool = False
     criterion: str = "paper"
+    display: str = "compensatory"
 
     def _checked(self, f: Fields) -> dict:
         return dict(seed=_seed(f, "seed"), k=f.integer("k", None, min=1, max=2),
@@ -172,6 +178,8 @@ class PilotsConfig(Settings):
     criterion : str
         Fit criterion (see :class:`CompareSettings`); default
         :data:`hesspipe.identification.criteria.DEFAULT_CRITERION`, as the identify command.
+    display : str
+        What the pilots saw, "compensatory" or "pursuit" (see :class:`CompareSettings`).
     cohort : str
         How the synthetic pilots are drawn (:data:`COHORT_DRAWS`): "crossover_model"
         (default; within the crossover-model limits, :mod:`hesspipe.pilots.cohort`) or "table1".
@@ -203,6 +211,7 @@ class PilotsConfig(Settings):
     resample: bool = False
     simulator: str = "jsbsim"
     criterion: str = DEFAULT_CRITERION
+    display: str = "compensatory"
     cohort: str = "crossover_model"
     forcing: str = "paper"
 
@@ -248,7 +257,7 @@ class PilotsConfig(Settings):
         CompareSettings
             With ``band`` = :attr:`band_hz` (Hz) and the shared settings
             (optimizer, passes, km_fixed, start, restarts, benchmark,
-            criterion) copied by name.
+            criterion, display) copied by name.
         """
         return CompareSettings(seed=self.seed if self.seed is not None else seed, band=self.band_hz,
                                **{name: getattr(self, name) for name in _SHARED})

@@ -1,0 +1,78 @@
+"""The motion test on a pursuit display (SYNTHETIC: independent generator trials with a
+feedforward path on the target, read back from the files its logger writes).
+
+On a pursuit display humans add a feedforward on the target. A double integrator's
+feedforward (s^2 Yc^-1) resembles a vestibular path enough that the compensatory test named
+motion on no-motion runs; told the display, the test fits the feedforward too.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from hesspipe.cli import main
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_plants, read_run
+from hesspipe.core.seeds import derive_seed
+from hesspipe.diagnose.settings import DiagnoseConfig
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.humanlike.forcing import SPARSE_LAYOUT
+from hesspipe.identification.motion_test import motion_test
+from hesspipe.pilot.hess import table1
+
+
+def _trial(folder, effects, seed, task="both", feedforward=0.7):
+    spec = draw_trial("K/s2", derive_seed(seed, "ff", "K/s2", ",".join(effects)), task=task, pilot="precision",
+                      effects=effects, output="angle", tau_m=0.15, name="t",
+                      **({"feedforward": feedforward} if feedforward else {}), **SPARSE_LAYOUT)
+    run = read_run(write_trial(folder, simulate_trial(spec)))
+    return run, read_plants(folder / "plants.json")
+
+
+def test_pursuit_feedforward_is_not_read_as_motion(tmp_path):
+    # Seed 9: the compensatory test named motion at p = 0.0004 on this no-motion run.
+    run, plants = _trial(tmp_path, (), 9)
+    comp = motion_test(run, plants, table1(2), k=2)
+    purs = motion_test(run, plants, table1(2), k=2, display="pursuit")
+    assert comp["p_value"] < 0.01 and comp["feedforward"] is None
+    assert purs["p_value"] > 0.05
+    assert set(purs["feedforward"]) == {"Kff", "T_ff"} and purs["feedforward"]["Kff"] > 0
+    assert purs["degrees_of_freedom"] == comp["degrees_of_freedom"] - 2
+
+
+def test_pursuit_test_still_names_motion(tmp_path):
+    run, plants = _trial(tmp_path, ("motion_feedback",), 4)
+    assert motion_test(run, plants, table1(2), k=2, display="pursuit")["p_value"] < 1e-6
+
+
+def test_without_a_target_the_display_changes_nothing(tmp_path):
+    run, plants = _trial(tmp_path, (), 9, task="disturbance", feedforward=None)
+    comp, purs = (motion_test(run, plants, table1(2), k=2, display=d) for d in ("compensatory", "pursuit"))
+    assert purs["feedforward"] is None and purs["p_value"] == comp["p_value"]
+
+
+def test_display_is_checked_and_reaches_diagnose(tmp_path):
+    run, plants = _trial(tmp_path, (), 9)
+    with pytest.raises(HesspipeError, match="display"):
+        motion_test(run, plants, table1(2), k=2, display="head-up")
+    with pytest.raises(HesspipeError, match="display"):
+        DiagnoseConfig(display="head-up")
+    out = tmp_path / "d.json"
+    assert main(["diagnose", run.source, "--plants", str(tmp_path / "plants.json"), "--display", "pursuit",
+                 "--json", str(out)]) == 0
+    d = json.loads(out.read_text())
+    assert "motion_feedback" not in d["named_effects"] and d["config"]["display"] == "pursuit"
+
+
+def test_compare_pilots_is_told_the_display(tmp_path):
+    folder = tmp_path / "runs"
+    run, _ = _trial(folder, (), 9)
+    out = tmp_path / "c.json"
+    assert main(["pilots", str(folder), "--plants", str(folder / "plants.json"), "--display", "pursuit",
+                 "--passes", "2", "--restarts", "1", "--json", str(out)]) == 0
+    c = json.loads(out.read_text())
+    assert c["settings"]["display"] == "pursuit"
+    t = c["pilots"][0]["motion_test"]
+    assert t["display"] == "pursuit" and t["feedforward"]["Kff"] > 0 and t["p_value"] > 0.05
