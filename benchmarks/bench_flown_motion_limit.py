@@ -102,14 +102,14 @@ def pair_rss(data, w, k, starts_o, starts_e, tau=False):
         lo[0], hi[0] = -big, 0.0
     xs = [[q[n] for n in free] for q in starts_o]
     xs += [[*xs[0][:3], t, *xs[0][4:]] for t in (0.15, 0.25, 0.35)]
-    rss_o, _, _ = _fit(original, base, free, lo, hi, xs, *data, None, w)
+    rss_o, _, _ = _fit(original, base, free, lo, hi, xs, *data, None, None, w)
     extra = ["Km", "tau_m"] if tau else ["Km"]
     lo_e = np.append(lo, [0.0] * len(extra))
     hi_e = np.append(hi, [big, TAU_M_MAX][:len(extra)])
     xe = [[q[n] for n in free] + [q.get("Km", 0.0) * f] + ([q.get("tau_m", 0.0)] if tau else [])
           for q in starts_e for f in (1.0, 0.3, 3.0)]
-    rss_e, q_e, _ = _fit(expanded, {**base, "Km": 0.0, "tau_m": 0.0}, free + extra, lo_e, hi_e, xe, *data, None, w)
-    rss_o = min(rss_o, _fit(original, base, free, lo, hi, [[q_e[n] for n in free]], *data, None, w)[0])
+    rss_e, q_e, _ = _fit(expanded, {**base, "Km": 0.0, "tau_m": 0.0}, free + extra, lo_e, hi_e, xe, *data, None, None, w)
+    rss_o = min(rss_o, _fit(original, base, free, lo, hi, [[q_e[n] for n in free]], *data, None, None, w)[0])
     return rss_o, min(rss_e, rss_o)
 
 

@@ -93,7 +93,7 @@ def oracle(run, clean, plants, k):
     km = [p_e["Km"], 0.5 * abs(p_o["Ke"]), 0.1 * abs(p_o["Ke"]), 1e-6]
 
     def fits(UU, EE, YY, w, seeds_o, seeds_e):
-        args = (cab, s[lines], EE[lines], YY[lines], UU[lines], None, w)   # one run: no groups
+        args = (cab, s[lines], EE[lines], YY[lines], UU[lines], None, None, w)   # one run: no groups, no feedforward
         starts = [[q[n] for n in free] for q in seeds_o]
         starts += [[*x[:3], tau, *x[4:]] for x in starts[:1] for tau in (0.15, 0.25, 0.35)]
         rss_o, q_o, _ = _fit(original, p_o, free, lo, hi, starts, *args)
