@@ -366,9 +366,6 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                   + [0.0])
     hi = np.array([big if sign > 0 else 0.0, 100.0, 10.0, 0.6, 60.0, 2.0] + ([20.0] if k == 2 else [])
                   + [eq_hi])
-    x_start = [base[name] for name in free]
-    starts = [x_start] + [[*x_start[:3], tau, *x_start[4:]] for tau in (0.15, 0.25, 0.35)] \
-        + [[*x_start[:-1], eq_start]]
     yc_inv = None
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
@@ -384,9 +381,12 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         lo = np.insert(lo, at, [FEEDFORWARD[n_][1] for n_ in FEEDFORWARD])
         hi = np.insert(hi, at, [FEEDFORWARD[n_][2] for n_ in FEEDFORWARD])
         base.update({n_: FEEDFORWARD[n_][0] for n_ in FEEDFORWARD})
-        x_start = [base[name] for name in free]
-        starts = [x_start] + [[*x_start[:3], tau, *x_start[4:]] for tau in (0.15, 0.25, 0.35)] \
-            + [[*x_start[:-1], eq_start]] + [[*x_start[:at], 0.0, *x_start[at + 1:]]]
+    x_start = [base[name] for name in free]
+    starts = [x_start] + [[*x_start[:3], tau, *x_start[4:]] for tau in (0.15, 0.25, 0.35)] \
+        + [[*x_start[:-1], eq_start]]
+    if yc_inv is not None:   # and from no feedforward
+        at = free.index(next(iter(FEEDFORWARD)))
+        starts.append([*x_start[:at], 0.0, *x_start[at + 1:]])
     data = (cab, ld.s, ld.E, ld.Y, ld.U, ld.groups, yc_inv)
 
     # An unweighted first fit serves as one more start (it no longer sets the weights).
