@@ -6,7 +6,7 @@ generator's crossover ranges is redrawn with the next sub-seed) (fine-step time-
 shares no modelling code with hesspipe's pilot model; multisine disturbance lines,
 remnant 10-40 %, tau 0.15-0.35 s): one with motion feedback in every pilot (Km = 0.2-1.0
 times Ke), one without. Each cohort goes through ``compare_pilots`` (APID, 2 restarts);
-printed: the verdict, its binomial p, Fisher's combined p, the per-pilot share of the
+printed: the verdict, its median-pilot p, the binomial p, Fisher's combined p, the per-pilot share of the
 describing-function misfit that motion feedback removes with its p-value, and, for
 contrast, the PSD-fitness improvement 1 - expanded/original of the paper's criterion.
 
@@ -134,7 +134,8 @@ def main(argv=None) -> None:
                 tally[label][0] += v["answer"] == ("yes" if label == "motion" else "no")
                 tally[label][1] += 1
                 print(f"\nplant {plant} seed {seed} cohort {label}: {v['sentence']}")
-                print(f"  binomial p {v.get('binomial_p', float('nan')):.3g}, Fisher p "
+                print(f"  median-pilot p {v.get('majority_p', float('nan')):.3g} (the verdict's test), "
+                      f"binomial p {v.get('binomial_p', float('nan')):.3g}, Fisher p "
                       f"{v.get('fisher_p', float('nan')):.3g}, {dt:.0f} s for {args.n} pilots"
                       + (f" x {args.runs} runs" if args.runs > 1 else ""))
                 for p in comp.pilots:

@@ -3,7 +3,7 @@
 ``bench_motion_limit`` and ``bench_flown_motion_limit`` call ``motion_test``'s private
 ``_fit`` and ``_predict`` to build their oracle; a change of those signatures broke both
 once without any test noticing. ``bench_drift_sidebands`` reads the generator's realised gain
-wander. One seed each, the cheapest case.
+wander. ``bench_cohort_rule`` draws cohorts through the verdict. One seed each, the cheapest case.
 """
 
 from __future__ import annotations
@@ -11,6 +11,8 @@ from __future__ import annotations
 import importlib.util
 import re
 from pathlib import Path
+
+import numpy as np
 
 BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
 
@@ -46,3 +48,15 @@ def test_drift_sidebands_runs():
     d, share = _load("bench_drift_sidebands").spread("roll", "angle", "both", 108, 0.15)
     assert d.shape == (6,) and d[0] > 0.0
     assert share[20] > 0.95 and share[20] >= share[1]
+
+
+def test_cohort_rule_rates_use_the_verdict():
+    # One strong pilot among seven plain ones: Fisher's combination says yes every time,
+    # the verdict (at least half of the pilots) never.
+    m = _load("bench_cohort_rule")
+    t = lambda p: {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": 1.0,  # noqa: E731
+                   "Km_se": 0.1, "significant": p < 0.01}
+    strong, plain = [t(1e-12)], [t(p) for p in np.linspace(0.2, 1.0, 9)]
+    r = m.rates(strong, plain, 1, 8, 40, np.random.default_rng(0))
+    assert r == {"verdict": 0.0, "fisher": 1.0, "binomial": 0.0}
+    assert m.rates(strong, plain, 8, 8, 5, np.random.default_rng(0))["verdict"] == 1.0

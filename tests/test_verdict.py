@@ -37,7 +37,7 @@ def test_verdict_yes_for_motion_cohort_no_without(tmp_path):
     assert all(t["available"] and t["n_lines"] >= 10 for t in {**yes, **no}.values())
     assert v_yes["answer"] == "yes" and v_yes["sentence"].startswith("yes: motion feedback")
     assert v_no["answer"] == "no" and v_no["sentence"].startswith("no: ")
-    assert v_yes["fisher_p"] < 0.01 < v_no["fisher_p"]
+    assert v_yes["majority_p"] < 0.01 < v_no["majority_p"]
     assert v_yes["n_significant"] >= 2 and v_no["n_significant"] <= 1
     assert v_yes["median_gain"] > v_no["median_gain"] + 0.1
 
@@ -55,9 +55,13 @@ def test_random_forcing_has_no_lines_and_an_undetermined_verdict(tmp_path):
     assert v["answer"] == "undetermined" and "no pilot" in v["sentence"]
 
 
+def _t(p):
+    return {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": 1.0, "Km_se": 0.1,
+            "significant": p < 0.01}
+
+
 def test_cohort_counts_and_binomial():
-    t = lambda p: {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": 1.0,  # noqa: E731
-                   "Km_se": 0.1, "significant": p < 0.01}
+    t = _t
     v = cohort_verdict({"a": t(0.001), "b": t(0.005), "c": t(0.5), "d": {"available": False}})
     assert v["n_tested"] == 3 and v["n_significant"] == 2
     assert v["binomial_p"] == pytest.approx(3 * 0.01 ** 2 * 0.99 + 0.01 ** 3)
@@ -65,11 +69,41 @@ def test_cohort_counts_and_binomial():
     chi = -2 * np.log([0.001, 0.005, 0.5]).sum()
     assert v["fisher_p"] == pytest.approx(np.exp(-chi / 2) * sum((chi / 2) ** j / math.factorial(j)
                                                                  for j in range(3)))
+    # The median pilot (r = 2 of 3) has p = 0.005: two or more of three uniform p-values at
+    # or below it.
+    assert v["majority_r"] == 2
+    assert v["majority_p"] == pytest.approx(3 * 0.005 ** 2 * 0.995 + 0.005 ** 3)
     assert v["answer"] == "yes"
     assert cohort_verdict({"a": t(0.04), "b": t(0.6), "c": t(0.9)})["answer"] == "no"
-    # The cohort's level is the motion test's: Fisher's p = 0.013 is a "no".
-    assert 0.01 < cohort_verdict({"a": t(0.013)})["fisher_p"] < 0.05
+    # The cohort's level is the motion test's: one pilot at p = 0.013 is a "no".
+    assert cohort_verdict({"a": t(0.013)})["majority_p"] == pytest.approx(0.013)
     assert cohort_verdict({"a": t(0.013)})["answer"] == "no"
+
+
+def test_one_atypical_pilot_does_not_decide_the_cohort():
+    """Fisher's combination says "some pilot"; the verdict asks for at least half of them."""
+    rest = [0.3, 0.45, 0.6, 0.8, 0.95, 1.0, 1.0]
+    v = cohort_verdict({f"p{i}": _t(p) for i, p in enumerate([1e-9] + rest)})
+    assert v["fisher_p"] < 0.01 < v["majority_p"]
+    assert v["answer"] == "no" and "1 of 8 pilots" in v["sentence"]
+    assert "some pilot's fit improves, not the typical pilot's" in v["sentence"]
+    # Half of them strongly, the others not at all: yes (r = 4 of 8).
+    v = cohort_verdict({f"p{i}": _t(p) for i, p in enumerate([1e-6] * 4 + [1.0] * 4)})
+    assert v["answer"] == "yes" and v["majority_r"] == 4
+    # Three of eight is not half: no, whatever their p-values.
+    v = cohort_verdict({f"p{i}": _t(p) for i, p in enumerate([1e-12] * 3 + [0.5] * 5)})
+    assert v["answer"] == "no" and v["fisher_p"] < 1e-20
+
+
+def test_median_pilot_p_is_calibrated_under_the_null():
+    """Uniform p-values: the median-pilot test rejects at most at its level."""
+    from hesspipe.pilots.verdict import median_pilot_p
+    rng = np.random.default_rng(5)
+    for n in (1, 2, 5, 8):
+        p = np.array([median_pilot_p(rng.random(n))[0] for _ in range(4000)])
+        assert np.mean(p < 0.05) <= 0.05 + 3 * math.sqrt(0.05 * 0.95 / 4000)
+    with pytest.raises(HesspipeError, match="at least one p-value"):
+        median_pilot_p([])
 
 
 def test_tracking_target_lines_drive_the_motion_test(tmp_path):
@@ -159,7 +193,7 @@ def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
     assert a["Km"] == pytest.approx(2.0) and a["Km_se"] == pytest.approx(1.0)    # mean, its se
     assert v["per_pilot"]["b"]["untested_runs"] == ["b3"]
     assert v["n_tested"] == 2 and v["n_significant"] == 1
-    assert "across the 2 pilots, 4 runs (each pilot's runs combined first; Fisher" in v["sentence"]
+    assert "for at least half of the 2 pilots, 4 runs (each pilot's runs combined first; median-pilot" in v["sentence"]
     assert "1 of 2 pilots" in v["sentence"]
     assert "1 run(s) without forcing lines" in v["sentence"]
     # Ungrouped, the same records would count four "pilots".

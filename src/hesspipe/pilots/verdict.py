@@ -5,17 +5,21 @@ diagnose), the likelihood-ratio (F) test of Km on the pilot's describing-functio
 its module docstring gives the equation and the test. Its **gain** is the share of the
 describing-function misfit that the motion path removes.
 
-Across pilots (:func:`cohort_verdict`): under "no pilot uses motion" the
-per-pilot p-values are independent and (super-)uniform, so Fisher's
-combination ``-2 Σ log p ~ χ²(2n)`` tests that null for the cohort; the verdict
-is "yes" when it is significant at alpha. Beside it: the count of individually
-significant pilots, tested against Binomial(n, alpha). (The first benchmark run
-used the binomial count as the rule; it said "no" for one of six motion
-cohorts of 8 pilots whose weak-motion pilots were each just short of
-significance, where Fisher's p was 1e-4. Fisher's rule, tried on three more
-seeds, gave one false "yes" from a pilot whose original fit had stopped in a
-local optimum: hence the exchange of optima in :func:`motion_test`. See
-benchmarks/bench_verdict.py and the README for the numbers.)
+Across pilots (:func:`cohort_verdict`) the question is the population's — does *the*
+pilot use the motion, not *some* pilot — so the verdict rests on the median pilot: an
+order-statistic test (Wilkinson 1951). With r = ceil(n/2) and p_(r) the r-th smallest
+per-pilot p-value, under "no pilot uses motion" (independent, super-uniform p) P(p_(r) <= x)
+<= P(Binomial(n, x) >= r), so ``majority_p = P(Binomial(n, p_(r)) >= r)``, and the verdict is
+"yes" when it is below alpha: at least half of the pilots show the effect. Beside it:
+Fisher's combination ``-2 Σ log p ~ χ²(2n)``, which tests "at least one pilot" and is
+reported, not decisive, and the count of individually significant pilots against
+Binomial(n, alpha). History: a binomial count rule said "no" for one of six motion cohorts
+of 8 pilots whose weak-motion pilots were each just short of significance (Fisher's p
+1e-4; the median test says yes there); Fisher's rule, the verdict before this one, let one
+atypical pilot decide: on the independent generator's no-motion pilots whose visual
+gain wanders (CV 0.3) it said "yes" for 9 % of cohorts of 8, and for 81 % of cohorts with
+one motion pilot among seven without (``benchmarks/bench_cohort_rule.py``; the README
+gives the figures).
 
 Pilots who flew a condition several times (:func:`pilot_groups` maps run ids to pilots):
 each pilot's runs are combined first, by Fisher's rule over their p-values, so that the
@@ -120,8 +124,9 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     -------
     dict
         ``answer`` ("yes", "no" or "undetermined"), ``sentence`` (the verdict in
-        words), ``fisher_p`` (Fisher's combination of the per-pilot p-values: the
-        cohort test), ``n_tested``, ``n_significant``, ``binomial_p`` (P[X ≥
+        words), ``majority_p`` (:func:`median_pilot_p`: the cohort test), ``majority_r``,
+        ``fisher_p`` (Fisher's combination of the per-pilot p-values: "at least one
+        pilot", reported), ``n_tested``, ``n_significant``, ``binomial_p`` (P[X ≥
         n_significant] for X ~ Binomial(n_tested, alpha)), ``median_gain``, ``per_pilot``
         (id → gain, p_value, significant), ``method``.
     """
@@ -130,7 +135,8 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
               "(equation error U(1+NM PF) = NM(visual E - vestibular Y), residuals scaled by the "
               "remnant level of neighbouring unforced bins; nested F test, p = 0.5 P(F > f), "
               "Km >= 0); "
-              f"cohort: Fisher's combination of the pilots' p-values, yes if p < {alpha:g}")
+              f"cohort: yes if at least half of the pilots show it, median-pilot order-statistic test "
+              f"p < {alpha:g} (Fisher's combination, reported beside it, tests 'at least one')")
     if not done:
         return {"answer": "undetermined", "n_tested": 0, "n_significant": 0, "method": method,
                 "sentence": "undetermined: no pilot's record has multisine forcing lines, so no "
@@ -139,26 +145,55 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     n_runs = len(done)
     pilots = _per_pilot(done, groups or {})
     n = len(pilots)
-    sig = sum(1 for t in pilots.values() if t["p_value"] < alpha)
+    ps = np.array([t["p_value"] for t in pilots.values()], dtype=float)
+    sig = int(np.sum(ps < alpha))
     binom_p = float(stats.binom.sf(sig - 1, n, alpha)) if sig > 0 else 1.0
-    fisher_p = float(stats.combine_pvalues([t["p_value"] for t in pilots.values()],
-                                           method="fisher").pvalue)
+    fisher_p = float(stats.combine_pvalues(ps, method="fisher").pvalue)
+    majority_p, r = median_pilot_p(ps)
     gains = np.array([t["gain"] for t in pilots.values()])
-    yes = fisher_p < alpha
+    yes = majority_p < alpha
     skipped = len(tests) - n_runs
     unit = "run(s)" if groups else "pilot(s)"
     tail = f" ({skipped} {unit} without forcing lines not tested)" if skipped else ""
     of_runs = f", {n_runs} runs" if n_runs > n else ""
     first = "each pilot's runs combined first; " if n_runs > n else ""
     claim = "improves" if yes else "does not significantly improve"
+    some = (" (evidence that some pilot's fit improves, not the typical pilot's)"
+            if not yes and fisher_p < alpha else "")
     sentence = (f"{'yes' if yes else 'no'}: motion feedback {claim} the describing-function "
-                f"fit across the {n} pilots{of_runs} ({first}Fisher's combined p = {fisher_p:.2g}); individually "
-                f"significant for {sig} of {n} pilots (p < {alpha:g}; binomial p = {binom_p:.2g}); "
+                f"fit for at least half of the {n} pilots{of_runs} ({first}median-pilot test p = "
+                f"{majority_p:.2g}); individually significant for {sig} of {n} pilots (p < {alpha:g}; "
+                f"binomial p = {binom_p:.2g}); Fisher's combined p = {fisher_p:.2g}{some}; "
                 f"median share of the misfit removed {100 * float(np.median(gains)):.0f} %{tail}")
     return {"answer": "yes" if yes else "no", "sentence": sentence, "n_tested": n,
-            "n_significant": sig, "binomial_p": binom_p, "fisher_p": fisher_p, "median_gain": float(np.median(gains)), "alpha": alpha,
+            "n_significant": sig, "binomial_p": binom_p, "majority_p": majority_p, "majority_r": r,
+            "fisher_p": fisher_p, "median_gain": float(np.median(gains)), "alpha": alpha,
             "method": method + (", a pilot's runs first combined by Fisher's rule" if groups else ""),
             "per_pilot": _per_pilot_out(tests, pilots, groups, alpha)}
+
+
+def median_pilot_p(p_values) -> tuple[float, int]:
+    """The cohort test that at least half of the pilots show the effect (Wilkinson 1951).
+
+    Parameters
+    ----------
+    p_values : array_like
+        One p-value per pilot (independent; uniform or larger under the null).
+
+    Returns
+    -------
+    p : float
+        ``P(Binomial(n, p_(r)) >= r)``: the probability, with no pilot affected, that r or
+        more of n p-values fall at or below the r-th smallest one observed.
+    r : int
+        ``ceil(n / 2)``, the order statistic tested.
+    """
+    ps = np.sort(np.asarray(p_values, dtype=float))
+    n = ps.size
+    if n == 0:
+        raise HesspipeError("median_pilot_p: expected at least one p-value, got none")
+    r = math.ceil(n / 2)
+    return float(stats.binom.sf(r - 1, n, ps[r - 1])), r
 
 
 def _per_pilot_out(tests, pilots, groups, alpha) -> dict:
