@@ -75,7 +75,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hesspipe.core.choices import DISPLAYS
+from hesspipe.core.choices import DEFAULT_DISPLAY, DISPLAYS
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
@@ -190,7 +190,7 @@ def main(argv=None) -> int:
     ap.add_argument("--feedforward", type=float, default=None, metavar="KFF",
                     help="a pursuit display: the generator's precision pilots add a feedforward path on "
                          "the target, KFF times the controlled element's inverse (tasks with a target)")
-    ap.add_argument("--display", choices=DISPLAYS, default="compensatory",
+    ap.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
                     help="what diagnose is told the pilot saw (DiagnoseConfig.display)")
     args = ap.parse_args(argv)
     split = (lambda s: [x for x in s.split(",") if x])

@@ -34,7 +34,7 @@ def _trial(folder, effects, seed, task="both", feedforward=0.7):
 def test_pursuit_feedforward_is_not_read_as_motion(tmp_path):
     # Seed 9: the compensatory test named motion at p = 0.0004 on this no-motion run.
     run, plants = _trial(tmp_path, (), 9)
-    comp = motion_test(run, plants, table1(2), k=2)
+    comp = motion_test(run, plants, table1(2), k=2, display="compensatory")
     purs = motion_test(run, plants, table1(2), k=2, display="pursuit")
     assert comp["p_value"] < 0.01 and comp["feedforward"] is None
     assert purs["p_value"] > 0.05
@@ -76,3 +76,20 @@ def test_compare_pilots_is_told_the_display(tmp_path):
     assert c["settings"]["display"] == "pursuit"
     t = c["pilots"][0]["motion_test"]
     assert t["display"] == "pursuit" and t["feedforward"]["Kff"] > 0 and t["p_value"] > 0.05
+
+
+def test_either_display_names_motion_only_when_both_tests_do(tmp_path):
+    # The no-motion pursuit run of seed 9: the compensatory test alone named it.
+    run, plants = _trial(tmp_path / "a", (), 9)
+    t = motion_test(run, plants, table1(2), k=2, display="either")
+    assert t["display"] == "either" and t["display_p"]["compensatory"] < 0.01
+    assert t["p_value"] == t["display_p"]["pursuit"] > 0.05 and not t["significant"]
+    assert t["feedforward"] is not None          # the reported fit is the pursuit one
+    # A motion run is named under both, with the larger of the two p-values.
+    run, plants = _trial(tmp_path / "b", ("motion_feedback",), 4)
+    t = motion_test(run, plants, table1(2), k=2, display="either")
+    assert t["significant"] and t["p_value"] == max(t["display_p"].values())
+    # Without a target's lines the pursuit fits are never made.
+    run, plants = _trial(tmp_path / "c", (), 9, task="disturbance", feedforward=None)
+    t = motion_test(run, plants, table1(2), k=2, display="either")
+    assert not t["target_lines"] and set(t["display_p"]) == {"compensatory"}

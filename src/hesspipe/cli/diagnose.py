@@ -6,7 +6,7 @@ from __future__ import annotations
 # (tests/test_api.py), and each command loads only its own stage.
 from dataclasses import replace
 
-from ..core.choices import DISPLAYS
+from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 
 
 def register(sub) -> None:
@@ -33,9 +33,10 @@ def register(sub) -> None:
                    help="the same pilot's run(s) in the baseline condition (same aircraft and columns): "
                         "the visual delay is tested against theirs, so a simulator's extra delay can be "
                         "told from the pilot's own")
-    p.add_argument("--display", choices=DISPLAYS, default="compensatory",
-                   help="what the pilot saw: compensatory (default; the error alone) or pursuit "
-                        "(target and output apart: the motion test fits the feedforward humans add)")
+    p.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
+                   help=f"what the pilot saw (default {DEFAULT_DISPLAY}): compensatory (the error alone), "
+                        "pursuit (target and output apart: the motion test fits the feedforward humans "
+                        "add) or either (not known: motion only if the test finds it for both)")
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
     from ._options import add_run_options, add_seed, add_terms, field_terms

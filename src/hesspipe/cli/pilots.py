@@ -6,7 +6,7 @@ from __future__ import annotations
 # (tests/test_api.py), and each command loads only its own stage.
 import sys
 
-from ..core.choices import CRITERIA, DEFAULT_CRITERION, DISPLAYS, OPTIMIZERS
+from ..core.choices import CRITERIA, DEFAULT_CRITERION, DEFAULT_DISPLAY, DISPLAYS, OPTIMIZERS
 
 
 def register(sub) -> None:
@@ -48,9 +48,10 @@ def register(sub) -> None:
     p.add_argument("--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
                    help=f"fit criterion (default {DEFAULT_CRITERION}, as identify): paper = Eq. 10 "
                         "control PSD; df = describing-function error; output = control output error")
-    p.add_argument("--display", choices=DISPLAYS, default="compensatory",
-                   help="what the pilots saw: compensatory (default; the error alone) or pursuit "
-                        "(target and output apart: the motion test fits the feedforward humans add)")
+    p.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
+                   help=f"what the pilots saw (default {DEFAULT_DISPLAY}): compensatory (the error alone), "
+                        "pursuit (target and output apart: the motion test fits the feedforward humans "
+                        "add) or either (not known: motion only if the test finds it for both)")
     p.add_argument("--start", choices=("warm", "random"), default="warm",
                    help="warm (default): the expanded search starts from the original's optimum "
                         "plus fixed Km and the models exchange optima, so improvements measure Km, "

@@ -14,7 +14,14 @@ DEFAULT_CRITERION = "df"
 OPTIMIZERS = ("apid", "scipy", "differential_evolution")
 """Optimizers of :func:`hesspipe.identification.fit.identify` (the paper's APID first)."""
 
-DISPLAYS = ("compensatory", "pursuit")
+DISPLAYS = ("compensatory", "pursuit", "either")
 """What the pilot saw: the error alone (the paper's task), or the target and the output apart,
 where humans add a feedforward path on the target (the motion test's nuisance,
-:data:`hesspipe.identification.motion_test.FEEDFORWARD`)."""
+:data:`hesspipe.identification.motion_test.FEEDFORWARD`), or not known: "either" names motion
+only when the test says so for both displays."""
+
+DEFAULT_DISPLAY = "either"
+"""The display assumed when a setting does not say: not known, since a recording rarely says
+which display its pilot had, and a pursuit display's feedforward read as motion (README,
+"Does the pilot need motion?"). On compensatory pilots the independent generator's motion
+runs were named as often as with "compensatory"."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.choices import DISPLAYS
+from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 from ..core.config import Fields, Settings
 from ..identification.motion_test import ALPHA as MOTION_ALPHA
 
@@ -71,10 +71,11 @@ class DiagnoseConfig(Settings):
     motion_alpha : float
         Significance level of the describing-function test of motion feedback
         (:mod:`hesspipe.diagnose.motion`).
-    display : {"compensatory", "pursuit"}
-        What the pilot saw: the error alone, or target and output apart (the motion test
+    display : {"compensatory", "pursuit", "either"}
+        What the pilot saw: the error alone, target and output apart (the motion test
         then fits the feedforward humans add on the target;
-        :func:`hesspipe.identification.motion_test.motion_test`).
+        :func:`hesspipe.identification.motion_test.motion_test`), or not known (motion only
+        where the test finds it for both).
     """
 
     TABLE = "diagnose"
@@ -118,7 +119,7 @@ class DiagnoseConfig(Settings):
     retest_delay_sd: float = 0.02
     #: Share of the control power between multisine lines from which the remnant is named.
     remnant_share: float = 0.01
-    display: str = "compensatory"
+    display: str = DEFAULT_DISPLAY
 
     def _checked(self, f: Fields) -> dict:
         # Validated on construction (Python, the command line and TOML alike); from_table maps.

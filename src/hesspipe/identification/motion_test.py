@@ -62,7 +62,7 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy import stats
 
-from ..core.choices import DISPLAYS
+from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 from ..core.errors import HesspipeError
 from ..core.formats import as_runs
 from ..pilot.blocks import from_tf
@@ -292,60 +292,9 @@ def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: 
     return float(ends[0]), float(ends[1])
 
 
-def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
-                band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
-                interval: float | None = None, display: str = "compensatory") -> dict:
-    """Likelihood-ratio test of motion feedback on one pilot's describing-function lines.
-
-    Parameters
-    ----------
-    run : hesspipe.core.formats.Run or sequence of Run
-        Time (s), disturbance, output, control, reference (e = reference − output).
-        Repeated runs of one pilot in one condition are pooled line by line
-        (:func:`~hesspipe.identification.lines.pooled_line_data`), the second and later
-        each with its own gain (a human's gains move by 5-15 % between runs; one degree
-        of freedom each).
-    plants : hesspipe.core.formats.Plants
-        Only ``motion_path`` is used (output → cab angular velocity; absent: the
-        paper's platform × washout).
-    start : mapping
-        Starting values of the original model's parameters (e.g. compare-pilots'
-        spectral optimum); Ke's sign is kept.
-    k : int
-        Hess model order (1: rate-like controlled element, 2: K/s²).
-    band_hz : (float, float)
-        Lines are used in this band, Hz.
-    max_delay : float, optional
-        Also test the original model's visual delay against this bound, s
-        (:func:`_delay_bound`; diagnose's extra delay).
-    interval : float, optional
-        Confidence level (e.g. 0.95) of a profile-likelihood interval of Km
-        (:func:`_km_profile`; about twenty more fits, so compare-pilots asks for it and
-        diagnose does not).
-    display : {"compensatory", "pursuit"}
-        What the pilot saw. "pursuit" (target and output shown apart) adds the feedforward
-        path humans then use on the target (:data:`FEEDFORWARD`), fitted with the original
-        model and held by the expanded, on records with target lines.
-
-    Returns
-    -------
-    dict
-        ``available`` (bool; False with ``reason`` when the record has too few
-        forcing lines), ``n_lines``, ``rss_original``, ``rss_expanded`` (weighted
-        residual sums, dimensionless: remnant variance units), ``lr`` (LR
-        statistic, the F of the nested test), ``p_value``, ``gain`` (1 − rss_expanded / rss_original),
-        ``Km`` and ``Km_se`` (its standard error from the fit's Jacobian with the residual
-        variance rss/dof and parameters on a bound held, same units as the pilot model's
-        Km; NaN with Km on its bound of 0), ``Km_interval`` (with `interval`: the profile
-        interval ``[lo, hi]``, ``hi`` inf when unbounded), ``significant`` (p < :data:`ALPHA`),
-        ``parameters_original`` / ``parameters_expanded`` (the two fits' pilot
-        parameters), ``standard_errors_original`` (of the original's free
-        parameters; diagnose reads the pilot's own delay from them) and
-        ``delay_bound`` (None without `max_delay`; else
-        :func:`_delay_bound`'s test of the original's delay against it), ``display`` and
-        ``feedforward`` (the fitted ``Kff`` and ``T_ff``; None unless a pursuit display
-        with target lines).
-    """
+def _one_display(run, plants, start: Mapping[str, float], *, k: int, band_hz: tuple[float, float],
+                 max_delay: float | None, interval: float | None, display: str) -> dict:
+    # :func:`motion_test` for one display ("compensatory" or "pursuit").
 
     runs = as_runs(run)
     ld = line_data(runs[0], band_hz) if len(runs) == 1 else pooled_line_data(runs, band_hz)
@@ -367,10 +316,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     hi = np.array([big if sign > 0 else 0.0, 100.0, 10.0, 0.6, 60.0, 2.0] + ([20.0] if k == 2 else [])
                   + [eq_hi])
     yc_inv = None
-    if display not in DISPLAYS:
-        raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
     R = ld.E + ld.Y
-    if display == "pursuit" and float(np.sum(np.abs(R) ** 2)) > 1e-6 * float(np.sum(np.abs(ld.E) ** 2)):
+    target = float(np.sum(np.abs(R) ** 2)) > 1e-6 * float(np.sum(np.abs(ld.E) ** 2))
+    if display == "pursuit" and target:
         # The feedforward is free in every fit, original and expanded alike (inserted before
         # the equaliser, which stays last): held at the original's optimum, as the
         # equaliser is, it took up the vestibular path of 4 of 10 double-integrator motion
@@ -475,14 +423,91 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
             "Km_se": km_se, "Km_interval": km_interval, "interval_level": interval,
             "significant": bool(p_value < ALPHA),
             "alternatives": {"+".join(t[5]): t[0] for t in tests},
-            "delay_bound": delay_bound, "display": display,
+            "delay_bound": delay_bound, "display": display, "target_lines": target,
             "feedforward": None if yc_inv is None else {n_: float(p_e[n_]) for n_ in FEEDFORWARD},
             "degrees_of_freedom": dof}
 
 
+def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
+                band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
+                interval: float | None = None, display: str = DEFAULT_DISPLAY) -> dict:
+    """Likelihood-ratio test of motion feedback on one pilot's describing-function lines.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run or sequence of Run
+        Time (s), disturbance, output, control, reference (e = reference − output).
+        Repeated runs of one pilot in one condition are pooled line by line
+        (:func:`~hesspipe.identification.lines.pooled_line_data`), the second and later
+        each with its own gain (a human's gains move by 5-15 % between runs; one degree
+        of freedom each).
+    plants : hesspipe.core.formats.Plants
+        Only ``motion_path`` is used (output → cab angular velocity; absent: the
+        paper's platform × washout).
+    start : mapping
+        Starting values of the original model's parameters (e.g. compare-pilots'
+        spectral optimum); Ke's sign is kept.
+    k : int
+        Hess model order (1: rate-like controlled element, 2: K/s²).
+    band_hz : (float, float)
+        Lines are used in this band, Hz.
+    max_delay : float, optional
+        Also test the original model's visual delay against this bound, s
+        (:func:`_delay_bound`; diagnose's extra delay).
+    interval : float, optional
+        Confidence level (e.g. 0.95) of a profile-likelihood interval of Km
+        (:func:`_km_profile`; about twenty more fits, so compare-pilots asks for it and
+        diagnose does not).
+    display : {"compensatory", "pursuit", "either"}
+        What the pilot saw. "pursuit" (target and output shown apart) adds the feedforward
+        path humans then use on the target (:data:`FEEDFORWARD`), free in both models, on
+        records with target lines. "either" (display not known): motion is significant only
+        if it is so with and without that path (an intersection-union test; the reported
+        result is the one with the larger p, and ``display_p`` gives both).
+
+    Returns
+    -------
+    dict
+        ``available`` (bool; False with ``reason`` when the record has too few
+        forcing lines), ``n_lines``, ``rss_original``, ``rss_expanded`` (weighted
+        residual sums, dimensionless: remnant variance units), ``lr`` (LR
+        statistic, the F of the nested test), ``p_value``, ``gain`` (1 − rss_expanded / rss_original),
+        ``Km`` and ``Km_se`` (its standard error from the fit's Jacobian with the residual
+        variance rss/dof and parameters on a bound held, same units as the pilot model's
+        Km; NaN with Km on its bound of 0), ``Km_interval`` (with `interval`: the profile
+        interval ``[lo, hi]``, ``hi`` inf when unbounded), ``significant`` (p < :data:`ALPHA`),
+        ``parameters_original`` / ``parameters_expanded`` (the two fits' pilot
+        parameters), ``standard_errors_original`` (of the original's free
+        parameters; diagnose reads the pilot's own delay from them) and
+        ``delay_bound`` (None without `max_delay`; else
+        :func:`_delay_bound`'s test of the original's delay against it), ``display``,
+        ``target_lines`` (whether the record has a target's lines) and ``feedforward``
+        (the fitted ``Kff`` and ``T_ff``; None unless a pursuit display with target
+        lines); with display "either" also ``display_p`` (display → p-value; "pursuit"
+        only where the compensatory test was significant with target lines).
+    """
+    if display not in DISPLAYS:
+        raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
+    kw = dict(k=k, band_hz=band_hz, max_delay=max_delay, interval=interval)
+    if display != "either":
+        return _one_display(run, plants, start, display=display, **kw)
+    # An intersection-union test (Berger 1982): significant only if significant with the
+    # display's feedforward and without it. Under "no motion" with either display the
+    # matching test rejects with probability <= alpha, so the pair does too, whichever
+    # display the pilot had. The pursuit fits are only needed where the first test rejects.
+    comp = _one_display(run, plants, start, display="compensatory", **kw)
+    out = {"display": "either", "display_p": {"compensatory": comp.get("p_value")}}
+    if not (comp.get("available") and comp["significant"] and comp["target_lines"]):
+        return {**comp, **out}
+    purs = _one_display(run, plants, start, display="pursuit", **kw)
+    out["display_p"]["pursuit"] = purs.get("p_value")
+    chosen = purs if purs.get("available") and purs["p_value"] >= comp["p_value"] else comp
+    return {**chosen, **out}
+
+
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                      band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
-                     interval: float | None = None, display: str = "compensatory") -> dict:
+                     interval: float | None = None, display: str = DEFAULT_DISPLAY) -> dict:
     """:func:`motion_test`, with a failure of the test reported in the result, not raised
     (a pilot's identification stays valid when its describing function cannot be tested).
 

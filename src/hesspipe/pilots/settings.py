@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.choices import CRITERIA, DEFAULT_CRITERION, DISPLAYS, OPTIMIZERS
+from ..core.choices import CRITERIA, DEFAULT_CRITERION, DEFAULT_DISPLAY, DISPLAYS, OPTIMIZERS
 from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
 from ..core.formats import _parse_columns, record_samples
@@ -102,8 +102,9 @@ class CompareSettings(Settings):
         one ("df", the command line's and the pipeline's default).
     display : str
         What the pilots saw (:data:`hesspipe.core.choices.DISPLAYS`): "compensatory" (the
-        error alone) or "pursuit" (target and output apart: the motion test fits the
-        feedforward humans then add, :func:`hesspipe.identification.motion_test.motion_test`).
+        error alone), "pursuit" (target and output apart: the motion test fits the
+        feedforward humans then add, :func:`hesspipe.identification.motion_test.motion_test`)
+        or "either" (not known: motion only where the test finds it for both).
     """
 
     seed: int = 0
@@ -116,7 +117,7 @@ class CompareSettings(Settings):
     restarts: int = 2
     benchmark: bool = False
     criterion: str = "paper"
-    display: str = "compensatory"
+    display: str = DEFAULT_DISPLAY
 
     def _checked(self, f: Fields) -> dict:
         return dict(seed=_seed(f, "seed"), k=f.integer("k", None, min=1, max=2),
@@ -179,7 +180,7 @@ class PilotsConfig(Settings):
         Fit criterion (see :class:`CompareSettings`); default
         :data:`hesspipe.identification.criteria.DEFAULT_CRITERION`, as the identify command.
     display : str
-        What the pilots saw, "compensatory" or "pursuit" (see :class:`CompareSettings`).
+        What the pilots saw, "compensatory", "pursuit" or "either" (see :class:`CompareSettings`).
     cohort : str
         How the synthetic pilots are drawn (:data:`COHORT_DRAWS`): "crossover_model"
         (default; within the crossover-model limits, :mod:`hesspipe.pilots.cohort`) or "table1".
@@ -211,7 +212,7 @@ class PilotsConfig(Settings):
     resample: bool = False
     simulator: str = "jsbsim"
     criterion: str = DEFAULT_CRITERION
-    display: str = "compensatory"
+    display: str = DEFAULT_DISPLAY
     cohort: str = "crossover_model"
     forcing: str = "paper"
 
