@@ -16,7 +16,7 @@ parameters, as ``bench_motion_calibration.py``). Pools:
 - ``error-remnant``: precision pilots, remnant injected at the error, CV 0.3, adjacent
   lines, no motion;
 - ``pursuit``: precision pilots with a pursuit display's feedforward (0.7), sparse layout,
-  no motion, tested as compensatory (the display not stated).
+  no motion, the display not stated (``--display``, default the library's).
 
 Cohorts of n pilots are then drawn from the pools with replacement (the pilots' tests are
 computed once), pure or mixed (k motion pilots among n - k without), and each goes
@@ -27,7 +27,7 @@ and the count of significant pilots (binomial) would have, at the verdict's leve
 Usage::
 
     python benchmarks/bench_cohort_rule.py [--pilots 25] [--n 6,8,10] [--cohorts 2000]
-                                           [--workers 2] [--seed 1]
+                                           [--workers 2] [--seed 1] [--display either]
 
 ``--pilots`` is per plant and pool (pools of 40-60 pilots at the default). About 12 min
 on 2 cores.
@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hesspipe.core.choices import DEFAULT_DISPLAY, DISPLAYS
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
@@ -74,7 +75,7 @@ POOLS = {
 
 def pilot_test(job) -> dict | None:
     """The motion test of one generated pilot (None: no pilot in the generator's ranges)."""
-    pool, plant, output, seed = job
+    pool, plant, output, seed, display = job
     cases, effects, draw = POOLS[pool]
     kw = dict(draw)
     if plant == "paper":
@@ -89,7 +90,7 @@ def pilot_test(job) -> dict | None:
         path = write_trial(Path(tmp) / "pilot", trial)
         plants = read_plants(path.parent / "plants.json")
         k = choose_k(plants)[0]
-        t = motion_test(read_run(path), plants, PilotModel().complete({}, k), k=k)
+        t = motion_test(read_run(path), plants, PilotModel().complete({}, k), k=k, display=display)
     return t if t.get("available") else None
 
 
@@ -113,10 +114,13 @@ def main(argv=None) -> int:
     ap.add_argument("--cohorts", type=int, default=2000, help="cohorts drawn per kind and size")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=1, help="seed of the cohort draws")
+    ap.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
+                    help="the per-pilot test's display setting (default the library's)")
     args = ap.parse_args(argv)
-    print("SYNTHETIC DATA: every pilot below is a run of the independent generator hesspipe.humanlike.")
+    print("SYNTHETIC DATA: every pilot below is a run of the independent generator hesspipe.humanlike. "
+          f"Per-pilot test display: {args.display}.")
     t0 = time.perf_counter()
-    jobs = [(pool, plant, output, seed) for pool, (cases, _, _) in POOLS.items()
+    jobs = [(pool, plant, output, seed, args.display) for pool, (cases, _, _) in POOLS.items()
             for plant, output in cases for seed in range(args.pilots)]
     with ProcessPoolExecutor(args.workers) as ex:
         results = list(ex.map(pilot_test, jobs, chunksize=4))

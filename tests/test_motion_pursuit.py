@@ -19,7 +19,7 @@ from hesspipe.core.seeds import derive_seed
 from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
-from hesspipe.identification.motion_test import motion_test
+from hesspipe.identification.motion_test import EITHER_EXACT, motion_test
 from hesspipe.pilot.hess import table1
 
 
@@ -89,6 +89,12 @@ def test_either_display_names_motion_only_when_both_tests_do(tmp_path):
     run, plants = _trial(tmp_path / "b", ("motion_feedback",), 4)
     t = motion_test(run, plants, table1(2), k=2, display="either")
     assert t["significant"] and t["p_value"] == max(t["display_p"].values())
+    # With target lines the pursuit test runs wherever the first p is below EITHER_EXACT.
+    for seed in (1, 2):
+        run, plants = _trial(tmp_path / f"n{seed}", (), seed, feedforward=None)
+        t = motion_test(run, plants, table1(2), k=2, display="either")
+        assert ("pursuit" in t["display_p"]) == (t["display_p"]["compensatory"] < EITHER_EXACT)
+        assert t["p_value"] == max(t["display_p"].values())
     # Without a target's lines the pursuit fits are never made.
     run, plants = _trial(tmp_path / "c", (), 9, task="disturbance", feedforward=None)
     t = motion_test(run, plants, table1(2), k=2, display="either")

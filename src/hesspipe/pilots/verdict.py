@@ -17,9 +17,9 @@ Binomial(n, alpha). History: a binomial count rule said "no" for one of six moti
 of 8 pilots whose weak-motion pilots were each just short of significance (Fisher's p
 1e-4; the median test says yes there); Fisher's rule, the verdict before this one, let one
 atypical pilot decide: on the independent generator's no-motion pilots whose visual
-gain wanders (CV 0.3) it said "yes" for 9 % of cohorts of 8, and for 81 % of cohorts with
-one motion pilot among seven without (``benchmarks/bench_cohort_rule.py``; the README
-gives the figures).
+gain wanders (CV 0.3) it said "yes" for 10 % of cohorts of 8, and for 77 % of cohorts with
+one motion pilot among seven without (per-pilot test with the compensatory display;
+``benchmarks/bench_cohort_rule.py``, the README gives the figures).
 
 Pilots who flew a condition several times (:func:`pilot_groups` maps run ids to pilots):
 each pilot's runs are combined first, by Fisher's rule over their p-values, so that the
