@@ -57,7 +57,7 @@ motion in 0 of 4 pilots.)
 from __future__ import annotations
 
 import math
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 from scipy import stats
@@ -299,17 +299,17 @@ def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: 
     return float(ends[0]), float(ends[1])
 
 
-def _one_display(run, plants, start: Mapping[str, float], *, k: int, band_hz: tuple[float, float],
-                 max_delay: float | None, interval: float | None, display: str) -> dict:
-    # :func:`motion_test` for one display ("compensatory" or "pursuit").
-
-    runs = as_runs(run)
-    ld = line_data(runs[0], band_hz) if len(runs) == 1 else pooled_line_data(runs, band_hz)
+def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, max_delay: float | None,
+                 display: str) -> tuple[dict, Callable[[float], list] | None]:
+    # :func:`motion_test` for one display ("compensatory" or "pursuit") on the lines `ld`,
+    # without Km's profile interval: returned is the result and the function that
+    # computes that interval at a level (None where the test is not available), so that
+    # with display "either" only the reported test pays for its profile.
     lines = ld.lines
     # Real residuals, less the later runs' own gains that every fit solves for.
     n_res = 2 * int(lines.size) - (0 if ld.groups is None else int(np.unique(ld.groups).size) - 1)
     if ld.reason:
-        return {"available": False, "n_lines": int(lines.size), "reason": ld.reason}
+        return {"available": False, "n_lines": int(lines.size), "reason": ld.reason}, None
     original, expanded = PilotModel(), PilotModel(("motion_feedback",))
     cab = motion_block(plants)
     base = pilot_start(original, start, k)
@@ -368,7 +368,7 @@ def _one_display(run, plants, start: Mapping[str, float], *, k: int, band_hz: tu
     dof = n_res - len(free) - len(alternatives[-1])
     if dof < 1:
         return {"available": False, "n_lines": int(lines.size),
-                "reason": f"{lines.size} forcing lines leave no degrees of freedom for the test"}
+                "reason": f"{lines.size} forcing lines leave no degrees of freedom for the test"}, None
     km_hi = 1e3 * max(abs(base["Ke"]), 1.0)
     # The vestibular alternatives hold the visual equaliser at the original's value: they
     # ask what the path adds to the pilot without it, not what Km and a re-shaped lead do
@@ -415,10 +415,11 @@ def _one_display(run, plants, start: Mapping[str, float], *, k: int, band_hz: tu
     # Scaled by the residual variance and with bound-held parameters out, as every other
     # standard error here (it was the unscaled inverse, with a flat held column in it).
     km_se = _standard_errors(sol, free_e, rss_e, dof_e)["Km"]
-    km_interval = None
-    if interval is not None:
-        km_interval = list(_km_profile(expanded, base_e, free_e, lo_e, hi_e, p_e, rss_e, rss_o, dof_e,
-                                       float(interval), 1e-3 * km0, data, ld.w))
+
+    def profile(level: float) -> list:
+        return list(_km_profile(expanded, base_e, free_e, lo_e, hi_e, p_e, rss_e, rss_o, dof_e,
+                                float(level), 1e-3 * km0, data, ld.w))
+
     return {"available": True, "n_lines": int(lines.size), "window_samples": ld.window_samples,
             "parameters_original": {n_: float(v) for n_, v in p_o.items()},
             "parameters_expanded": {n_: float(v) for n_, v in p_e.items()},
@@ -427,12 +428,12 @@ def _one_display(run, plants, start: Mapping[str, float], *, k: int, band_hz: tu
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
             "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": float(p_e["Km"]),
             "tau_m": float(p_e.get("tau_m", 0.0)),
-            "Km_se": km_se, "Km_interval": km_interval, "interval_level": interval,
+            "Km_se": km_se,
             "significant": bool(p_value < ALPHA),
             "alternatives": {"+".join(t[5]): t[0] for t in tests},
             "delay_bound": delay_bound, "display": display, "target_lines": target,
             "feedforward": None if yc_inv is None else {n_: float(p_e[n_]) for n_ in FEEDFORWARD},
-            "degrees_of_freedom": dof}
+            "degrees_of_freedom": dof}, profile
 
 
 def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
@@ -496,9 +497,11 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     """
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
-    kw = dict(k=k, band_hz=band_hz, max_delay=max_delay, interval=interval)
+    runs = as_runs(run)
+    ld = line_data(runs[0], band_hz) if len(runs) == 1 else pooled_line_data(runs, band_hz)
+    kw = dict(k=k, max_delay=max_delay)
     if display != "either":
-        return _one_display(run, plants, start, display=display, **kw)
+        return _with_interval(*_one_display(ld, plants, start, display=display, **kw), interval)
     # An intersection-union test (Berger 1982): significant only if significant with the
     # display's feedforward and without it. Under "no motion" with either display the
     # matching test rejects with probability <= alpha, so the pair does too, whichever
@@ -506,14 +509,22 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     # needed where the first p is below EITHER_EXACT. (Run only where the first test was
     # significant, the reported p of the generator's pursuit no-motion pilots leaned low
     # below it, and the cohort's median-pilot test said yes for 9-11 % of their cohorts.)
-    comp = _one_display(run, plants, start, display="compensatory", **kw)
-    out = {"display": "either", "display_p": {"compensatory": comp.get("p_value")}}
-    if not (comp.get("available") and comp["target_lines"] and comp["p_value"] < EITHER_EXACT):
-        return {**comp, **out}
-    purs = _one_display(run, plants, start, display="pursuit", **kw)
-    out["display_p"]["pursuit"] = purs.get("p_value")
-    chosen = purs if purs.get("available") and purs["p_value"] >= comp["p_value"] else comp
-    return {**chosen, **out}
+    comp = _one_display(ld, plants, start, display="compensatory", **kw)
+    out = {"display": "either", "display_p": {"compensatory": comp[0].get("p_value")}}
+    if comp[0].get("available") and comp[0]["target_lines"] and comp[0]["p_value"] < EITHER_EXACT:
+        purs = _one_display(ld, plants, start, display="pursuit", **kw)
+        out["display_p"]["pursuit"] = purs[0].get("p_value")
+        if purs[0].get("available") and purs[0]["p_value"] >= comp[0]["p_value"]:
+            comp = purs
+    return {**_with_interval(*comp, interval), **out}
+
+
+def _with_interval(result: dict, profile, interval: float | None) -> dict:
+    # Km's profile interval (None unless asked and available) added to a test's result.
+    if not result.get("available"):
+        return result
+    ci = profile(interval) if interval is not None else None
+    return {**result, "Km_interval": ci, "interval_level": interval}
 
 
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
