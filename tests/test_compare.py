@@ -389,3 +389,20 @@ def test_pilots_command_keeps_compare_pilots_as_an_alias(tmp_path, capsys):
     for cmd in ("pilots", "compare-pilots"):
         assert main([cmd, str(tmp_path), "--plants", str(tmp_path / "p.json"), "--restarts", "0"]) == 1
         assert capsys.readouterr().err.strip() == "hesspipe: error: --restarts: expected an integer >= 1, got 0"
+
+
+def test_a_note_every_file_shares_is_said_once():
+    """A folder written by one lab gives one line per note, not one per file and note; a note
+    only some files have keeps its files' names."""
+    from hesspipe.cli._options import reading_lines
+
+    deg = "column 'Yaw [deg]' (output): deg converted to SPEC.md's units (x 0.0174533)"
+    reading = {f"lab/s{i:02d}.csv": ["semicolon-separated with decimal commas", deg] for i in range(1, 19)}
+    reading["lab/s07.csv"] = reading["lab/s07.csv"] + ["2 incomplete row(s) at the end dropped"]
+    assert reading_lines(reading) == [
+        "hesspipe: note: 18 files (lab/s01.csv … lab/s18.csv): semicolon-separated with decimal commas",
+        f"hesspipe: note: 18 files (lab/s01.csv … lab/s18.csv): {deg}",
+        "hesspipe: note: lab/s07.csv: 2 incomplete row(s) at the end dropped",
+    ]
+    assert reading_lines({"one.csv": ["a", "a"]}) == ["hesspipe: note: one.csv: a"]
+    assert reading_lines({"one.csv": []}) == []

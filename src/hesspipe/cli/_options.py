@@ -60,11 +60,32 @@ def run_options(args: argparse.Namespace) -> dict:
     return {"columns": args.columns, "resample": bool(args.resample)}
 
 
-def print_reading(reading) -> None:
-    """On stderr, what reading each run did beyond the plain format (file → notes)."""
+def reading_lines(reading) -> list[str]:
+    """What reading the runs did beyond the plain format (file → notes), one line per note.
+
+    A note that several files share (a laboratory writes every run alike: the same
+    units, the same separator) is said once with their count and first and last file,
+    so that a folder of 100 runs gives a few lines, not 500, and a note that only
+    some file has is not lost among them.
+    """
+    files: dict[str, list[str]] = {}
     for source, notes in reading.items():
-        for note in notes:
-            print(f"hesspipe: note: {source}: {note}", file=sys.stderr)
+        for note in dict.fromkeys(notes):
+            files.setdefault(note, []).append(str(source))
+    lines = []
+    for note, sources in files.items():
+        if len(sources) == 1:
+            where = sources[0]
+        else:
+            where = f"{len(sources)} files ({sources[0]} … {sources[-1]})"
+        lines.append(f"hesspipe: note: {where}: {note}")
+    return lines
+
+
+def print_reading(reading) -> None:
+    """On stderr, :func:`reading_lines` of `reading` (file → notes)."""
+    for line in reading_lines(reading):
+        print(line, file=sys.stderr)
 
 
 def read_cli_run(path, args: argparse.Namespace, **kwargs):
