@@ -132,6 +132,14 @@ def test_json_keys_improvement_and_synthetic_flags(tmp_path):
     assert d["mean_improvement"] == pytest.approx(0.5)
     table = result.table()
     assert table.startswith("SYNTHETIC DATA") and "real" in table and "mean 50.0 %" in table
+    # Km/|Ke| beside the gains: x where the model has no Km, Km/|Ke| = 1/20 where it has.
+    rows = table.splitlines()
+    head = next(r for r in rows if r.startswith("pilot "))
+    assert head.split()[2:8] == ["Ke", "K1", "K2", "Km", "Km/|Ke|", "fitness"]
+    # From the right: PM, wc, fitness (no improvement on these rows), Km/|Ke|, Km.
+    original = next(r for r in rows if " original " in r).split()
+    fixed = next(r for r in rows if r.lstrip().startswith("expanded_fixed ")).split()
+    assert original[-5:-3] == ["x", "x"] and fixed[-5:-3] == ["1", "0.05"]
 
 
 def test_list_runs_errors(tmp_path):

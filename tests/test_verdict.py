@@ -182,7 +182,7 @@ def test_pilot_groups_find_the_pilot_in_each_run_id():
 
 def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
     t = lambda p, km=1.0: {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": km,  # noqa: E731
-                           "Km_se": 0.1, "significant": p < 0.01}
+                           "Km_se": 0.1, "Km_per_Ke": km / 10, "significant": p < 0.01}
     tests = {"a1": t(0.02, 1.0), "a2": t(0.03, 3.0), "b1": t(0.6), "b2": t(0.7), "b3": {"available": False}}
     groups = {"a1": "a", "a2": "a", "b1": "b", "b2": "b", "b3": "b"}
     v = cohort_verdict(tests, groups=groups)
@@ -191,6 +191,7 @@ def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
     assert a["p_value"] == pytest.approx(np.exp(-chi / 2) * (1 + chi / 2))     # Fisher, 2 runs
     assert a["runs"] == 2 and a["significant"] and a["run_ids"] == ["a1", "a2"]
     assert a["Km"] == pytest.approx(2.0) and a["Km_se"] == pytest.approx(1.0)    # mean, its se
+    assert a["Km_per_Ke"] == pytest.approx(0.2) and a["Km_per_Ke_se"] == pytest.approx(0.1)
     assert v["per_pilot"]["b"]["untested_runs"] == ["b3"]
     assert v["n_tested"] == 2 and v["n_significant"] == 1
     assert "for at least half of the 2 pilots, 4 runs (each pilot's runs combined first; median-pilot" in v["sentence"]
@@ -202,6 +203,7 @@ def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
     assert none["answer"] == "undetermined" and none["per_pilot"]["b"]["untested_runs"] == ["b3"]
     text = "\n".join(verdict_lines(v))
     assert "  a (2 runs): misfit removed 50.0 %" in text
+    assert "Km/|Ke| 0.2 +/- 0.1, Km 2 +/- 1" in text
 
 
 def test_compare_pilots_groups_repeated_runs_by_pilot(tmp_path, capsys):

@@ -56,6 +56,10 @@ class MotionVerdict:
         F statistic, its p-value (halved: Km >= 0) and the share of misfit removed.
     Km, Km_se : float
         Fitted vestibular gain and its standard error (control units per rad/s).
+    Km_per_Ke : float
+        Km/|Ke|, the vestibular gain relative to the visual one (output units per rad/s of
+        cab motion): identified where Km alone trades with Ke and the proprioceptive gain
+        (:mod:`hesspipe.identification.motion_test`).
     n_lines : int
         Forcing lines used (of all runs pooled).
     runs : int
@@ -91,11 +95,13 @@ class MotionVerdict:
     forcing: str = ""
     separable: bool = True
     verdict: str = ""
+    Km_per_Ke: float = float("nan")
 
     def to_dict(self) -> dict:
         """JSON-ready fields and the criterion that produced them."""
         return {"named": self.named, "statistic": self.statistic, "p_value": self.p_value,
-                "gain": self.gain, "Km": self.Km, "Km_se": self.Km_se, "n_lines": self.n_lines,
+                "gain": self.gain, "Km": self.Km, "Km_se": self.Km_se, "Km_per_Ke": self.Km_per_Ke,
+                "n_lines": self.n_lines,
                 "runs": self.runs,
                 "alpha": self.alpha, "note": self.note, "forcing": self.forcing,
                 "separable": self.separable, "verdict": self.verdict,
@@ -394,7 +400,8 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
     mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
                        separable=forcing == "disturbance and target",
-                       verdict=motion_words(named, forcing), runs=1 + len(repeat_runs) if pool else 1)
+                       verdict=motion_words(named, forcing), runs=1 + len(repeat_runs) if pool else 1,
+                       Km_per_Ke=float(t.get("Km_per_Ke", math.nan)))
     pars, se = _df_delay(t, mv.named)
     if baseline_run is None:
         bound = t.get("delay_bound")
@@ -452,7 +459,7 @@ def motion_step(ev: DFEvidence, problem, current, cfg):
     # Km is reported as the describing function sees it: the control spectrum barely does.
     return _df_step(problem, aug, fit, "motion_feedback", accepted=v.named, statistic=v.statistic,
                     dof=1, p_value=v.p_value, threshold=cfg.motion_alpha,
-                    parameters={"Km": v.Km, "Km_se": v.Km_se})
+                    parameters={"Km": v.Km, "Km_se": v.Km_se, "Km_per_Ke": v.Km_per_Ke})
 
 
 def delay_step(ev: DFEvidence, problem, current, cfg):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from ..core.errors import HesspipeError
 from .fitting import _effect
 from .results import Diagnosis
@@ -52,7 +54,9 @@ def format_report(d: Diagnosis) -> str:
                    f"({dv['baseline_delay_s']:.3f} s; difference {dv['difference_s']:.3f} s, run-to-run "
                    f"spread {dv.get('spread_s', dv['retest_sd_s']):.3g} s{counted})" if "baseline_run" in dv else
                    f"against a human's longest {dv['max_pilot_delay_s']:g} s")
-        out.append(f"Visual delay on the describing function: {dv['delay_s']:.3f} +/- {dv['se_s']:.3f} s "
+        # A delay held on its bound has no standard error (NaN): none is printed then.
+        se = f" +/- {dv['se_s']:.3f}" if dv.get("se_s") is not None and math.isfinite(dv["se_s"]) else ""
+        out.append(f"Visual delay on the describing function: {dv['delay_s']:.3f}{se} s "
                    f"{against}: p={dv['p_value']:.2g} "
                    f"(needs < {dv['alpha']:g}) -> {'extra_delay NAMED' if dv['named'] else 'no extra delay'}")
     rv = d.remnant_verdict
@@ -62,8 +66,10 @@ def format_report(d: Diagnosis) -> str:
     mv = d.motion_verdict
     if mv is not None:
         runs = f" of {mv['runs']} runs, each its own gain" if mv.get("runs", 1) > 1 else ""
+        r = mv.get("Km_per_Ke")
+        ratio = f", Km/|Ke|={r:.3g}" if r is not None and math.isfinite(r) else ""
         out.append(f"Motion feedback on the describing function ({mv['n_lines']} lines{runs}; misfit removed "
-                   f"{100 * mv['gain']:.0f} % with Km={mv['Km']:.3g}): F={mv['statistic']:.1f}, "
+                   f"{100 * mv['gain']:.0f} % with Km={mv['Km']:.3g}{ratio}): F={mv['statistic']:.1f}, "
                    f"p={mv['p_value']:.2g} (needs < {d.config.motion_alpha:g}) -> "
                    f"{'NAMED' if mv['named'] else 'not named'}")
         if mv.get("verdict"):

@@ -45,6 +45,16 @@ original's value; the original is fitted without it too), several starts each. T
 ``1 − RSS_expanded / RSS_original``: the share of the describing-function
 misfit that the motion path removes.
 
+How strong the motion path is, per pilot, is **Km/|Ke|**, not Km. Where the
+proprioceptive lead's corner 1/T1 lies below the lines (as a human's often does), its
+feedback is the constant K1 K2 there, and the inner loop ``NM / (1 + NM K1 K2)`` is one
+gain ``1/(1 + K1 K2)`` times a neuromuscular mode of frequency ``wn sqrt(1 + K1 K2)`` and
+damping ``zn / sqrt(1 + K1 K2)``: Ke and Km scale together along a valley of (K1, wn, zn),
+which only the lines near 1/T1 bound. The ratio is the same all along it. On the SYNTHETIC
+yaw-angle runs of the independent generator's precision pilots (three runs each of one
+person, 1/s, sparse two-input layout) one person's Km came out 2.2, 13.5 and 0.34 with Ke
+18.7, 209 and 3.1, while Km/|Ke| came out 0.116, 0.065 and 0.110.
+
 Records without separated multisine lines (random wind or gusts, as in the
 JSBSim pipeline's cohort) have no describing function to test: the pilot's
 test is "not available" and the verdict says so instead of guessing from
@@ -151,19 +161,23 @@ def _predict(params, model, cab, s, E, Y, yc_inv=None):
     return nm * drive / loop.return_difference(s, None)
 
 
-def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w):
+def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w,
+         tie: Callable[[dict], None] | None = None):
     """Bounded least squares of the weighted complex residual; best of `starts`.
 
     With `groups` (the run of each line, repeated runs pooled), the second and later runs'
     predictions are each scaled by their own gain, solved in closed form at every step
     (variable projection): a human's gains move by 5-15 % between runs. `yc_inv` (the
     controlled element's inverse at the lines, or None) adds a pursuit display's feedforward.
+    `tie` sets parameters from the others at every step (a profile along Km/Ke).
     """
     runs = [] if groups is None else [groups == g for g in np.unique(groups)[1:]]
 
     def resid(x):
         p = dict(base)
         p.update(zip(free, x))
+        if tie is not None:
+            tie(p)
         pred = _predict(p, model, cab, s, E, Y, yc_inv)
         for m in runs:
             ww = w[m] ** 2
@@ -177,6 +191,8 @@ def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U
                                   "function converged")
     p = dict(base)
     p.update(zip(free, sol.x))
+    if tie is not None:
+        tie(p)
     return rss, p, sol
 
 
@@ -244,51 +260,63 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
 
 
 def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: float, rss_zero: float,
-                dof: int, level: float, km_small: float, data, w) -> tuple[float, float]:
-    """Profile-likelihood interval of Km at confidence `level`: the Km whose best fit of the
-    other parameters stays within the F test's critical value of the optimum.
+                dof: int, level: float, km_small: float, data, w, *, ratio: bool = False) -> tuple[float, float]:
+    """Profile-likelihood interval of Km (or, with `ratio`, of Km/|Ke|) at confidence `level`:
+    the values whose best fit of the other parameters stays within the F test's critical
+    value of the optimum.
 
     Consistent with the test (its lower end is above 0 exactly when the nested F at Km = 0,
     from ``rss_zero``, exceeds the critical value), and honest in a valley: where Km trades
     with the proprioceptive loop or the delay the curvature at the optimum gives standard
     errors of 10^3-10^4 for a Km significant at p ~ 1e-25 (generator trials), while the
-    profile follows the valley. The upper end is ``inf`` when Km's search bound is reached.
+    profile follows the valley. Along that valley Ke and Km scale together with the
+    proprioceptive gain (1 + K1 K2 where 1/T1 lies below the lines; module doc), so the
+    ratio's profile is
+    narrow where Km's spans decades. The upper end is ``inf`` when Km's search bound (for
+    the ratio: that bound over the optimum's |Ke|) is reached.
     """
     i = free.index("Km")
     names = free[:i] + free[i + 1:]
     lo_r, hi_r = np.delete(lo, i), np.delete(hi, i)
     crit = float(stats.f.ppf(level, 1, dof))
     scale = rss_best / dof
+    ke_hat = max(abs(float(best["Ke"])), 1e-12)
 
-    def f_at(km, start):
-        rss, p, _ = _fit(model, {**base, **best, "Km": km}, names, lo_r, hi_r, [start], *data, w)
+    def f_at(v, start):
+        if ratio:
+            rss, p, _ = _fit(model, {**base, **best}, names, lo_r, hi_r, [start], *data, w,
+                             tie=lambda q: q.__setitem__("Km", v * abs(q["Ke"])))
+        else:
+            rss, p, _ = _fit(model, {**base, **best, "Km": v}, names, lo_r, hi_r, [start], *data, w)
         return (max(rss, rss_best) - rss_best) / scale, [p[n] for n in names]
 
-    km_hat, start = float(best["Km"]), [best[n] for n in names]
+    hat = float(best["Km"]) / ke_hat if ratio else float(best["Km"])
+    small, top = (km_small / ke_hat, float(hi[i]) / ke_hat) if ratio else (km_small, float(hi[i]))
+    start = [best[n] for n in names]
     ends = []
-    for factor, limit in ((1 / 3, None), (3.0, float(hi[i]))):
-        if factor < 1 and ((rss_zero - rss_best) / scale <= crit or km_hat <= 0):
+    for factor, limit in ((1 / 3, None), (3.0, top)):
+        if factor < 1 and ((rss_zero - rss_best) / scale <= crit or hat <= 0):
             ends.append(0.0)
             continue
-        inside, x_in, outside = km_hat, start, None
+        inside, x_in, outside = hat, start, None
         for _ in range(24):   # bracket: geometric steps until the fit is worse than crit
             # From Km on its bound of 0 the upward steps start at km_small.
-            km = inside * factor if inside > 0 else km_small
-            if limit is not None and km >= limit:
+            v = inside * factor if inside > 0 else small
+            if limit is not None and v >= limit:
                 f, x = f_at(limit, x_in)
                 if f <= crit:
                     break
-                km = limit
+                v = limit
             else:
-                f, x = f_at(km, x_in)
+                f, x = f_at(v, x_in)
             if f > crit:
-                outside = km
+                outside = v
                 break
-            inside, x_in = km, x
+            inside, x_in = v, x
         if outside is None:
             ends.append(0.0 if factor < 1 else math.inf)
             continue
-        for _ in range(6):    # bisection in ln Km: about 2 % of Km
+        for _ in range(6):    # bisection in the logarithm: about 2 % of the value
             mid = math.sqrt(inside * outside) if inside > 0 else 0.5 * outside
             f, x = f_at(mid, x_in)
             if f > crit:
@@ -416,9 +444,10 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
     # standard error here (it was the unscaled inverse, with a flat held column in it).
     km_se = _standard_errors(sol, free_e, rss_e, dof_e)["Km"]
 
-    def profile(level: float) -> list:
-        return list(_km_profile(expanded, base_e, free_e, lo_e, hi_e, p_e, rss_e, rss_o, dof_e,
-                                float(level), 1e-3 * km0, data, ld.w))
+    def profile(level: float) -> dict:
+        return {key: list(_km_profile(expanded, base_e, free_e, lo_e, hi_e, p_e, rss_e, rss_o, dof_e,
+                                      float(level), 1e-3 * km0, data, ld.w, ratio=ratio))
+                for key, ratio in (("Km_interval", False), ("Km_per_Ke_interval", True))}
 
     return {"available": True, "n_lines": int(lines.size), "window_samples": ld.window_samples,
             "parameters_original": {n_: float(v) for n_, v in p_o.items()},
@@ -427,6 +456,7 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "rss_original": rss_o,
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
             "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": float(p_e["Km"]),
+            "Km_per_Ke": float(p_e["Km"]) / abs(float(p_e["Ke"])) if p_e["Ke"] else math.nan,
             "tau_m": float(p_e.get("tau_m", 0.0)),
             "Km_se": km_se,
             "significant": bool(p_value < ALPHA),
@@ -464,8 +494,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         (:func:`_delay_bound`; diagnose's extra delay).
     interval : float, optional
         Confidence level (e.g. 0.95) of a profile-likelihood interval of Km
-        (:func:`_km_profile`; about twenty more fits, so compare-pilots asks for it and
-        diagnose does not).
+        and of Km/|Ke| (:func:`_km_profile`; about twenty more fits each, so compare-pilots
+        asks for them and diagnose does not).
     display : {"compensatory", "pursuit", "either"}
         What the pilot saw. "pursuit" (target and output shown apart) adds the feedforward
         path humans then use on the target (:data:`FEEDFORWARD`), free in both models, on
@@ -482,8 +512,12 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         statistic, the F of the nested test), ``p_value``, ``gain`` (1 − rss_expanded / rss_original),
         ``Km`` and ``Km_se`` (its standard error from the fit's Jacobian with the residual
         variance rss/dof and parameters on a bound held, same units as the pilot model's
-        Km; NaN with Km on its bound of 0), ``Km_interval`` (with `interval`: the profile
-        interval ``[lo, hi]``, ``hi`` inf when unbounded), ``significant`` (p < :data:`ALPHA`),
+        Km; NaN with Km on its bound of 0), ``Km_per_Ke`` (Km/|Ke|: the vestibular path's
+        gain relative to the visual one, output units per rad/s of cab motion, so
+        dimensionless on a rate task and seconds on an angle task; unlike Km itself it is
+        identified, module doc), ``Km_interval`` and ``Km_per_Ke_interval`` (with
+        `interval`: the profile intervals ``[lo, hi]``, ``hi`` inf when unbounded; else
+        None), ``significant`` (p < :data:`ALPHA`),
         ``parameters_original`` / ``parameters_expanded`` (the two fits' pilot
         parameters), ``standard_errors_original`` (of the original's free
         parameters; diagnose reads the pilot's own delay from them) and
@@ -520,11 +554,12 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
 
 
 def _with_interval(result: dict, profile, interval: float | None) -> dict:
-    # Km's profile interval (None unless asked and available) added to a test's result.
+    # The profile intervals of Km and Km/|Ke| (None unless asked and available) added to a
+    # test's result.
     if not result.get("available"):
         return result
-    ci = profile(interval) if interval is not None else None
-    return {**result, "Km_interval": ci, "interval_level": interval}
+    ci = profile(interval) if interval is not None else {"Km_interval": None, "Km_per_Ke_interval": None}
+    return {**result, **ci, "interval_level": interval}
 
 
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,

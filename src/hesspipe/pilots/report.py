@@ -23,11 +23,21 @@ def _fmt(x, spec=".3g") -> str:
     return format(x, spec)
 
 
+def _km_per_ke(params) -> str:
+    # Km/|Ke| of a configuration with Km ("x" without): the comparable motion gain.
+    if "Km" not in params:
+        return "x"
+    km, ke = params.get("Km"), params.get("Ke")
+    return _fmt(km / abs(ke)) if km is not None and ke else "-"
+
+
 def format_table(comparison) -> str:
     """Plain-text comparison: one row per pilot and configuration, then mean and spread.
 
     Columns: the gains of :data:`TABLE_PARAMETERS` (``x`` = not in that
-    configuration's model, ``-`` = missing or not finite), the fitness, the
+    configuration's model, ``-`` = missing or not finite), Km/|Ke| (the vestibular
+    gain relative to the visual one, which the valley of Ke, Km and K1 K2 leaves
+    comparable between runs and pilots), the fitness, the
     improvement ``1 - expanded/original fitness`` in percent (on the
     ``expanded`` row), the crossover frequency (rad/s) and the phase margin
     (deg). Synthetic runs are marked ``*`` and the table headed
@@ -46,7 +56,8 @@ def format_table(comparison) -> str:
     str
         The table, lines joined by newlines (no trailing newline).
     """
-    head = ("pilot", "configuration", *TABLE_PARAMETERS, "fitness", "improvement", "wc rad/s", "PM deg")
+    head = ("pilot", "configuration", *TABLE_PARAMETERS, "Km/|Ke|", "fitness", "improvement", "wc rad/s",
+            "PM deg")
     rows = []
     for p in comparison.pilots:
         for name in CONFIGURATIONS:
@@ -56,6 +67,7 @@ def format_table(comparison) -> str:
             cross = conf.get("primary_crossover") or conf.get("crossover") or {}
             rows.append((p.id + (" *" if p.synthetic else "") if name == "original" else "", name,
                          *(_fmt(params.get(k)) if k in params else "x" for k in TABLE_PARAMETERS),
+                         _km_per_ke(params),
                          _fmt(conf.get("fitness"), ".4g"),
                          f"{100 * p.improvement:.1f} %" if name == "expanded" and math.isfinite(p.improvement)
                          else "",
@@ -83,6 +95,9 @@ def format_table(comparison) -> str:
                    "identifications); only that combination is determined")
     out.append(f"expanded_fixed: original's parameters with Km = {_fmt(comparison.km_fixed_value(), 'g')}, "
                "not re-identified; x = not in the model")
+    out.append("Km/|Ke|: the vestibular gain relative to the visual one. Where 1/T1 lies below the "
+               "forcing, Ke and Km scale together with 1 + K1 K2 (only their ratio, the crossover and "
+               "the phase margin are determined): compare runs and pilots by these, not by Ke or Km")
     for f in comparison.failures:
         out.append(f"FAILED {f.id}: {f.error}")
     return "\n".join(out)

@@ -97,11 +97,16 @@ def _per_pilot(done: Mapping[str, Mapping], groups: Mapping[str, str]) -> dict[s
     for pid, ts in by.items():
         ps = [t["p_value"] for t in ts]
         p = ps[0] if len(ps) == 1 else float(stats.combine_pvalues(ps, method="fisher").pvalue)
-        km = np.array([t["Km"] for t in ts], dtype=float)
         out[pid] = {"p_value": p, "gain": float(np.median([t["gain"] for t in ts])),
-                    "lr": float(np.median([t["lr"] for t in ts])), "Km": float(np.mean(km)),
-                    "Km_se": (float(np.std(km, ddof=1) / math.sqrt(km.size)) if km.size > 1
-                              else ts[0]["Km_se"]), "runs": len(ts)}
+                    "lr": float(np.median([t["lr"] for t in ts])), "runs": len(ts)}
+        for key in ("Km", "Km_per_Ke"):
+            v = np.array([t.get(key, math.nan) for t in ts], dtype=float)
+            out[pid][key] = float(np.mean(v))
+            out[pid][f"{key}_se"] = (float(np.std(v, ddof=1) / math.sqrt(v.size)) if v.size > 1
+                                     else ts[0].get(f"{key}_se", math.nan))
+        if len(ts) == 1:
+            out[pid].update({key: ts[0].get(key) for key in ("Km_interval", "Km_per_Ke_interval",
+                                                            "interval_level")})
     return out
 
 
@@ -118,8 +123,8 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     groups : mapping, optional
         Run id → pilot id (:func:`pilot_groups`) when pilots flew several runs: a pilot's
         runs are combined first (Fisher's combination of their p-values; median gain; Km
-        their mean, its error their standard error), so the count and the cohort test
-        are over pilots.
+        and Km/|Ke| their means, their errors the standard errors over the runs), so the
+        count and the cohort test are over pilots.
 
     Returns
     -------
@@ -129,7 +134,8 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
         ``fisher_p`` (Fisher's combination of the per-pilot p-values: "at least one
         pilot", reported), ``n_tested``, ``n_significant``, ``binomial_p`` (P[X ≥
         n_significant] for X ~ Binomial(n_tested, alpha)), ``median_gain``, ``per_pilot``
-        (id → gain, p_value, significant), ``method``.
+        (id → gain, p_value, significant, Km and Km/|Ke| with their profile intervals, or
+        with `groups` their means and standard errors over the pilot's runs), ``method``.
     """
     done = {pid: t for pid, t in tests.items() if t.get("available")}
     method = ("per pilot: likelihood-ratio test of Km on the describing-function lines "
@@ -169,7 +175,8 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     return {"answer": "yes" if yes else "no", "sentence": sentence, "n_tested": n,
             "n_significant": sig, "binomial_p": binom_p, "majority_p": majority_p, "majority_r": r,
             "fisher_p": fisher_p, "median_gain": float(np.median(gains)), "alpha": alpha,
-            "method": method + (", a pilot's runs first combined by Fisher's rule" if groups else ""),
+            "method": method + (", a pilot's runs first combined by Fisher's rule (Km/|Ke| and Km: "
+                                "mean +/- standard error over the runs)" if groups else ""),
             "per_pilot": _per_pilot_out(tests, pilots, groups, alpha)}
 
 
@@ -201,6 +208,7 @@ def _per_pilot_out(tests, pilots, groups, alpha) -> dict:
     if not groups:
         return {pid: ({"gain": t["gain"], "p_value": t["p_value"], "lr": t["lr"],
                        "Km": t["Km"], "Km_se": t["Km_se"], "Km_interval": t.get("Km_interval"),
+                       "Km_per_Ke": t.get("Km_per_Ke"), "Km_per_Ke_interval": t.get("Km_per_Ke_interval"),
                        "interval_level": t.get("interval_level"), "significant": t["significant"]}
                       if t.get("available") else {"available": False, "reason": t.get("reason", "")})
                 for pid, t in tests.items()}
@@ -212,6 +220,19 @@ def _per_pilot_out(tests, pilots, groups, alpha) -> dict:
             out.setdefault(groups.get(rid, rid), {"available": False, "reason": t.get("reason", "")}) \
                 .setdefault("untested_runs", []).append(rid)
     return out
+
+
+def _estimate(name: str, value, se, ci, level: str) -> str:
+    # "NAME v (95 % profile interval lo to hi)", else "NAME v +/- se" (a pilot's runs: the
+    # standard error over them); "" without a value (a result written before the ratio).
+    if value is None or not math.isfinite(value):
+        return ""
+    if ci:
+        hi = "unbounded" if ci[1] is None or not math.isfinite(ci[1]) else f"{ci[1]:.3g}"
+        return f"{name} {value:.3g} ({level} profile interval {ci[0]:.3g} to {hi})"
+    if se is not None and math.isfinite(se):
+        return f"{name} {value:.3g} +/- {se:.2g}"
+    return f"{name} {value:.3g}"
 
 
 def verdict_lines(verdict: Mapping) -> list[str]:
@@ -227,15 +248,15 @@ def verdict_lines(verdict: Mapping) -> list[str]:
         if t.get("available", True) is False:
             out.append(f"  {pid}: not tested ({t.get('reason', 'no forcing lines')})")
             continue
-        se, ci = t.get("Km_se"), t.get("Km_interval")
-        if ci:
-            # The profile follows the valley in which Km trades with the other gains; the
-            # curvature at the optimum (Km_se) can be 10^3 times the estimate there.
-            hi = "unbounded" if ci[1] is None or not math.isfinite(ci[1]) else f"{ci[1]:.3g}"
-            km = (f"Km {t['Km']:.3g} ({100 * (t.get('interval_level') or 0.95):g} % profile interval "
-                  f"{ci[0]:.3g} to {hi})")
-        else:
-            km = f"Km {t['Km']:.3g}" + (f" +/- {se:.2g}" if se is not None and math.isfinite(se) else "")
+        level = f"{100 * (t.get('interval_level') or 0.95):g} %"
+        # Km/|Ke| first: Km itself trades with Ke and the proprioceptive gain along a valley
+        # (identification.motion_test), so its interval can span decades where the ratio's
+        # does not; Km follows.
+        gains = [_estimate("Km/|Ke|", t.get("Km_per_Ke"), t.get("Km_per_Ke_se"), t.get("Km_per_Ke_interval"),
+                           level),
+                 _estimate("Km", t["Km"], t.get("Km_se"), t.get("Km_interval"), level)]
+        gains = [g for g in gains if g]
+        km = ", ".join(gains)
         runs = f" ({t['runs']} runs)" if t.get("runs", 1) > 1 else ""
         out.append(f"  {pid}{runs}: misfit removed {100 * t['gain']:.1f} %, F = {t['lr']:.3g}, "
                    f"p = {t['p_value']:.2g}{' *' if t['significant'] else ''}, {km}")
