@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -102,6 +103,17 @@ def test_identify_and_frf_take_repeated_runs_from_files(tmp_path, repeats, capsy
     out = tmp_path / "frf.json"
     assert main(["frf", *paths, "--plants", plants, "--json", str(out)]) == 0
     assert "averaged over 3 run(s)" in capsys.readouterr().out
+    # The same runs as a lab writes them (semicolons, decimal commas): what reading did is
+    # said once for the three files, not once per file.
+    lab = []
+    for j, path in enumerate(paths):
+        text = Path(path).read_text(encoding="utf-8-sig").splitlines()
+        rows = [r if r.startswith("#") else r.replace(",", ";").replace(".", ",") for r in text]
+        lab.append(tmp_path / f"lab{j}.csv")
+        lab[-1].write_text("\n".join(rows) + "\n")
+    assert main(["frf", *map(str, lab), "--plants", plants]) == 0
+    notes = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("hesspipe: note:")]
+    assert notes == [f"hesspipe: note: 3 files ({lab[0]} … {lab[2]}): semicolon-separated with decimal commas"]
     obj = json.loads(out.read_text())
     assert obj["repeats"]["runs"] == 3 and obj["run"] == paths
     ident = tmp_path / "ident.json"

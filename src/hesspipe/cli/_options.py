@@ -88,13 +88,14 @@ def print_reading(reading) -> None:
         print(line, file=sys.stderr)
 
 
-def read_cli_run(path, args: argparse.Namespace, **kwargs):
-    """:func:`hesspipe.core.formats.read_run` with the command's run options, its notes on stderr."""
+def read_cli_runs(paths, args: argparse.Namespace, **kwargs) -> list:
+    """:func:`hesspipe.core.formats.read_run` of each path with the command's run options;
+    the notes of all of them on stderr once they are read (:func:`reading_lines`)."""
     from ..core.formats import read_run
 
-    run = read_run(path, **run_options(args), **kwargs)
-    print_reading({run.source: run.notes})
-    return run
+    runs = [read_run(path, **run_options(args), **kwargs) for path in paths]
+    print_reading({run.source: run.notes for run in runs})
+    return runs
 
 
 def seed_arg(text: str) -> int:

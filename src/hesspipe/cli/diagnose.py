@@ -67,11 +67,11 @@ def _diagnose(args) -> int:
         if not candidates:
             raise HesspipeError("--candidates: expected effect ids separated by commas, got nothing")
     plants = read_plants(args.plants)
-    from ._options import read_cli_run
+    from ._options import read_cli_runs
 
-    run, *repeats = (read_cli_run(path, args, min_samples=WELCH_SEGMENT) for path in args.run)
-    base = None if args.baseline_run is None else \
-        [read_cli_run(path, args, min_samples=WELCH_SEGMENT) for path in args.baseline_run]
+    runs = read_cli_runs([*args.run, *(args.baseline_run or [])], args, min_samples=WELCH_SEGMENT)
+    run, *repeats = runs[:len(args.run)]
+    base = None if args.baseline_run is None else runs[len(args.run):]
     result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
                       baseline_run=base, repeat_runs=repeats)
     print(format_report(result))

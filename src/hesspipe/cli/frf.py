@@ -87,13 +87,13 @@ def run(args) -> int:
     from ..core.formats import read_plants
     from ..identification.frf import estimate_frf
     from ..identification.frf_average import average_frf
-    from ._options import read_cli_run
+    from ._options import read_cli_runs
     from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
     curves = _model_curves(args.model) if args.model else None  # a bad file fails before any work
-    recs = [read_cli_run(path, args) for path in args.run]
+    recs = read_cli_runs(args.run, args)
     result = (average_frf(recs, plants, seed=args.seed) if len(recs) > 1 else
               estimate_frf(recs[0], plants, seed=args.seed))
     print(format_table(result))

@@ -9,7 +9,7 @@ import math
 
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.errors import HesspipeError
-from ._options import add_run_options, add_seed, add_terms, read_cli_run
+from ._options import add_run_options, add_seed, add_terms, read_cli_runs
 
 #: The library's names of identify's settings → this command's options.
 TERMS = {r"(^|: )free: ": r"\1--free: ", r"(^|: )fixed: ": r"\1--fix: ",
@@ -173,7 +173,7 @@ def run(args) -> int:
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     plants = read_plants(args.plants)
-    recs = [read_cli_run(path, args, min_samples=PaperWelch().nperseg) for path in args.run]
+    recs = read_cli_runs(args.run, args, min_samples=PaperWelch().nperseg)
     rec = recs[0]
     free = None
     if args.free is not None:
