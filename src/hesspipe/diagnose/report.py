@@ -29,7 +29,7 @@ def format_report(d: Diagnosis) -> str:
     out.append(f"Diagnosis of run '{d.run_id}' with the {d.baseline_model} model")
     pc = d.plant_check
     out.append(f"Plant check: fit {pc.fit_percent:.1f} % of the output from the measured control and "
-               f"disturbance; residual {'white' if pc.tests_control.white else 'NOT white'} "
+               f"disturbance, the plants started from rest; residual {'white' if pc.tests_control.white else 'NOT white'} "
                f"(p={pc.tests_control.whiteness_p:.2g}), independent of control: "
                f"{'yes' if pc.independence_p['control'] >= 0.01 else 'NO'} "
                f"(p={pc.independence_p['control']:.2g}), of disturbance: "
@@ -44,6 +44,11 @@ def format_report(d: Diagnosis) -> str:
         out.append(f"  -> {d.plant_finding['message']}; the small residual's dependence on an input "
                    "is not an aircraft-side effect any candidate explains (differences in how the "
                    "simulator integrated between samples, or the file's rounding, leave such a residual)")
+    elif d.plant_finding and d.plant_finding.get("explanations"):
+        # The check starts the plants from rest; a record taken mid-run behind an integrator
+        # (a yaw-angle task) then "fits" -46 % with exact plants. The finding's refit of the
+        # initial state is what says whether the plants match: print it.
+        out.append("  -> " + d.plant_finding["message"])
     dv = d.delay_verdict
     if dv is not None:
         runs = dv.get("runs", 1), dv.get("baseline_runs", 1)
