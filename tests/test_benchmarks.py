@@ -3,7 +3,8 @@
 ``bench_motion_limit`` and ``bench_flown_motion_limit`` call ``motion_test``'s private
 ``_fit`` and ``_predict`` to build their oracle; a change of those signatures broke both
 once without any test noticing. ``bench_drift_sidebands`` reads the generator's realised gain
-wander. ``bench_cohort_rule`` draws cohorts through the verdict. One seed each, the cheapest case.
+wander. ``bench_cohort_rule`` draws cohorts through the verdict. ``bench_lab_experiment`` writes
+files as a lab does, which must read back as the trial. One seed each, the cheapest case.
 """
 
 from __future__ import annotations
@@ -60,3 +61,26 @@ def test_cohort_rule_rates_use_the_verdict():
     r = m.rates(strong, plain, 1, 8, 40, np.random.default_rng(0))
     assert r == {"verdict": 0.0, "fisher": 1.0, "binomial": 0.0}
     assert m.rates(strong, plain, 8, 8, 5, np.random.default_rng(0))["verdict"] == 1.0
+
+
+def test_lab_experiment_files_read_back_as_the_trial(tmp_path):
+    # The stand-in's files (degrees, semicolons, decimal commas, CRLF, Windows-1252, the
+    # lab's own column names) must reach the tool as the generator's signals, in radians.
+    from hesspipe.core.formats import read_run
+    from hesspipe.humanlike import draw_trial, simulate_trial
+
+    m = _load("bench_lab_experiment")
+    trial = simulate_trial(draw_trial("1/s", 3, task="both", pilot="precision", output="angle", name="s01_motion_r1"))
+    path = tmp_path / "s01_motion_r1.csv"
+    m.lab_file(trial, path)
+    assert path.read_bytes().count(b"\r\n") == trial.time.size + 2
+    run = read_run(path, columns=m.COLUMNS)
+    assert run.synthetic   # the comment line says so
+    for name in ("reference", "disturbance", "output", "control"):
+        want = getattr(trial, name)
+        assert np.allclose(getattr(run, name), want, rtol=0, atol=1e-6 * (1 + np.abs(want).max())), name
+    cmp = {"pilot_of_run": {"a1": "a", "a2": "a"},
+           "pilots": [{"id": i, "motion_test": {"available": True, "Km_per_Ke": r, "Km": k}}
+                      for i, r, k in (("a1", 0.1, 1.0), ("a2", 0.3, 3.0))]}
+    cv = np.std([0.1, 0.3], ddof=1) / 0.2
+    assert np.allclose(m.variation(cmp), (cv, cv), rtol=1e-12, atol=0)

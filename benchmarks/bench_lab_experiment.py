@@ -1,0 +1,156 @@
+"""Benchmark: a motion / no-motion experiment written as a laboratory writes it, run through
+``hesspipe pilots`` (SYNTHETIC DATA).
+
+The stand-in for real yaw-tracking trials with and without simulator motion (issue 13):
+the independent generator's precision pilots (hesspipe.humanlike; McRuer form with the
+multimodal vestibular path, vestibular delay 0.15 s, gain wandering with CV 0.15), a yaw-angle
+display the cab turns with, target and disturbance on a sparse two-input layout (81.92 s at
+100 Hz), single and double integrator. Each of N persons flies R runs of each condition (one
+pilot drawn per person and condition, each run its own forcing phases, remnant and wander).
+The files are what a lab's logger writes: degrees, semicolons and decimal commas, CRLF,
+Windows-1252, the laboratory's own column names (``Time [s];Target [deg];Disturbance
+[deg];Yaw [deg];Stick [deg]``); the plants JSON has the yaw task's ``motion_path``.
+
+Each condition's folder goes through the command line as a user would type it::
+
+    hesspipe pilots FOLDER --plants plants.json --pilot-id '^(s[0-9]+)_' \\
+        --columns reference=Target,disturbance=Disturbance,output=Yaw,control=Stick
+
+Prints per condition the verdict, the per-person lines (Km/|Ke| and Km), the wall time, and
+for the motion conditions how much one person's Km/|Ke| and Km vary over the runs (median
+coefficient of variation).
+
+    python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from hesspipe.cli import main as hesspipe
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.seeds import derive_seed
+from hesspipe.humanlike import draw_trial, simulate_trial
+from hesspipe.humanlike.forcing import SPARSE_LAYOUT
+from hesspipe.humanlike.writer import plants_dict
+
+DEG = 180.0 / np.pi
+HEADER = "Time [s];Target [deg];Disturbance [deg];Yaw [deg];Stick [deg]"
+COLUMNS = "reference=Target,disturbance=Disturbance,output=Yaw,control=Stick"
+PLANTS = {"SI": "1/s", "DI": "K/s2"}
+
+
+def lab_file(trial, path: Path) -> None:
+    """`trial` as a lab's logger writes it (module doc), labelled SYNTHETIC in a comment line."""
+    rows = ["# SYNTHETIC: hesspipe.humanlike independent generator (benchmarks/bench_lab_experiment.py)", HEADER]
+    cols = np.column_stack([trial.time, DEG * trial.reference, DEG * trial.disturbance,
+                            DEG * trial.output, DEG * trial.control])
+    rows += [";".join(f"{v:.5f}".replace(".", ",") for v in row) for row in cols]
+    path.write_bytes(("\r\n".join(rows) + "\r\n").encode("cp1252"))
+
+
+def draw_person(plant: str, effects, seed: int, **kw):
+    """A trial spec of a person whose pilot meets the generator's crossover ranges (re-drawn
+    from derived seeds when one does not)."""
+    for attempt in range(20):
+        try:
+            return draw_trial(plant, derive_seed(seed, "attempt", str(attempt)), **kw, effects=effects)
+        except HesspipeError:
+            continue
+    raise HesspipeError(f"no pilot drawn for {plant} after 20 attempts (seed {seed})")
+
+
+def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, seed: int) -> dict:
+    """Write one condition's runs; return person -> the generator's pilot (its truth)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    effects = ("motion_feedback",) if cond == "motion" else ()
+    truth, spec = {}, None
+    for s in range(persons):
+        person = None
+        for r in range(runs):
+            kw = dict(task="both", pilot="precision", output="angle", tau_m=0.15, gain_drift=0.15,
+                      line_bins=SPARSE_LAYOUT["line_bins"], fs=SPARSE_LAYOUT["fs"], T_m=SPARSE_LAYOUT["T_m"],
+                      name=f"s{s + 1:02d}_{cond}_r{r + 1}")
+            seed_r = derive_seed(seed, tag, cond, str(s), str(r))
+            if person is None:
+                spec = draw_person(PLANTS[tag], effects, seed_r, **kw)
+                person = spec.pilot
+                truth[f"s{s + 1:02d}"] = {k: v for k, v in person.items() if isinstance(v, (int, float, str))}
+            else:   # the same person again: only forcing phases, remnant and wander are new
+                spec = draw_trial(PLANTS[tag], seed_r, effects=effects, pilot_params=person, **kw)
+            lab_file(simulate_trial(spec), folder / f"{spec.name}.csv")
+    (folder.parent / f"plants_{tag}.json").write_text(json.dumps(plants_dict(spec), indent=1))
+    return truth
+
+
+def run_pilots(folder: Path, plants: Path, out_json: Path) -> tuple[int, str, str, float]:
+    """``hesspipe pilots`` on `folder` in this process: (exit status, stdout, stderr, wall s)."""
+    out, err = io.StringIO(), io.StringIO()
+    t0 = time.perf_counter()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = hesspipe(["pilots", str(folder), "--plants", str(plants), "--pilot-id", "^(s[0-9]+)_",
+                         "--columns", COLUMNS, "--json", str(out_json)])
+    return code, out.getvalue(), err.getvalue(), time.perf_counter() - t0
+
+
+def variation(comparison: dict) -> tuple[float, float]:
+    """Median over persons of the coefficient of variation of Km/|Ke| and of Km over their runs
+    (the motion tests' fits)."""
+    by: dict[str, list] = {}
+    for p in comparison["pilots"]:
+        t = p["motion_test"]
+        if t.get("available"):
+            by.setdefault(comparison["pilot_of_run"].get(p["id"], p["id"]), []).append((t["Km_per_Ke"], t["Km"]))
+    cv = [[np.std(v, ddof=1) / np.mean(v) for v in zip(*runs)] for runs in by.values() if len(runs) > 1]
+    return statistics.median(c[0] for c in cv), statistics.median(c[1] for c in cv)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--persons", type=int, default=6)
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--plants", default="SI,DI", help="comma list of SI (1/s) and DI (K/s2)")
+    ap.add_argument("--out", default=None, help="keep the experiment's files here (default: a temporary folder)")
+    args = ap.parse_args(argv)
+    print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, files as a lab writes them")
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(args.out or tmp)
+        for tag in args.plants.split(","):
+            for cond in ("motion", "static"):
+                folder = root / f"{tag}_{cond}"
+                t0 = time.perf_counter()
+                truth = write_condition(folder, tag, cond, args.persons, args.runs, args.seed)
+                print(f"\n== {tag} ({PLANTS[tag]}), {cond}: {args.persons} persons x {args.runs} runs written "
+                      f"in {time.perf_counter() - t0:.0f} s")
+                out_json = root / f"{tag}_{cond}.json"
+                code, out, err, wall = run_pilots(folder, root / f"plants_{tag}.json", out_json)
+                if code != 0:
+                    print(f"hesspipe pilots exited {code}: {err.strip()}")
+                    return 1
+                lines = out.splitlines()
+                print("\n".join(ln for ln in lines if ln.startswith(("MOTION VERDICT", "  s"))))
+                notes = [ln for ln in err.splitlines() if ln.startswith("hesspipe: note:")]
+                print(f"hesspipe pilots: {wall:.0f} s wall; {len(notes)} note line(s) on stderr")
+                if cond == "motion":
+                    cmp = json.loads(out_json.read_text())
+                    r, k = variation(cmp)
+                    ratio = {s: t.get("km_ratio") for s, t in truth.items()}
+                    print(f"one person's runs: median coefficient of variation Km/|Ke| {r:.2f}, Km {k:.2f}; "
+                          "the generator's km_ratio per person (its own model's, not Hess's Km/Ke): "
+                          + ", ".join(f"{s} {v:.2f}" for s, v in ratio.items()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
