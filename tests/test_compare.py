@@ -201,6 +201,8 @@ def test_pilots_config_defaults_and_errors():
     assert cfg.n == 6 and cfg.effects == ("motion_feedback",) and cfg.optimizer == "apid"
     cfg = PilotsConfig.from_table({"n": 3, "seed": 5, "effects": [], "workers": 2}, "x.toml")
     assert (cfg.n, cfg.seed, cfg.effects, cfg.workers) == (3, 5, (), 2)
+    cfg = PilotsConfig.from_table({"data": "runs", "plants": "yaw.json", "pilot_id": "^(s[0-9]+)_"}, "x.toml")
+    assert (cfg.plants, cfg.pilot_id) == ("yaw.json", "^(s[0-9]+)_")
     for table, words in [({"n": 0}, "field 'pilots.n': expected an integer >= 1, got 0"),
                          ({"optimizer": "ga"}, "field 'pilots.optimizer'"),
                          ({"effects": "motion_feedback"}, "field 'pilots.effects': expected a list"),
@@ -211,7 +213,11 @@ def test_pilots_config_defaults_and_errors():
                          ({"seed": -1}, "field 'pilots.seed': expected an integer >= 0"),
                          ({"seed": 2 ** 63}, "field 'pilots.seed': expected an integer >= 0 <= 9223372036854775807"),
                          ({"resample": "yes"}, "field 'pilots.resample': expected true or false"),
-                         ({"columns": "stick"}, "field 'pilots.columns': columns: expected ROLE=NAME")]:
+                         ({"columns": "stick"}, "field 'pilots.columns': columns: expected ROLE=NAME"),
+                         ({"plants": "yaw.json"}, "field 'pilots.plants': a plants file is for the runs of a "
+                                                  "data folder"),
+                         ({"data": "runs", "pilot_id": "^(s[0-9]+_"}, "field 'pilots.pilot_id': expected a "
+                                                                       "regular expression, got ")]:
         with pytest.raises(HesspipeError, match=words.replace(".", r"\.").replace("(", r"\(")):
             PilotsConfig.from_table(table, "x.toml")
 

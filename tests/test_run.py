@@ -204,3 +204,49 @@ def test_sigterm_during_the_pilots_stage_leaves_no_worker_and_no_half_stage(tmp_
     assert err.strip().splitlines()[-1] == "hesspipe: terminated" and "Traceback" not in err
     assert not (out / "pilots" / MANIFEST).exists() and (out / "plants" / MANIFEST).exists()
     assert not [p for p in out.rglob(".hesspipe-staging-*")] + [p for p in out.rglob(".hesspipe-tmp-*")]
+
+
+def test_own_recordings_with_their_own_plants_and_persons(reference, tmp_path, capsys):
+    """`[pilots] data`, `plants`, `columns` and `pilot_id`: a lab's runs (semicolons, decimal
+    commas, degrees) of another task than the aircraft flown here are identified and
+    diagnosed with their own plants, each person's runs counted as one pilot; a change of
+    the plants file makes the pilots and diagnose stages stale (SYNTHETIC: the independent
+    generator's precision pilots on 1/s)."""
+    import json
+
+    import numpy as np
+
+    from hesspipe.humanlike import draw_trial, simulate_trial
+    from hesspipe.humanlike.writer import plants_dict
+
+    cfg, out, _ = reference
+    work = tmp_path / "out"
+    shutil.copytree(out, work)
+    lab = tmp_path / "lab"
+    lab.mkdir()
+    for person in (1, 2):
+        for r in (1, 2):
+            spec = draw_trial("1/s", 10 * person + r, task="both", pilot="precision", output="angle",
+                              name=f"s{person}_r{r}")
+            t = simulate_trial(spec)
+            rows = ["# SYNTHETIC (hesspipe.humanlike)", "Time [s];Target [deg];Dist [deg];Yaw [deg];Stick [deg]"]
+            rows += [";".join(f"{v:.6g}".replace(".", ",") for v in row) for row in np.column_stack(
+                [t.time, *(np.degrees(x) for x in (t.reference, t.disturbance, t.output, t.control))])]
+            (lab / f"{spec.name}.csv").write_text("\r\n".join(rows) + "\r\n")
+    (tmp_path / "yaw.json").write_text(json.dumps(plants_dict(spec)))
+    own = tmp_path / "own.toml"
+    own.write_text(cfg.read_text().replace("[pilots]\n", '[pilots]\ndata = "lab"\nplants = "yaw.json"\n'
+                   'pilot_id = "^(s[0-9]+)_"\ncolumns = "reference=Target,disturbance=Dist,output=Yaw,control=Stick"\n'))
+    capsys.readouterr()
+    assert main(["run", "--config", str(own), "--out", str(work)]) == 0
+    assert _ran(capsys) == ["pilots", "diagnose", "report"]
+    comp = json.loads((work / "pilots" / "comparison.json").read_text())
+    assert comp["plants"]["control_to_output"] == plants_dict(spec)["control_to_output"]
+    verdict = comp["motion_verdict"]
+    assert verdict["n_tested"] == 2 and "2 pilots, 4 runs" in verdict["sentence"]
+    assert json.loads((work / "diagnose" / "diagnosis.json").read_text())["run"] == "s1_r1"
+    assert "Plants the runs were identified with: Yc = `" in (work / "report.md").read_text()
+    (tmp_path / "yaw.json").write_text(json.dumps({**plants_dict(spec), "source": "edited"}))
+    assert main(["status", "--config", str(own), "--out", str(work)]) == 0
+    state = {ln.split()[0]: ln.split()[1] for ln in capsys.readouterr().out.splitlines()}
+    assert [s for s in STAGES if state[s] != "fresh"] == ["pilots", "diagnose", "report"]

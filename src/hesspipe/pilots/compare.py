@@ -460,7 +460,7 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
                      spec=cohort_spec(config.cohort, duration_s=config.duration_s, dt_s=config.dt_s))
     result = compare_pilots(source, plants, settings, workers=config.workers or None,
                             scheduler=config.scheduler or None, columns=config.columns or None,
-                            resample=config.resample, progress=progress)
+                            resample=config.resample, progress=progress, pilot_id=config.pilot_id or None)
     write_comparison(result, out_dir, draw=draw if config.figures else None)
     return result
 

@@ -83,7 +83,9 @@ def format_table(comparison) -> str:
     s = comparison.improvement_stats()
     if s["n"]:
         spread = f", sd {100 * s['std']:.1f} %" if math.isfinite(s["std"]) else ""
-        out.append(f"improvement (1 - expanded/original fitness) over {s['n']} pilot(s): mean "
+        # With a pilot's several runs (pilot_id) the improvement is each run's.
+        grouped = any(pid != rid for rid, pid in (getattr(comparison, "groups", None) or {}).items())
+        out.append(f"improvement (1 - expanded/original fitness) over {s['n']} {'run' if grouped else 'pilot'}(s): mean "
                    f"{100 * s['mean']:.1f} %{spread}, range {100 * s['min']:.1f} .. {100 * s['max']:.1f} %")
     notes: dict[str, int] = {}
     for p in comparison.pilots:

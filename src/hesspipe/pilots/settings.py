@@ -8,6 +8,7 @@ format and the batch, plus the identification settings by the same names
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, DEFAULT_DISPLAY, DISPLAYS, OPTIMIZERS
@@ -188,6 +189,14 @@ class PilotsConfig(Settings):
         The JSBSim cohort's forcing (:data:`FORCINGS`): "paper" (default) or "two_input"
         (:data:`hesspipe.flight.target.TWO_INPUT`: the flight is ``duration_s`` plus its
         15 s run-in, the record the last ``duration_s``). Only with simulator "jsbsim".
+    plants : str
+        A plants JSON for the runs in ``data`` (another task or simulator than the
+        aircraft flown here: a yaw experiment's controlled element and ``motion_path``);
+        "" (default): the plants stage's. Only with ``data``; diagnose uses it too.
+    pilot_id : str
+        A regular expression that finds the pilot in each file name of ``data`` (its group
+        ``pilot``, else its first group) when pilots flew several runs; "" (default):
+        every file is a pilot (:func:`hesspipe.pilots.verdict.pilot_groups`).
     """
 
     TABLE = "pilots"
@@ -215,6 +224,8 @@ class PilotsConfig(Settings):
     display: str = DEFAULT_DISPLAY
     cohort: str = "crossover_model"
     forcing: str = "paper"
+    plants: str = ""
+    pilot_id: str = ""
 
     def _checked(self, f: Fields) -> dict:
         effects = f.strings("effects")
@@ -229,8 +240,16 @@ class PilotsConfig(Settings):
                    figures=f.boolean("figures"), columns=f.string("columns"),
                    resample=f.boolean("resample"), simulator=f.string("simulator", choices=SIMULATORS),
                    cohort=f.string("cohort", choices=COHORT_DRAWS),
-                   forcing=f.string("forcing", choices=FORCINGS),
-                   **_identification(f, "band_hz"))
+                   forcing=f.string("forcing", choices=FORCINGS), plants=f.string("plants"),
+                   pilot_id=f.string("pilot_id"), **_identification(f, "band_hz"))
+        if out["plants"] and not out["data"]:
+            raise f.fail("plants", "a plants file is for the runs of a data folder (the synthetic cohort "
+                                   "flies the plants stage's aircraft); set data too, or leave plants empty")
+        if out["pilot_id"]:
+            try:
+                re.compile(out["pilot_id"])
+            except re.error as exc:
+                raise f.fail("pilot_id", f"expected a regular expression, got {out['pilot_id']!r} ({exc})") from None
         if out["forcing"] != "paper" and out["simulator"] != "jsbsim":
             raise f.fail("forcing", f"a forcing other than 'paper' is flown only by simulator 'jsbsim'; "
                                     f"got simulator {out['simulator']!r}")

@@ -117,6 +117,12 @@ def _analytic(folder: Path, root: Path) -> list[str]:
     return out
 
 
+def _ratio(params: dict):
+    # Km/|Ke| of the expanded fit: what stays comparable along the Ke-Km-K1K2 valley.
+    km, ke = params.get("Km"), params.get("Ke")
+    return km / abs(ke) if km is not None and ke else None
+
+
 def _pilots(folder: Path, root: Path) -> list[str]:
     comp = _load(folder / "comparison.json")
     if comp is None:
@@ -127,6 +133,11 @@ def _pilots(folder: Path, root: Path) -> list[str]:
     if synthetic:
         out += [SYNTHETIC_NOTE, ""]
     out += _simulator_note(folder)
+    plants = comp.get("plants") or {}
+    if _load(folder / "cohort" / "cohort.json") is None and {"control_to_output", "disturbance_to_output"} <= set(plants):
+        # A data folder's runs may come with their own task's plants ([pilots] plants): say which.
+        out += [f"Plants the runs were identified with: Yc = `{format_tf(plants['control_to_output'])}`, "
+                f"Yd = `{format_tf(plants['disturbance_to_output'])}`.", ""]
     crit = (comp.get("settings") or {}).get("criterion", "paper")
     fit_text = ("Fitness is the paper's Eq. 10 (RMS difference of control PSDs, lower is better). "
                 if crit == "paper" else
@@ -141,10 +152,10 @@ def _pilots(folder: Path, root: Path) -> list[str]:
         o, f, e = p["original"], p["expanded_fixed"], p["expanded"]
         rows.append([p["id"] + (" (synthetic)" if p.get("synthetic") else ""),
                      *(e["parameters"].get(k) for k in ("Ke", "K1", "K2", "Km")),
-                     o["fitness"], f["fitness"], e["fitness"],
+                     _ratio(e["parameters"]), o["fitness"], f["fitness"], e["fitness"],
                      "—" if p.get("improvement") is None else f"{100 * p['improvement']:.1f} %"])
-    out += _table(["pilot", "Ke", "K1", "K2", "Km", "fitness original", "fitness expanded, Km fixed",
-                   "fitness expanded", "improvement"], rows)
+    out += _table(["pilot", "Ke", "K1", "K2", "Km", "Km/\\|Ke\\|", "fitness original",
+                   "fitness expanded, Km fixed", "fitness expanded", "improvement"], rows)
     mean, std = comp.get("mean_improvement"), comp.get("std_improvement")
     if mean is not None:
         out += [f"Mean improvement from motion feedback over {comp.get('n_pilots')} pilot(s): "

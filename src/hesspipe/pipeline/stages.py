@@ -24,7 +24,7 @@ SECTIONS = ("flight", "plants", "analytic", "pilots", "diagnose", "report")
 def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
     """Load ``pipeline/default.toml`` merged with the user's file and overrides.
 
-    Relative paths in the user's file (``[pilots] data``, ``[diagnose] run``)
+    Relative paths in the user's file (``[pilots] data`` and ``plants``, ``[diagnose] run``)
     are resolved against its folder.
 
     Parameters
@@ -61,7 +61,7 @@ def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
         if unknown:
             raise HesspipeError(f"{path}: field '{unknown[0]}': unknown section; expected seed or one of "
                                 f"{', '.join(SECTIONS)}")
-        for section, key in (("pilots", "data"), ("diagnose", "run")):
+        for section, key in (("pilots", "data"), ("pilots", "plants"), ("diagnose", "run")):
             value = user.get(section, {}).get(key) if isinstance(user.get(section), dict) else None
             if isinstance(value, str) and value and not Path(value).is_absolute():
                 user[section][key] = str((Path(path).parent / value).resolve())
@@ -86,7 +86,7 @@ def load_config(path=None, *, aircraft=None, seed=None) -> tuple[dict, str]:
 
 
 #: (table, field) of the names and paths the pipeline itself reads.
-PATH_FIELDS = (("flight", "aircraft"), ("analytic", "model"), ("pilots", "data"),
+PATH_FIELDS = (("flight", "aircraft"), ("analytic", "model"), ("pilots", "data"), ("pilots", "plants"),
                ("diagnose", "run"), ("diagnose", "model"))
 
 
@@ -272,7 +272,7 @@ def analytic(ctx) -> None:
 # -- pilots -------------------------------------------------------------------------------
 
 def pilots_inputs(section: dict, config: dict) -> list:
-    """External input of the pilots stage: the ``[pilots] data`` folder, if set.
+    """External inputs of the pilots stage: the ``[pilots] data`` folder and ``plants`` file, if set.
 
     Parameters
     ----------
@@ -284,10 +284,18 @@ def pilots_inputs(section: dict, config: dict) -> list:
     Returns
     -------
     list of Path
-        ``[Path(data)]``, or empty for the synthetic cohort (``data`` unset).
+        ``[Path(data)]`` and ``Path(plants)``, or empty for the synthetic cohort (``data`` unset).
     """
-    data = section.get("data")
-    return [Path(data)] if isinstance(data, str) and data else []
+    return [Path(section[k]) for k in ("data", "plants") if isinstance(section.get(k), str) and section[k]]
+
+
+def _study_plants(ctx):
+    """The plants the pilots' runs are identified and diagnosed with: ``[pilots] plants``
+    (a data folder's own task), else the plants stage's."""
+    from ..core.formats import read_plants
+
+    own = ctx.config.get("pilots", {}).get("plants")
+    return read_plants(own if isinstance(own, str) and own else ctx.upstream["plants"] / "plants.json")
 
 
 def pilots(ctx) -> None:
@@ -308,12 +316,11 @@ def pilots(ctx) -> None:
     HesspipeError
         If any run failed, naming each.
     """
-    from ..core.formats import read_plants
     from ..pilots.compare import PilotsConfig, run_study
     from ..viz.compare import draw_comparison
 
     config = PilotsConfig.from_table(ctx.section, ctx.source)
-    plants_ = read_plants(ctx.upstream["plants"] / "plants.json")
+    plants_ = _study_plants(ctx)
     if not config.data and config.simulator == "jsbsim":
         from ..pilots.flown import fly_pipeline_cohort
 
@@ -361,7 +368,8 @@ def diagnose(ctx) -> None:
     """Diagnose one run: ``diagnosis.json``, ``diagnosis.md`` and ``diagnosis.png``.
 
     The run is ``[diagnose] run``, else the first run of the pilots stage's
-    ``comparison.json``; it is read with ``[pilots] columns``/``resample``.
+    ``comparison.json``; it is read with ``[pilots] columns``/``resample`` and diagnosed
+    with the pilots' plants (``[pilots] plants``, else the plants stage's).
 
     Parameters
     ----------
@@ -369,7 +377,7 @@ def diagnose(ctx) -> None:
         The stage's table (``ctx.section``), seed, staging folder
         (``ctx.out_dir``) and upstream folders.
     """
-    from ..core.formats import read_plants, read_run
+    from ..core.formats import read_run
     from ..core.io import write_json, write_text
     from ..core.paper import WELCH_SEGMENT
     from ..diagnose.report import format_report
@@ -385,30 +393,31 @@ def diagnose(ctx) -> None:
                        resample=bool(pilots_cfg.get("resample", False)))
     except HesspipeError as exc:
         raise HesspipeError(_config_terms(str(exc))) from None
-    result = run_diagnose(run, read_plants(ctx.upstream["plants"] / "plants.json"),
-                          model=model or "original", seed=ctx.seed, config=config)
+    result = run_diagnose(run, _study_plants(ctx), model=model or "original", seed=ctx.seed, config=config)
     write_json(ctx.out_dir / "diagnosis.json", result.to_dict())
     write_text(ctx.out_dir / "diagnosis.md", format_report(result) + "\n")
     plot_diagnosis(result, ctx.out_dir / "diagnosis.png")
 
 
 def diagnose_inputs(section: dict, config: dict) -> list:
-    """External input of the diagnose stage: the ``[diagnose] run`` file, if set.
+    """External inputs of the diagnose stage: the ``[diagnose] run`` file and the
+    ``[pilots] plants`` file, if set.
 
     Parameters
     ----------
     section : dict
         The stage's configuration table.
     config : dict
-        The whole configuration (unused).
+        The whole configuration (its ``[pilots] plants``).
 
     Returns
     -------
     list of Path
-        ``[Path(run)]``, or empty when the run comes from the pilots stage.
+        ``Path(run)`` and ``Path(plants)`` where set; empty when the run comes from the
+        pilots stage and the plants from the plants stage.
     """
-    run = section.get("run")
-    return [Path(run)] if isinstance(run, str) and run else []
+    run, own = section.get("run"), config.get("pilots", {}).get("plants")
+    return [Path(x) for x in (run, own) if isinstance(x, str) and x]
 
 
 # -- report -------------------------------------------------------------------------------
