@@ -77,7 +77,7 @@ from ..core.errors import HesspipeError
 from ..core.formats import as_runs
 from ..pilot.blocks import from_tf
 from ..pilot.crossover import gain_scale
-from ..pilot.hess import PilotModel
+from ..pilot.hess import PilotModel, km_per_ke
 from ..pilot.motion import motion_block, with_motion_path
 from ._lsq import best_least_squares, held_covariance
 
@@ -271,9 +271,8 @@ def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: 
     errors of 10^3-10^4 for a Km significant at p ~ 1e-25 (generator trials), while the
     profile follows the valley. Along that valley Ke and Km scale together with the
     proprioceptive gain (1 + K1 K2 where 1/T1 lies below the lines; module doc), so the
-    ratio's profile is
-    narrow where Km's spans decades. The upper end is ``inf`` when Km's search bound (for
-    the ratio: that bound over the optimum's |Ke|) is reached.
+    ratio's profile is narrow where Km's spans decades. The upper end is ``inf`` when Km's
+    search bound (for the ratio: that bound over the optimum's |Ke|) is reached.
     """
     i = free.index("Km")
     names = free[:i] + free[i + 1:]
@@ -456,7 +455,7 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "rss_original": rss_o,
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
             "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": float(p_e["Km"]),
-            "Km_per_Ke": float(p_e["Km"]) / abs(float(p_e["Ke"])) if p_e["Ke"] else math.nan,
+            "Km_per_Ke": km_per_ke(p_e),
             "tau_m": float(p_e.get("tau_m", 0.0)),
             "Km_se": km_se,
             "significant": bool(p_value < ALPHA),

@@ -274,6 +274,29 @@ def core_loop(p: Mapping[str, float]) -> Loop:
     return Loop(visual=visual, vestibular=Block(), neuromuscular=nm, proprioceptive=pf)
 
 
+def km_per_ke(p: Mapping[str, float]) -> float:
+    """Km/|Ke|: the vestibular path's gain relative to the visual one (output units per
+    rad/s of cab motion; dimensionless on a rate task, s on an angle task).
+
+    Where the proprioceptive corner 1/T1 lies below the frequencies that matter, the
+    inner loop ``NM/(1 + NM K1 K2)`` is one gain ``1/(1 + K1 K2)`` times a neuromuscular
+    mode, so Ke and Km scale together along a valley of (K1, wn, zn) that data hardly
+    bound; their ratio is the same all along it, and is what compares pilots.
+
+    Parameters
+    ----------
+    p : mapping
+        Pilot parameters with Ke and, for a model with motion feedback, Km.
+
+    Returns
+    -------
+    float
+        NaN without Km or with Ke = 0.
+    """
+    km, ke = p.get("Km"), p.get("Ke")
+    return float(km) / abs(float(ke)) if km is not None and ke else float("nan")
+
+
 def model_from_name(name: str | PilotModel) -> PilotModel:
     """"original", "expanded", or "+"-joined effect ids ("expanded+remnant").
 

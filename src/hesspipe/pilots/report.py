@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..core.io import write_json, write_text
+from ..pilot.hess import km_per_ke
 from .settings import CONFIGURATIONS
 from .verdict import verdict_lines
 
@@ -25,10 +26,7 @@ def _fmt(x, spec=".3g") -> str:
 
 def _km_per_ke(params) -> str:
     # Km/|Ke| of a configuration with Km ("x" without): the comparable motion gain.
-    if "Km" not in params:
-        return "x"
-    km, ke = params.get("Km"), params.get("Ke")
-    return _fmt(km / abs(ke)) if km is not None and ke else "-"
+    return _fmt(km_per_ke(params)) if "Km" in params else "x"
 
 
 def format_table(comparison) -> str:
