@@ -18,9 +18,12 @@ Each condition's folder goes through the command line as a user would type it::
 
 Prints per condition the verdict, the per-person lines (Km/|Ke| and Km), the wall time, and
 for the motion conditions how much one person's Km/|Ke| and Km vary over the runs (median
-coefficient of variation).
+coefficient of variation). With ``--diagnose`` also every run through ``hesspipe diagnose
+RUN --plants plants.json --columns ...`` (one run at a time, as issue 13's real-trial check
+counts): how many runs of each condition are named ``motion_feedback``, what else is named,
+and the median CPU time per diagnosis.
 
-    python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR]
+    python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
 """
 
 from __future__ import annotations
@@ -103,6 +106,28 @@ def run_pilots(folder: Path, plants: Path, out_json: Path) -> tuple[int, str, st
     return code, out.getvalue(), err.getvalue(), time.perf_counter() - t0
 
 
+def diagnose_runs(folder: Path, plants: Path) -> tuple[int, int, dict, float]:
+    """``hesspipe diagnose`` on every run of `folder`, one at a time: (runs named
+    motion_feedback, runs, other names -> count, median CPU s per diagnosis)."""
+    named, others, cpu = 0, {}, []
+    paths = sorted(folder.glob("*.csv"))
+    for path in paths:
+        out_json = folder.parent / f"{folder.name}-{path.stem}.diagnosis.json"
+        t0 = time.process_time()
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            code = hesspipe(["diagnose", str(path), "--plants", str(plants), "--columns", COLUMNS,
+                             "--json", str(out_json)])
+        cpu.append(time.process_time() - t0)
+        if code != 0:
+            raise HesspipeError(f"hesspipe diagnose {path} exited {code}")
+        names = json.loads(out_json.read_text())["named_effects"]
+        named += "motion_feedback" in names
+        for n in names:
+            if n != "motion_feedback":
+                others[n] = others.get(n, 0) + 1
+    return named, len(paths), others, statistics.median(cpu)
+
+
 def variation(comparison: dict) -> tuple[float, float]:
     """Median over persons of the coefficient of variation of Km/|Ke| and of Km over their runs
     (the motion tests' fits)."""
@@ -122,6 +147,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--plants", default="SI,DI", help="comma list of SI (1/s) and DI (K/s2)")
     ap.add_argument("--out", default=None, help="keep the experiment's files here (default: a temporary folder)")
+    ap.add_argument("--diagnose", action="store_true", help="also diagnose every run on its own")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, files as a lab writes them")
     with tempfile.TemporaryDirectory() as tmp:
@@ -142,6 +168,11 @@ def main(argv=None) -> int:
                 print("\n".join(ln for ln in lines if ln.startswith(("MOTION VERDICT", "  s"))))
                 notes = [ln for ln in err.splitlines() if ln.startswith("hesspipe: note:")]
                 print(f"hesspipe pilots: {wall:.0f} s wall; {len(notes)} note line(s) on stderr")
+                if args.diagnose:
+                    named, n, others, cpu = diagnose_runs(folder, root / f"plants_{tag}.json")
+                    print(f"hesspipe diagnose, run by run: motion_feedback named on {named}/{n} runs; other "
+                          f"names: {', '.join(f'{k} {v}/{n}' for k, v in sorted(others.items())) or 'none'}; "
+                          f"median CPU {cpu:.2f} s per diagnosis")
                 if cond == "motion":
                     cmp = json.loads(out_json.read_text())
                     r, k = variation(cmp)
