@@ -43,23 +43,18 @@ import numpy as np
 from hesspipe.cli import main as hesspipe
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.seeds import derive_seed
-from hesspipe.humanlike import draw_trial, simulate_trial
+from hesspipe.humanlike import csv_bytes, draw_trial, simulate_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
-from hesspipe.humanlike.writer import plants_dict
+from hesspipe.humanlike.writer import LAB, plants_dict
 
-DEG = 180.0 / np.pi
-HEADER = "Time [s];Target [deg];Disturbance [deg];Yaw [deg];Stick [deg]"
-COLUMNS = "reference=Target,disturbance=Disturbance,output=Yaw,control=Stick"
+COLUMNS = ",".join(f"{role}={LAB['names'][role]}" for role in ("reference", "disturbance", "output", "control"))
 PLANTS = {"SI": "1/s", "DI": "K/s2"}
 
 
 def lab_file(trial, path: Path) -> None:
-    """`trial` as a lab's logger writes it (module doc), labelled SYNTHETIC in a comment line."""
-    rows = ["# SYNTHETIC: hesspipe.humanlike independent generator (benchmarks/bench_lab_experiment.py)", HEADER]
-    cols = np.column_stack([trial.time, DEG * trial.reference, DEG * trial.disturbance,
-                            DEG * trial.output, DEG * trial.control])
-    rows += [";".join(f"{v:.5f}".replace(".", ",") for v in row) for row in cols]
-    path.write_bytes(("\r\n".join(rows) + "\r\n").encode("cp1252"))
+    """`trial` as a lab's logger writes it (the generator's :data:`~hesspipe.humanlike.writer.LAB`
+    style, module doc), labelled synthetic in its comment line."""
+    path.write_bytes(csv_bytes(trial, LAB))
 
 
 def draw_person(plant: str, effects, seed: int, **kw):

@@ -267,6 +267,30 @@ def test_readable_by_hesspipe_rounded_times(tmp_path, time_style):
     assert abs(run.dt / (tr.time[1] - tr.time[0]) - 1) < 1e-6
 
 
+@pytest.mark.parametrize("style", [{}, {"sep": "\t", "encoding": "utf-16"},
+                                   {"sep": ",", "decimal": ",", "degrees": True}])
+def test_a_laboratorys_own_files_read_back_as_the_trial(tmp_path, style):
+    # The LAB style (semicolons, decimal commas, degrees, CRLF, Windows-1252, the lab's own
+    # names) and variations of it; a separator that is also the decimal mark is refused.
+    from hesspipe.core.errors import HesspipeError
+    from hesspipe.core.formats import read_run
+    from hesspipe.humanlike.writer import LAB
+
+    tr = simulate_trial(draw_trial("1/s", 6, **SHORT))
+    st = {**LAB, **style}
+    if st["sep"] == st["decimal"]:
+        with pytest.raises(HesspipeError, match="fields 'sep' and 'decimal'"):
+            write_trial(tmp_path, tr, style=st)
+        return
+    path = write_trial(tmp_path, tr, style=st)
+    run = read_run(path, columns=",".join(f"{r}={LAB['names'][r]}" for r in ("reference", "disturbance",
+                                                                           "output", "control")))
+    assert run.synthetic and len(run.time) == len(tr.time)
+    for name in ("reference", "disturbance", "output", "control"):
+        want = getattr(tr, name)
+        assert np.allclose(getattr(run, name), want, rtol=0, atol=1e-6 * (1 + np.abs(want).max())), name
+
+
 @pytest.mark.parametrize("output", ["rate", "angle"])
 def test_motion_feedback_is_simulated_as_reported(output, tmp_path):
     spec = draw_trial("roll", 9, task="both", pilot="hess", effects=("motion_feedback",),

@@ -214,10 +214,8 @@ def test_own_recordings_with_their_own_plants_and_persons(reference, tmp_path, c
     generator's precision pilots on 1/s)."""
     import json
 
-    import numpy as np
-
-    from hesspipe.humanlike import draw_trial, simulate_trial
-    from hesspipe.humanlike.writer import plants_dict
+    from hesspipe.humanlike import csv_bytes, draw_trial, simulate_trial
+    from hesspipe.humanlike.writer import LAB, plants_dict
 
     cfg, out, _ = reference
     work = tmp_path / "out"
@@ -228,15 +226,12 @@ def test_own_recordings_with_their_own_plants_and_persons(reference, tmp_path, c
         for r in (1, 2):
             spec = draw_trial("1/s", 10 * person + r, task="both", pilot="precision", output="angle",
                               name=f"s{person}_r{r}")
-            t = simulate_trial(spec)
-            rows = ["# SYNTHETIC (hesspipe.humanlike)", "Time [s];Target [deg];Dist [deg];Yaw [deg];Stick [deg]"]
-            rows += [";".join(f"{v:.6g}".replace(".", ",") for v in row) for row in np.column_stack(
-                [t.time, *(np.degrees(x) for x in (t.reference, t.disturbance, t.output, t.control))])]
-            (lab / f"{spec.name}.csv").write_text("\r\n".join(rows) + "\r\n")
+            (lab / f"{spec.name}.csv").write_bytes(csv_bytes(simulate_trial(spec), LAB))
     (tmp_path / "yaw.json").write_text(json.dumps(plants_dict(spec)))
     own = tmp_path / "own.toml"
     own.write_text(cfg.read_text().replace("[pilots]\n", '[pilots]\ndata = "lab"\nplants = "yaw.json"\n'
-                   'pilot_id = "^(s[0-9]+)_"\ncolumns = "reference=Target,disturbance=Dist,output=Yaw,control=Stick"\n'))
+                   'pilot_id = "^(s[0-9]+)_"\ncolumns = "reference=Target,disturbance=Disturbance,output=Yaw,'
+                   'control=Stick"\n'))
     capsys.readouterr()
     assert main(["run", "--config", str(own), "--out", str(work)]) == 0
     assert _ran(capsys) == ["pilots", "diagnose", "report"]

@@ -19,6 +19,19 @@ or given:
     column order (names as in SPEC).
 ``epoch0``
     Unix time of the first sample (epoch styles).
+
+Never drawn, given for a laboratory's own files (:data:`LAB`):
+
+``sep``, ``decimal``
+    field separator (``","``, ``";"``, ``"\t"``) and decimal mark (``"."`` or ``","``,
+    not the separator).
+``degrees``
+    every signal in degrees (times 180/pi), its header ``NAME [deg]``.
+``names``
+    the header of each column by SPEC name (missing: the SPEC name).
+``encoding``
+    ``"utf-8"``, ``"cp1252"`` or ``"utf-16"`` (its own byte-order mark).
+``time`` may also be a printf format of seconds from the start (``"%.5f"``).
 """
 
 from __future__ import annotations
@@ -37,7 +50,16 @@ TIME_STYLES = ("g9", "ms", "epoch_ms", "epoch_us", "g17")
 COLUMNS = ("time", "disturbance", "output", "control", "reference")
 LABEL = "synthetic data: independent human-like generator"
 PLAIN = {"time": "g17", "values": "%.6g", "newline": "\n", "bom": False,
-         "columns": list(COLUMNS), "epoch0": 0.0}
+         "columns": list(COLUMNS), "epoch0": 0.0, "sep": ",", "decimal": ".", "degrees": False,
+         "names": None, "encoding": "utf-8"}
+LAB = {"time": "%.5f", "values": "%.5f", "newline": "\r\n", "sep": ";", "decimal": ",", "degrees": True,
+       "encoding": "cp1252", "columns": ["time", "reference", "disturbance", "output", "control"],
+       "names": {"time": "Time [s]", "reference": "Target", "disturbance": "Disturbance", "output": "Yaw",
+                 "control": "Stick"}}
+"""A laboratory's logger (a style to give, never drawn): seconds and degrees with five
+decimals, semicolons and decimal commas, CRLF, Windows-1252, its own column names
+(``--columns reference=Target,disturbance=Disturbance,output=Yaw,control=Stick`` reads it)."""
+ENCODINGS = ("utf-8", "cp1252", "utf-16")
 
 
 def draw_style(rng: np.random.Generator) -> dict:
@@ -66,16 +88,24 @@ def _style(style) -> dict:
         raise HesspipeError(f"style: expected 'plain', one of {', '.join(TIME_STYLES)} "
                             f"or a dict, got {style!r}")
     out = {**PLAIN, **dict(style)}
-    if out["time"] not in TIME_STYLES:
-        raise HesspipeError(f"style: field 'time': expected one of {', '.join(TIME_STYLES)}, "
-                            f"got {out['time']!r}")
+    if out["time"] not in TIME_STYLES and not str(out["time"]).startswith("%"):
+        raise HesspipeError(f"style: field 'time': expected one of {', '.join(TIME_STYLES)} "
+                            f"or a printf format, got {out['time']!r}")
     if sorted(out["columns"]) != sorted(COLUMNS):
         raise HesspipeError(f"style: field 'columns': expected an order of {', '.join(COLUMNS)}")
+    if out["sep"] not in (",", ";", "\t") or out["decimal"] not in (".", ",") or out["sep"] == out["decimal"]:
+        raise HesspipeError(f"style: fields 'sep' and 'decimal': expected a separator of ',', ';' or tab "
+                            f"and another decimal mark '.' or ',', got {out['sep']!r} and {out['decimal']!r}")
+    if out["encoding"] not in ENCODINGS:
+        raise HesspipeError(f"style: field 'encoding': expected one of {', '.join(ENCODINGS)}, "
+                            f"got {out['encoding']!r}")
     return out
 
 
 def _times(t: np.ndarray, st: dict) -> list[str]:
     kind = st["time"]
+    if kind.startswith("%"):
+        return [kind % x for x in t]
     if kind == "g9":
         return [f"{x:.9g}" for x in t]
     if kind == "ms":
@@ -98,15 +128,20 @@ def csv_bytes(trial, style=None) -> bytes:
     """
     st = _style(style)
     cols = {"time": _times(trial.time, st)}
-    fmt = st["values"]
+    fmt, scale = st["values"], (180.0 / np.pi if st["degrees"] else 1.0)
     for name in COLUMNS[1:]:
-        cols[name] = [fmt % v for v in getattr(trial, name)]
-    nl = st["newline"]
+        cols[name] = [fmt % (scale * v) for v in getattr(trial, name)]
+    if st["decimal"] != ".":
+        cols = {c: [v.replace(".", st["decimal"]) for v in vals] for c, vals in cols.items()}
+    names = {c: (st["names"] or {}).get(c, c) + (" [deg]" if st["degrees"] and c != "time" else "")
+             for c in COLUMNS}
+    nl, sep = st["newline"], st["sep"]
     rows = [f"# {LABEL} ({trial.truth['generator']}); trial {trial.spec.name}",
-            ",".join(st["columns"])]
-    rows += [",".join(cols[c][i] for c in st["columns"]) for i in range(len(trial.time))]
+            sep.join(names[c] for c in st["columns"])]
+    rows += [sep.join(cols[c][i] for c in st["columns"]) for i in range(len(trial.time))]
     text = nl.join(rows) + nl
-    return (b"\xef\xbb\xbf" if st["bom"] else b"") + text.encode("utf-8")
+    bom = b"\xef\xbb\xbf" if st["bom"] and st["encoding"] == "utf-8" else b""
+    return bom + text.encode(st["encoding"])
 
 
 def plants_dict(spec) -> dict:
