@@ -143,22 +143,23 @@ no-motion runs of the generator's precision pilots (single and double integrator
 display, development seeds 100-109), and a lag's phase was read as 0.1 s of extra delay."""
 
 
-def _predict(params, model, cab, s, E, Y, yc_inv=None):
+def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None):
     # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
     # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model),
     # the visual path with the test's equaliser (VISUAL_EQUALISER; 0 when absent); on a
     # pursuit display (yc_inv, the controlled element's inverse at s) also + NM FF R with
-    # R = E + Y (FEEDFORWARD).
+    # R = E + Y (FEEDFORWARD). `cache`: Block.response's shape cache for this `s` (a fit's
+    # thousands of calls then evaluate the vestibular path's fixed shape once).
     loop = with_motion_path(model.loop(params), cab)
-    nm = loop.neuromuscular.response(s)
-    ves = loop.vestibular.response(s) * np.exp(-s * params.get("tau_m", 0.0))
-    vis = loop.visual.response(s) * (1.0 + s * params.get("TL_v", 0.0)) \
+    nm = loop.neuromuscular.response(s, cache)
+    ves = loop.vestibular.response(s, cache) * np.exp(-s * params.get("tau_m", 0.0))
+    vis = loop.visual.response(s, cache) * (1.0 + s * params.get("TL_v", 0.0)) \
         / (1.0 + s * params.get("TI_v", 0.0))
     drive = vis * E - ves * Y
     if yc_inv is not None:
         drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("tau0", 0.0)) \
             / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
-    return nm * drive / loop.return_difference(s, None)
+    return nm * drive / loop.return_difference(s, None, cache)
 
 
 def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w,
@@ -172,13 +173,14 @@ def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U
     `tie` sets parameters from the others at every step (a profile along Km/Ke).
     """
     runs = [] if groups is None else [groups == g for g in np.unique(groups)[1:]]
+    cache: dict = {}
 
     def resid(x):
         p = dict(base)
         p.update(zip(free, x))
         if tie is not None:
             tie(p)
-        pred = _predict(p, model, cab, s, E, Y, yc_inv)
+        pred = _predict(p, model, cab, s, E, Y, yc_inv, cache)
         for m in runs:
             ww = w[m] ** 2
             den = float(np.sum(ww * np.abs(pred[m]) ** 2))

@@ -109,10 +109,12 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
         p.update(zip(own, x[j:j + len(own)]))
         return p
 
+    caches = [{} for _ in data]   # each run's shape cache, tied to its lines (motion_test._predict)
+
     def resid(x):
         out = []
         for i, (s, E, Y, U, w) in enumerate(data):
-            r = (U - _predict(params(x, i), model, cab, s, E, Y)) * w
+            r = (U - _predict(params(x, i), model, cab, s, E, Y, cache=caches[i])) * w
             out += [r.real, r.imag]
         return np.concatenate(out)
 

@@ -101,10 +101,10 @@ class Block:
         out = []
         for a in self.terms:
             for b in other.terms:
-                num = a.num if b.num == (1.0,) else _poly(_pmul(a.num, b.num))
-                num = b.num if a.num == (1.0,) else num
-                den = a.den if b.den == (1.0,) else _poly(_pmul(a.den, b.den))
-                den = b.den if a.den == (1.0,) else den
+                # A unit polynomial on either side is the other's: no product computed (a
+                # gain times a block, the common case, multiplies nothing).
+                num = b.num if a.num == (1.0,) else a.num if b.num == (1.0,) else _poly(_pmul(a.num, b.num))
+                den = b.den if a.den == (1.0,) else a.den if b.den == (1.0,) else _poly(_pmul(a.den, b.den))
                 out.append(Term(num, den, a.delay + b.delay, a.gain * b.gain))
         return Block(tuple(out))
 
