@@ -329,11 +329,12 @@ def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: 
 
 
 def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, max_delay: float | None,
-                 display: str) -> tuple[dict, Callable[[float], list] | None]:
+                 display: str) -> tuple[dict, Callable[[float], dict] | None]:
     # :func:`motion_test` for one display ("compensatory" or "pursuit") on the lines `ld`,
-    # without Km's profile interval: returned is the result and the function that
-    # computes that interval at a level (None where the test is not available), so that
-    # with display "either" only the reported test pays for its profile.
+    # without the profile intervals: returned is the result and the function that
+    # computes those of Km and Km/|Ke| at a level (a dict of the two result keys; None
+    # where the test is not available), so that with display "either" only the reported
+    # test pays for its profiles.
     lines = ld.lines
     # Real residuals, less the later runs' own gains that every fit solves for.
     n_res = 2 * int(lines.size) - (0 if ld.groups is None else int(np.unique(ld.groups).size) - 1)
