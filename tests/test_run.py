@@ -166,6 +166,18 @@ def test_unknown_stage_and_bad_config_are_one_line_errors(reference, tmp_path, c
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.toml: field 'diagnose.alpha'" in err[0], err
     assert not (tmp_path / "o").exists()
+    # So does a data folder or plants file of the pilots stage that is not there or not plants.
+    (tmp_path / "lab").mkdir()
+    (tmp_path / "notplants.json").write_text('{"source": "x"}')
+    for table, field, says in (('data = "nolab"', "pilots.data", "nolab not found"),
+                               ('data = "lab"\nplants = "none.json"', "pilots.plants", "none.json not found"),
+                               ('data = "lab"\nplants = "notplants.json"', "pilots.plants",
+                                "notplants.json: field 'control_to_output' missing")):
+        bad.write_text(f"[pilots]\n{table}\n")
+        assert main(["run", "--config", str(bad), "--out", str(tmp_path / "o")]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"bad.toml: field '{field}': " in err[0] and says in err[0], err
+        assert not (tmp_path / "o").exists()
 
 
 def test_a_csv_put_beside_the_cohort_is_not_diagnosed(reference, tmp_path, capsys):

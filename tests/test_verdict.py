@@ -176,6 +176,9 @@ def test_pilot_groups_find_the_pilot_in_each_run_id():
     assert pilot_groups(ids, r"s\d+") == pilot_groups(ids, r"^(s\d+)_")      # the whole match
     with pytest.raises(HesspipeError, match=r"s12_motion_r1: pilot_id pattern '\^s0' does not match"):
         pilot_groups(ids, r"^s0")
+    with pytest.raises(HesspipeError, match=r"^/lab/s12_motion_r1.csv: pilot_id pattern '\^s0' does not match "
+                                            r"the run id 's12_motion_r1'"):
+        pilot_groups(ids, r"^s0", {i: f"/lab/{i}.csv" for i in ids})
     with pytest.raises(HesspipeError, match="not a regular expression"):
         pilot_groups(ids, r"^(s\d+")
 
@@ -228,7 +231,7 @@ def test_compare_pilots_groups_repeated_runs_by_pilot(tmp_path, capsys):
     v = c.verdict()
     assert set(v["per_pilot"]) == {"s01", "s02"} and all(p["runs"] == 3 for p in v["per_pilot"].values())
     assert c.to_dict(psd=False)["n_pilots"] == 2 and c.to_dict(psd=False)["n_runs"] == 6
-    with pytest.raises(HesspipeError, match="s01_r1: pilot_id pattern"):
+    with pytest.raises(HesspipeError, match=r"s01_r1\.csv: pilot_id pattern"):
         compare_pilots(folder, plants, workers=1, job=job, pilot_id=r"^x", progress=False)
     # The same file name in two folders is one run id twice: refused, whatever the grouping.
     (other := tmp_path / "other").mkdir()
@@ -238,4 +241,4 @@ def test_compare_pilots_groups_repeated_runs_by_pilot(tmp_path, capsys):
     # The command line: a pattern that finds no pilot is one line naming the file and the flag.
     code = main(["compare-pilots", str(folder), "--plants", str(plants_path), "--pilot-id", "^x"])
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 1 and len(err) == 1 and "s01_r1: --pilot-id '^x' does not match" in err[0], err
+    assert code == 1 and len(err) == 1 and f"{folder / 's01_r1.csv'}: --pilot-id '^x' does not match" in err[0], err

@@ -408,7 +408,7 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
         settings = replace(settings, km_fixed=_km_fixed(settings, plants))
     _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
     paths = list_runs(paths_or_dir)
-    groups = pilot_groups([p.stem for p in paths], pilot_id)   # before any work
+    groups = pilot_groups([p.stem for p in paths], pilot_id, {p.stem: str(p) for p in paths})  # before any work
     runs, failures = read_runs(paths, columns=columns, resample=resample)
     if job is None:
         job = functools.partial(compare_run, plants=plants, settings=settings)

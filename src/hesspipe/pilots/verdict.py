@@ -46,7 +46,8 @@ from ..core.errors import HesspipeError
 from ..identification.motion_test import ALPHA, analysis_window, forcing_lines, motion_test, safe_motion_test  # noqa: F401
 
 
-def pilot_groups(run_ids: Sequence[str], pattern: str | None) -> dict[str, str] | None:
+def pilot_groups(run_ids: Sequence[str], pattern: str | None,
+                 sources: Mapping[str, str] | None = None) -> dict[str, str] | None:
     """Pilot id of each run id: the part of the id that `pattern` captures.
 
     Parameters
@@ -57,6 +58,8 @@ def pilot_groups(run_ids: Sequence[str], pattern: str | None) -> dict[str, str] 
         Regular expression searched in each id; its group ``pilot`` (or else its first
         group, or else the whole match) is the pilot id, e.g. ``r"^(s\\d+)"``. None: every
         run is its own pilot.
+    sources : mapping, optional
+        Run id → the file it was read from, named in the errors instead of the id.
 
     Returns
     -------
@@ -77,12 +80,14 @@ def pilot_groups(run_ids: Sequence[str], pattern: str | None) -> dict[str, str] 
     out = {}
     for rid in run_ids:
         m = rx.search(rid)
+        where = (sources or {}).get(rid, rid)
         if m is None:
-            raise HesspipeError(f"{rid}: pilot_id pattern {pattern!r} does not match this run id; "
+            raise HesspipeError(f"{where}: pilot_id pattern {pattern!r} does not match the run id {rid!r}; "
                                 f"expected a pattern that finds the pilot in every file name")
         key = m.group("pilot") if "pilot" in rx.groupindex else m.group(1) if rx.groups else m.group(0)
         if not key:
-            raise HesspipeError(f"{rid}: pilot_id pattern {pattern!r} captures an empty pilot id")
+            raise HesspipeError(f"{where}: pilot_id pattern {pattern!r} captures an empty pilot id "
+                                f"from the run id {rid!r}")
         out[rid] = key
     return out
 

@@ -98,6 +98,15 @@ def _in_field(source: str, field: str, check, value) -> None:
         raise HesspipeError(f"{source}: field '{field}': {exc}") from None
 
 
+def _plants_file(path: str) -> None:
+    """Read a plants JSON as the stages will (its own error names the file and the field)."""
+    from ..core.formats import read_plants
+
+    if not Path(path).is_file():
+        raise HesspipeError(f"expected a plants JSON file, {path} not found")
+    read_plants(path)
+
+
 def validate(config: dict, source: str) -> None:
     """Check every stage's table before anything runs, so a typo in the last stage's
     table fails in a second, not after the first stages have run.
@@ -133,6 +142,13 @@ def validate(config: dict, source: str) -> None:
     pilots = PilotsConfig.from_table(config.get("pilots", {}), source)
     if pilots.scheduler:
         check_scheduler_address(pilots.scheduler, f"{source}: field 'pilots.scheduler'")
+    # The data's own files are read by the pilots stage, after flight and plants have run:
+    # a path that is not there (or plants that do not read) fails here, before any of them.
+    if pilots.data and not Path(pilots.data).exists():
+        raise HesspipeError(f"{source}: field 'pilots.data': expected a folder or file of run CSVs, "
+                            f"{pilots.data} not found")
+    if pilots.plants:
+        _in_field(source, "pilots.plants", _plants_file, pilots.plants)
     table, (run, model) = _split(config.get("diagnose", {}), "run", "model")
     diagnose = DiagnoseConfig.from_table(table, source)
     _in_field(source, "diagnose.model", model_from_name, model or "original")
