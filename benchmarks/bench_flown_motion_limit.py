@@ -49,16 +49,14 @@ import bench_fly_pilot as bfp  # noqa: E402  (the same pilots, plants and forcin
 from hesspipe.core.errors import HesspipeError  # noqa: E402
 from hesspipe.core.seeds import derive_seed  # noqa: E402
 from hesspipe.flight.closed_loop import fly_pilot_record  # noqa: E402
+from hesspipe.identification._line_fit import _fit, _predict, pilot_start  # noqa: E402
 from hesspipe.identification.criteria import choose_k  # noqa: E402
 from hesspipe.identification.frf import NEIGHBOURS  # noqa: E402
 from hesspipe.identification.motion_test import (  # noqa: E402
     TAU_M_MAX,
-    _fit,
     _line_sets,
-    _predict,
     line_data,
     motion_test,
-    pilot_start,
     windowed,
 )
 from hesspipe.pilot.crossover import gain_scale  # noqa: E402

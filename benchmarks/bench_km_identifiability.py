@@ -66,6 +66,8 @@ def main(argv=None) -> int:
                     help="pilots of the Km levers study (identification and design levers, cohort remnant)")
     ap.add_argument("--bound", type=int, default=0,
                     help="pilots of the information bound (Cramer-Rao, FFT generator) per design")
+    ap.add_argument("--levers-designs", default="",
+                    help="levers study: only these designs (comma-separated names; default all)")
     ap.add_argument("--pilot-start", type=int, default=0,
                     help="levers study: first pilot index (0: pilot01; 10: pilots 11-20)")
     ap.add_argument("--runs", type=int, default=1,

@@ -41,11 +41,10 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.identification._line_fit import _fit, _predict
 from hesspipe.identification.criteria import choose_k
 from hesspipe.identification.frf import NEIGHBOURS
 from hesspipe.identification.motion_test import (
-    _fit,
-    _predict,
     analysis_window,
     forcing_lines,
     line_variances,

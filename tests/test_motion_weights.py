@@ -19,6 +19,7 @@ from hesspipe.core.formats import Run, read_plants, read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.identification.criteria import choose_k
+from hesspipe.identification.lines import line_data, remnant_variance
 from hesspipe.identification.motion_test import _line_sets, forcing_lines, line_variances, motion_test
 from hesspipe.pilot.hess import PilotModel
 
@@ -63,6 +64,29 @@ def test_weights_return_the_remnant_spectrum_of_an_exact_loop(seed):
     # (seed 1: 0.24 of the truth at bin 5): the per-line bound allows for that known bias.
     assert 0.75 < np.exp(np.mean(np.log(ratio))) < 1.3, ratio
     assert np.all((ratio > 0.2) & (ratio < 3.0)), ratio
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_any_models_equation_error_variance_follows_from_the_neighbours(seed):
+    # The errors-in-variables weights (hesspipe.identification._km_estimate): in this loop the
+    # remnant's own U/E is -1/Yc, and a model G's equation error U - G E at a line carries
+    # the remnant n (1 + G Yc) / (1 + h Yc): its variance relative to the true pilot's is
+    # |1 + G Yc|^2 / |1 + h Yc|^2, whatever G. Checked for a model 40 % stronger and lagging.
+    run, _ = _loop_run(seed)
+    ld = line_data(run)
+    s = ld.s
+    yc = 8.0 / (s * (s + 2.0))
+    h = 1.5 * (1 + 0.8 * s) / (1 + 0.1 * s) * np.exp(-0.25 * s) / (1 + 0.02 * s) ** 2
+    assert np.allclose(ld.g_remnant, -1.0 / yc, rtol=0.02)      # the loop is exact: no other noise
+    assert np.all(ld.c_remnant < 1e-3 * np.abs(ld.g_remnant) ** 2)
+    G = 1.4 * h * np.exp(-0.1 * s)
+    expected = np.abs(1 + G * yc) ** 2 / np.abs(1 + h * yc) ** 2
+    ratio = remnant_variance(ld, G, h) / expected
+    assert np.allclose(remnant_variance(ld, G) / remnant_variance(ld, h), remnant_variance(ld, G, h))
+    assert np.all((ratio > 0.95) & (ratio < 1.05)), ratio
+    # 1 for the describing function the level was measured with (a target line's: the
+    # nearest disturbance line's).
+    assert np.allclose(remnant_variance(ld, ld.h_level), 1.0)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])

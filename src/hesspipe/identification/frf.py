@@ -316,7 +316,8 @@ def _window(d: np.ndarray, r: np.ndarray | None):
     return best[1], best[2], best[0]
 
 
-def _neighbour_residual_power(U, E, H, lines, all_lines, within: int | None = None) -> np.ndarray:
+def _neighbour_residual_power(U, E, H, lines, all_lines, within: int | None = None,
+                              bins: list | None = None) -> np.ndarray:
     """Mean ``|U_j - H_k E_j|^2`` over the NEIGHBOURS non-excited bins j each side of every
     line k (the nearest ones, skipping every excited bin): the remnant's power in U near the
     line, with ``H_k`` (one complex value per line) the response that relates U to E there.
@@ -332,28 +333,37 @@ def _neighbour_residual_power(U, E, H, lines, all_lines, within: int | None = No
     within : int, optional
         Only bins at most this many bins from the line (fewer neighbours where lines are
         dense, none from far above a low line); default: walk out until 2 NEIGHBOURS.
+    bins : list of ndarray, optional
+        The neighbours already chosen (:func:`_neighbour_bins`), one array per line.
 
     Returns
     -------
     ndarray
         One power per line, squared control units (per Fourier coefficient).
     """
-    excited = np.zeros(U.size, dtype=bool)
+    power = np.empty(len(lines))
+    for i, nb in enumerate(bins if bins is not None else _neighbour_bins(U.size, lines, all_lines, within)):
+        power[i] = np.mean(np.abs(U[nb] - H[i] * E[nb]) ** 2) if nb.size else np.nan
+    return power
+
+
+def _neighbour_bins(n_bins: int, lines, all_lines, within: int | None = None) -> list[np.ndarray]:
+    """The unforced bins :func:`_neighbour_residual_power` averages over, one array per line."""
+    excited = np.zeros(n_bins, dtype=bool)
     excited[all_lines] = True
     excited[0] = True
-    power = np.empty(len(lines))
-    for i, k in enumerate(lines):
+    out = []
+    for k in lines:
         nb = []
         step = 1
         reach = 4 * NEIGHBOURS + 20 if within is None else within + 1
         while len(nb) < 2 * NEIGHBOURS and step < reach:
             for j in (k - step, k + step):
-                if 0 < j < U.size and not excited[j]:
+                if 0 < j < n_bins and not excited[j]:
                     nb.append(j)
             step += 1
-        nb = np.array(nb[: 2 * NEIGHBOURS], dtype=int)
-        power[i] = np.mean(np.abs(U[nb] - H[i] * E[nb]) ** 2) if nb.size else np.nan
-    return power
+        out.append(np.array(nb[: 2 * NEIGHBOURS], dtype=int))
+    return out
 
 
 def _response(U, E, F, lines, all_lines, omega) -> Response:

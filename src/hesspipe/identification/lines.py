@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .frf import NEIGHBOURS, _lines, _neighbour_residual_power, _window
+from .frf import NEIGHBOURS, _lines, _neighbour_bins, _neighbour_residual_power, _window
 
 MIN_LINES = 4
 SMOOTH_ORDER = 2
@@ -141,6 +141,13 @@ def line_variances(run, lines) -> np.ndarray:
     ndarray
         One variance per line, squared control units per Fourier coefficient.
     """
+    return _levels(run, lines)[0]
+
+
+def _levels(run, lines) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    # line_variances' levels; the H each was measured with; and over the same unforced
+    # neighbours the remnant's own U/E at the line, g, and the share of U's power there
+    # that E does not explain, c (_remnant_response; LineData.g_remnant, c_remnant).
     d_lines, r_lines = _line_sets(run)
     U = np.fft.rfft(np.asarray(run.control, dtype=float))
     E = np.fft.rfft(np.asarray(run.reference, dtype=float) - np.asarray(run.output, dtype=float))
@@ -150,16 +157,20 @@ def line_variances(run, lines) -> np.ndarray:
     H_src = U[src] / E[src]
     nearest = np.argmin(np.abs(np.asarray(lines)[:, None] - src[None, :]), axis=1)
     H = H_src[nearest]
-    usable = (line_snr(E, src, np.union1d(d_lines, r_lines).astype(int)) >= MIN_LINE_SNR)[nearest]
+    all_lines = np.union1d(d_lines, r_lines).astype(int)
+    bins = _neighbour_bins(U.size, lines, all_lines, within=NEIGHBOURS)
+    g, c = np.full(len(lines), np.nan, complex), np.full(len(lines), np.nan)
+    for i, (k, nb) in enumerate(zip(lines, bins)):
+        g[i], c[i] = _remnant_response(U[nb], E[nb], nb / k - 1.0)
+    usable = (line_snr(E, src, all_lines) >= MIN_LINE_SNR)[nearest]
     # Only bins within NEIGHBOURS of the line: frf's walk further out reaches, at the lowest
     # lines, bins several times the line's frequency, where the remnant is weaker; the
     # over-weighted low lines then named motion in 3 of 11 static double-integrator runs
     # (bench_motion_calibration, development seeds 100-111; 0 of 11 with this reach).
-    raw = _neighbour_residual_power(U, E, H, lines, np.union1d(d_lines, r_lines).astype(int),
-                                    within=NEIGHBOURS)
+    raw = _neighbour_residual_power(U, E, H, lines, all_lines, bins=bins)
     ok = np.isfinite(raw) & (raw > 0)
     if ok.sum() < SMOOTH_ORDER + 2:
-        return raw
+        return raw, H, g, c
     # JSBSim-flown runs (SYNTHETIC, bench_flown_motion_limit, seeds 0-15): at the lowest
     # 2-6 lines E was 80-90 % remnant and these levels came out 5-50x below the true
     # remnant's; those lines' weight then buried the motion path (ideal weights: 13.4 of 16
@@ -182,7 +193,23 @@ def line_variances(run, lines) -> np.ndarray:
     # rest (4 lines at 2.6-4.4 Hz, extrapolated to 0.03 Hz, overflowed: the test was
     # "unavailable"); such a line weighs nothing at this cap anyway.
     inside = level[(x >= lo) & (x <= hi)]
-    return np.exp(np.minimum(level, inside.max() + MAX_EXTRAPOLATED_RISE))
+    return np.exp(np.minimum(level, inside.max() + MAX_EXTRAPOLATED_RISE)), H, g, c
+
+
+def _remnant_response(U, E, x) -> tuple[complex, float]:
+    # U = (a + b x + c x^2) E at unforced bins x = f / f_line - 1, least squares: the
+    # remnant's own U/E at the line is a. It is about -1/Yc, a polynomial of degree 2 in s
+    # for the textbook plants (exactly so for K/s, K/s^2, K/(s(s + a))). A plain
+    # S_ue / S_ee over the neighbours (which reach from 0.2 to 3 times a low line's
+    # frequency) is the mean of -1/Yc weighted by |E|^2, i.e. by the lowest bins: 2.3
+    # times off at the lowest line of an exact loop (tests/test_motion_weights.py).
+    # c: the power E does not explain, over S_ee.
+    if x.size < 4:
+        return complex(np.nan), float("nan")
+    A = E[:, None] * x[:, None] ** np.arange(3)
+    coef, *_ = np.linalg.lstsq(A, U, rcond=None)
+    rest = U - A @ coef
+    return complex(coef[0]), float(np.vdot(rest, rest).real / np.vdot(E, E).real)
 
 
 def line_snr(E, lines, all_lines) -> np.ndarray:
@@ -234,6 +261,11 @@ class LineData:
         Why the lines cannot be used ("" when they can; then the arrays may be empty).
     groups : ndarray of int or None
         The run of each line when repeated runs are pooled (:func:`pooled_line_data`).
+    h_level, g_remnant, c_remnant : ndarray or None
+        Per line, over its unforced neighbours (:func:`remnant_variance`): the describing
+        function the level behind `w` was measured with, the remnant's own U/E there
+        (about −1/Yc, control units per error unit) and the share of U's power that E
+        does not explain (squared control units per squared error unit).
     """
 
     lines: np.ndarray
@@ -246,6 +278,9 @@ class LineData:
     window_samples: int
     reason: str = ""
     groups: np.ndarray | None = None
+    h_level: np.ndarray | None = None
+    g_remnant: np.ndarray | None = None
+    c_remnant: np.ndarray | None = None
 
 
 def line_data(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
@@ -269,7 +304,7 @@ def line_data(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
     if lines.size < MIN_LINES:
         return LineData(**unusable, reason=f"{lines.size} multisine forcing lines found (need {MIN_LINES}): "
                                            "no describing function to test")
-    var = line_variances(run, lines)
+    var, h_level, g_remnant, c_remnant = _levels(run, lines)
     if not np.all(np.isfinite(var)) or not np.max(var) > 0:
         return LineData(**unusable, reason="no unforced bins between the forcing lines to measure the remnant")
     U = np.fft.rfft(np.asarray(run.control, dtype=float))
@@ -277,7 +312,8 @@ def line_data(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
     E = np.fft.rfft(np.asarray(run.reference, dtype=float) - np.asarray(run.output, dtype=float))
     return LineData(lines=lines, s=1j * 2.0 * np.pi * np.fft.rfftfreq(n, run.dt)[lines], E=E[lines],
                     Y=Y[lines], U=U[lines], w=1.0 / np.sqrt(np.maximum(var, np.max(var) * 1e-12)),
-                    both=unusable["both"], window_samples=n)
+                    both=unusable["both"], window_samples=n, h_level=h_level, g_remnant=g_remnant,
+                    c_remnant=c_remnant)
 
 
 def pooled_line_data(runs, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
@@ -303,7 +339,40 @@ def pooled_line_data(runs, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineDat
         if ld.reason:
             return dataclasses.replace(ld, reason=f"{r.source or r.id}: {ld.reason}")
     cat = {name: np.concatenate([getattr(ld, name) for ld in parts])
-           for name in ("lines", "s", "E", "Y", "U", "w")}
+           for name in ("lines", "s", "E", "Y", "U", "w", "h_level", "g_remnant", "c_remnant")}
     groups = np.concatenate([np.full(ld.lines.size, i) for i, ld in enumerate(parts)])
     return LineData(**cat, both=all(ld.both for ld in parts), window_samples=parts[0].window_samples,
                     groups=groups)
+
+
+def remnant_variance(ld: LineData, G: np.ndarray, reference: np.ndarray | None = None) -> np.ndarray:
+    """Each line's equation-error variance for a pilot whose response to −y is `G`, relative
+    to that of a pilot whose response is `reference` (default: the describing function the
+    level behind ``ld.w`` was measured with, ``ld.h_level``).
+
+    At the unforced neighbours the loop runs on remnant alone, E = −Y there, and a model's
+    equation error is ``U_j − G E_j``; its mean power is ``S_ee (|G − g|^2 + c)`` with
+    ``g`` the remnant's own U/E (the loop closes it through the plant, about −1/Yc) and
+    ``c`` the part of U that E does not explain (LineData). Dividing each residual by this
+    variance, not by the level at the measured H, is the errors-in-variables (sample
+    maximum-likelihood) criterion: at the lines E and Y carry the same remnant as U, and
+    least squares with fixed weights leans every fit towards g, the remnant's own response
+    (SYNTHETIC generator Hess pilots: Km/|Ke| 0.74-0.80 of the truth at 40 % remnant
+    power, 0.93-1.0 at 10 %).
+
+    Parameters
+    ----------
+    ld : LineData
+        With ``h_level``, ``g_remnant`` and ``c_remnant``.
+    G, reference : ndarray, complex
+        Responses to −y at each line (control units per output unit).
+
+    Returns
+    -------
+    ndarray
+        One factor per line (dimensionless, > 0).
+    """
+    num = np.abs(G - ld.g_remnant) ** 2 + ld.c_remnant
+    den = np.abs((ld.h_level if reference is None else reference) - ld.g_remnant) ** 2 + ld.c_remnant
+    ok = np.isfinite(num) & np.isfinite(den) & (den > 0)
+    return np.where(ok, num / np.where(ok, den, 1.0), 1.0)

@@ -53,7 +53,10 @@ damping ``zn / sqrt(1 + K1 K2)``: Ke and Km scale together along a valley of (K1
 which only the lines near 1/T1 bound. The ratio is the same all along it. On the SYNTHETIC
 yaw-angle runs of the independent generator's precision pilots (three runs each of one
 person, 1/s, sparse two-input layout) one person's Km came out 2.2, 13.5 and 0.34 with Ke
-18.7, 209 and 3.1, while Km/|Ke| came out 0.116, 0.065 and 0.110.
+18.7, 209 and 3.1, while Km/|Ke| came out 0.116, 0.065 and 0.110. The reported Km and
+Km/|Ke| are not the test's fit but the estimate of :mod:`._km_estimate` (the equaliser free,
+errors-in-variables weights): the test's fit, right for a test, puts Km/|Ke| low by about
+a tenth at a typical remnant.
 
 Records without separated multisine lines (random wind or gusts, as in the
 JSBSim pipeline's cohort) have no describing function to test: the pilot's
@@ -67,7 +70,7 @@ motion in 0 of 4 pilots.)
 from __future__ import annotations
 
 import math
-from typing import Callable, Mapping, Sequence
+from typing import Callable, Mapping
 
 import numpy as np
 from scipy import stats
@@ -77,9 +80,10 @@ from ..core.errors import HesspipeError
 from ..core.formats import as_runs
 from ..pilot.blocks import from_tf
 from ..pilot.crossover import gain_scale
-from ..pilot.hess import PilotModel, km_per_ke
-from ..pilot.motion import motion_block, with_motion_path
-from ._lsq import best_least_squares, held_covariance
+from ..pilot.hess import PilotModel
+from ..pilot.motion import motion_block
+from ._km_estimate import km_estimate
+from ._line_fit import _fit, _standard_errors, pilot_start
 
 # The line data live in .lines; re-exported here, where the test's callers have read them.
 from .lines import (  # noqa: F401
@@ -143,90 +147,6 @@ no-motion runs of the generator's precision pilots (single and double integrator
 display, development seeds 100-109), and a lag's phase was read as 0.1 s of extra delay."""
 
 
-def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None):
-    # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
-    # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model),
-    # the visual path with the test's equaliser (VISUAL_EQUALISER; 0 when absent); on a
-    # pursuit display (yc_inv, the controlled element's inverse at s) also + NM FF R with
-    # R = E + Y (FEEDFORWARD). `cache`: Block.response's shape cache for this `s` (a fit's
-    # thousands of calls then evaluate the vestibular path's fixed shape once).
-    loop = with_motion_path(model.loop(params), cab)
-    nm = loop.neuromuscular.response(s, cache)
-    ves = loop.vestibular.response(s, cache) * np.exp(-s * params.get("tau_m", 0.0))
-    vis = loop.visual.response(s, cache) * (1.0 + s * params.get("TL_v", 0.0)) \
-        / (1.0 + s * params.get("TI_v", 0.0))
-    drive = vis * E - ves * Y
-    if yc_inv is not None:
-        drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("tau0", 0.0)) \
-            / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
-    return nm * drive / loop.return_difference(s, None, cache)
-
-
-def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w,
-         tie: Callable[[dict], None] | None = None):
-    """Bounded least squares of the weighted complex residual; best of `starts`.
-
-    With `groups` (the run of each line, repeated runs pooled), the second and later runs'
-    predictions are each scaled by their own gain, solved in closed form at every step
-    (variable projection): a human's gains move by 5-15 % between runs. `yc_inv` (the
-    controlled element's inverse at the lines, or None) adds a pursuit display's feedforward.
-    `tie` sets parameters from the others at every step (a profile along Km/Ke).
-    """
-    runs = [] if groups is None else [groups == g for g in np.unique(groups)[1:]]
-    cache: dict = {}
-
-    def resid(x):
-        p = dict(base)
-        p.update(zip(free, x))
-        if tie is not None:
-            tie(p)
-        pred = _predict(p, model, cab, s, E, Y, yc_inv, cache)
-        for m in runs:
-            ww = w[m] ** 2
-            den = float(np.sum(ww * np.abs(pred[m]) ** 2))
-            if den > 0:
-                pred[m] = pred[m] * max(float(np.sum(ww * (np.conj(pred[m]) * U[m]).real)) / den, 0.0)
-        r = (U - pred) * w
-        return np.concatenate([r.real, r.imag])
-
-    rss, sol = best_least_squares(resid, starts, lo, hi, "motion test: no fit of the describing "
-                                  "function converged")
-    p = dict(base)
-    p.update(zip(free, sol.x))
-    if tie is not None:
-        tie(p)
-    return rss, p, sol
-
-
-def pilot_start(model, start: Mapping[str, float], k: int) -> dict:
-    """The starting pilot parameters of a describing-function fit: `start` completed for order
-    `k`, K2 held at its default and the start's K1 K2 carried by K1 (only the product is
-    identifiable).
-
-    Parameters
-    ----------
-    model : hesspipe.pilot.hess.PilotModel
-        The model fitted.
-    start : mapping
-        Starting values (missing ones: the model's defaults).
-    k : int
-        Hess model order (1 or 2).
-    """
-    base = model.complete({key: v for key, v in start.items() if key in model.parameter_names()}, k)
-    base["k"] = float(k)
-    k2 = model.defaults(k)["K2"]
-    base["K1"], base["K2"] = float(np.clip(base["K1"] * base["K2"] / k2, 1e-3, 100.0)), k2
-    return base
-
-
-def _standard_errors(sol, free: Sequence[str], rss: float, dof: int) -> dict:
-    """Standard errors of the `free` parameters (:func:`held_covariance`; NaN for one held
-    on its bound)."""
-    cov = held_covariance(sol, rss, dof)
-    return {n_: float(math.sqrt(max(cov[i, i], 0.0))) if math.isfinite(cov[i, i]) else math.nan
-            for i, n_ in enumerate(free)}
-
-
 def _nested_f(rss_restricted: float, rss_full: float, q: int, dof: int) -> tuple[float, float]:
     """(F, p) of a nested least-squares test: `q` parameters, `dof` residual degrees of freedom
     of the full model. With one parameter the restriction is a bound (Km >= 0, a delay at
@@ -259,73 +179,6 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
     f, p = _nested_f(rss_b, rss, 1, dof)
     return {"bound_s": float(bound), "f": float(f), "p_value": p, "dof": int(dof),
             "bounded_tau0": float(p_b["tau0"])}
-
-
-def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: float, rss_zero: float,
-                dof: int, level: float, km_small: float, data, w, *, ratio: bool = False) -> tuple[float, float]:
-    """Profile-likelihood interval of Km (or, with `ratio`, of Km/|Ke|) at confidence `level`:
-    the values whose best fit of the other parameters stays within the F test's critical
-    value of the optimum.
-
-    Consistent with the test (its lower end is above 0 exactly when the nested F at Km = 0,
-    from ``rss_zero``, exceeds the critical value), and honest in a valley: where Km trades
-    with the proprioceptive loop or the delay the curvature at the optimum gives standard
-    errors of 10^3-10^4 for a Km significant at p ~ 1e-25 (generator trials), while the
-    profile follows the valley. Along that valley Ke and Km scale together with the
-    proprioceptive gain (1 + K1 K2 where 1/T1 lies below the lines; module doc), so the
-    ratio's profile is narrow where Km's spans decades. The upper end is ``inf`` when Km's
-    search bound (for the ratio: that bound over the optimum's |Ke|) is reached.
-    """
-    i = free.index("Km")
-    names = free[:i] + free[i + 1:]
-    lo_r, hi_r = np.delete(lo, i), np.delete(hi, i)
-    crit = float(stats.f.ppf(level, 1, dof))
-    scale = rss_best / dof
-    ke_hat = max(abs(float(best["Ke"])), 1e-12)
-
-    def f_at(v, start):
-        if ratio:
-            rss, p, _ = _fit(model, {**base, **best}, names, lo_r, hi_r, [start], *data, w,
-                             tie=lambda q: q.__setitem__("Km", v * abs(q["Ke"])))
-        else:
-            rss, p, _ = _fit(model, {**base, **best, "Km": v}, names, lo_r, hi_r, [start], *data, w)
-        return (max(rss, rss_best) - rss_best) / scale, [p[n] for n in names]
-
-    hat = float(best["Km"]) / ke_hat if ratio else float(best["Km"])
-    small, top = (km_small / ke_hat, float(hi[i]) / ke_hat) if ratio else (km_small, float(hi[i]))
-    start = [best[n] for n in names]
-    ends = []
-    for factor, limit in ((1 / 3, None), (3.0, top)):
-        if factor < 1 and ((rss_zero - rss_best) / scale <= crit or hat <= 0):
-            ends.append(0.0)
-            continue
-        inside, x_in, outside = hat, start, None
-        for _ in range(24):   # bracket: geometric steps until the fit is worse than crit
-            # From Km on its bound of 0 the upward steps start at km_small.
-            v = inside * factor if inside > 0 else small
-            if limit is not None and v >= limit:
-                f, x = f_at(limit, x_in)
-                if f <= crit:
-                    break
-                v = limit
-            else:
-                f, x = f_at(v, x_in)
-            if f > crit:
-                outside = v
-                break
-            inside, x_in = v, x
-        if outside is None:
-            ends.append(0.0 if factor < 1 else math.inf)
-            continue
-        for _ in range(6):    # bisection in the logarithm: about 2 % of the value
-            mid = math.sqrt(inside * outside) if inside > 0 else 0.5 * outside
-            f, x = f_at(mid, x_in)
-            if f > crit:
-                outside = mid
-            else:
-                inside, x_in = mid, x
-        ends.append(inside)
-    return float(ends[0]), float(ends[1])
 
 
 def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, max_delay: float | None,
@@ -441,15 +294,9 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
     # generator's runs drawn with tau_m = 0.15 s.
     p_value, lr, rss_e, p_e, sol, extra, (base_e, free_e, lo_e, hi_e) = min(tests, key=lambda t: t[0])
     p_value = min(1.0, p_value * len(tests))
-    dof_e = n_res - len(free_e)
-    # Scaled by the residual variance and with bound-held parameters out, as every other
-    # standard error here (it was the unscaled inverse, with a flat held column in it).
-    km_se = _standard_errors(sol, free_e, rss_e, dof_e)["Km"]
-
-    def profile(level: float) -> dict:
-        return {key: list(_km_profile(expanded, base_e, free_e, lo_e, hi_e, p_e, rss_e, rss_o, dof_e,
-                                      float(level), 1e-3 * km0, data, ld.w, ratio=ratio))
-                for key, ratio in (("Km_interval", False), ("Km_per_Ke_interval", True))}
+    # How much (Km, Km/|Ke|, their intervals): the estimate's own fit (_km_estimate).
+    estimate, profile = km_estimate(expanded, base_e, free_e, lo_e, hi_e, p_e, p_o, (eq, lo[-1], hi[-1]),
+                                    n_res - len(free_e), 1e-3 * km0, data, ld)
 
     return {"available": True, "n_lines": int(lines.size), "window_samples": ld.window_samples,
             "parameters_original": {n_: float(v) for n_, v in p_o.items()},
@@ -457,10 +304,10 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "standard_errors_original": _standard_errors(sol_o, free, rss_o, dof + 1),
             "rss_original": rss_o,
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
-            "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": float(p_e["Km"]),
-            "Km_per_Ke": km_per_ke(p_e),
+            "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": estimate["Km"],
+            "Km_per_Ke": estimate["Km_per_Ke"], "parameters_estimate": estimate["parameters"],
             "tau_m": float(p_e.get("tau_m", 0.0)),
-            "Km_se": km_se,
+            "Km_se": estimate["Km_se"],
             "significant": bool(p_value < ALPHA),
             "alternatives": {"+".join(t[5]): t[0] for t in tests},
             "delay_bound": delay_bound, "display": display, "target_lines": target,
@@ -496,7 +343,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         (:func:`_delay_bound`; diagnose's extra delay).
     interval : float, optional
         Confidence level (e.g. 0.95) of a profile-likelihood interval of Km
-        and of Km/|Ke| (:func:`_km_profile`; about twenty more fits each, so compare-pilots
+        and of Km/|Ke| (:func:`._km_estimate._km_profile`; about twenty more fits each, so compare-pilots
         asks for them and diagnose does not).
     display : {"compensatory", "pursuit", "either"}
         What the pilot saw. "pursuit" (target and output shown apart) adds the feedforward
@@ -512,7 +359,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         forcing lines), ``n_lines``, ``rss_original``, ``rss_expanded`` (weighted
         residual sums, dimensionless: remnant variance units), ``lr`` (LR
         statistic, the F of the nested test), ``p_value``, ``gain`` (1 − rss_expanded / rss_original),
-        ``Km`` and ``Km_se`` (its standard error from the fit's Jacobian with the residual
+        ``Km`` and ``Km_se`` (the estimate's, :mod:`._km_estimate`: the expanded model with
+        the visual equaliser free and errors-in-variables weights, not the test's fit; its
+        standard error from the fit's Jacobian with the residual
         variance rss/dof and parameters on a bound held, same units as the pilot model's
         Km; NaN with Km on its bound of 0), ``Km_per_Ke`` (Km/|Ke|: the vestibular path's
         gain relative to the visual one, output units per rad/s of cab motion, so
@@ -520,8 +369,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         identified, module doc), ``Km_interval`` and ``Km_per_Ke_interval`` (with
         `interval`: the profile intervals ``[lo, hi]``, ``hi`` inf when unbounded; else
         None), ``significant`` (p < :data:`ALPHA`),
-        ``parameters_original`` / ``parameters_expanded`` (the two fits' pilot
-        parameters), ``standard_errors_original`` (of the original's free
+        ``parameters_original`` / ``parameters_expanded`` (the test's two fits' pilot
+        parameters), ``parameters_estimate`` (the estimate's), ``standard_errors_original`` (of the original's free
         parameters; diagnose reads the pilot's own delay from them) and
         ``delay_bound`` (None without `max_delay`; else
         :func:`_delay_bound`'s test of the original's delay against it), ``display``,

@@ -28,9 +28,9 @@ from ..core.errors import HesspipeError
 from ..core.formats import as_runs
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
+from ._line_fit import _predict, pilot_start
 from ._lsq import best_least_squares, held_covariance
 from .lines import line_data
-from .motion_test import _predict, pilot_start
 
 SHARED = ("K1", "1/T1", "wn", "zn", "1/T2")
 """Pilot parameters common to the two runs (1/T2 for k = 2 only). (K1 each run's own too
@@ -109,7 +109,7 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
         p.update(zip(own, x[j:j + len(own)]))
         return p
 
-    caches = [{} for _ in data]   # each run's shape cache, tied to its lines (motion_test._predict)
+    caches = [{} for _ in data]   # each run's shape cache, tied to its lines (_line_fit._predict)
 
     def resid(x):
         out = []

@@ -1,0 +1,143 @@
+"""The equation-error fits at the forcing lines that :mod:`.motion_test`, its Km estimate
+(:mod:`._km_estimate`) and :mod:`.paired_delay` share: the Hess loop's prediction of the
+control from the measured error and output (:func:`_predict`), its bounded least squares
+(:func:`_fit`) with fixed or errors-in-variables weights (:func:`sml_weights`), starts and
+standard errors.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from ..pilot.motion import with_motion_path
+from ._lsq import best_least_squares, held_covariance
+from .lines import LineData, remnant_variance
+
+
+def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None, *, response: bool = False):
+    # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
+    # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model),
+    # the visual path with the test's equaliser (VISUAL_EQUALISER; 0 when absent); on a
+    # pursuit display (yc_inv, the controlled element's inverse at s) also + NM FF R with
+    # R = E + Y (FEEDFORWARD). `cache`: Block.response's shape cache for this `s` (a fit's
+    # thousands of calls then evaluate the vestibular path's fixed shape once). With
+    # `response`, also the pilot's response to -y (e = -y, r = 0: the remnant's bins).
+    loop = with_motion_path(model.loop(params), cab)
+    nm = loop.neuromuscular.response(s, cache)
+    ves = loop.vestibular.response(s, cache) * np.exp(-s * params.get("tau_m", 0.0))
+    vis = loop.visual.response(s, cache) * (1.0 + s * params.get("TL_v", 0.0)) \
+        / (1.0 + s * params.get("TI_v", 0.0))
+    drive = vis * E - ves * Y
+    if yc_inv is not None:
+        drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("tau0", 0.0)) \
+            / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
+    rd = loop.return_difference(s, None, cache)
+    return (nm * drive / rd, nm * (vis + ves) / rd) if response else nm * drive / rd
+
+
+def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w,
+         tie: Callable[[dict], None] | None = None):
+    """Bounded least squares of the weighted complex residual; best of `starts`.
+
+    With `groups` (the run of each line, repeated runs pooled), the second and later runs'
+    predictions are each scaled by their own gain, solved in closed form at every step
+    (variable projection): a human's gains move by 5-15 % between runs. `yc_inv` (the
+    controlled element's inverse at the lines, or None) adds a pursuit display's feedforward.
+    `tie` sets parameters from the others at every step (a profile along Km/Ke). `w`: the
+    lines' weights, or a function of the model's response to -y that gives them
+    (:func:`sml_weights`; a later run's own gain scales its response too).
+    """
+    runs = [] if groups is None else [groups == g for g in np.unique(groups)[1:]]
+    cache: dict = {}
+    fixed = not callable(w)
+
+    def resid(x):
+        p = dict(base)
+        p.update(zip(free, x))
+        if tie is not None:
+            tie(p)
+        if fixed:
+            pred, ws = _predict(p, model, cab, s, E, Y, yc_inv, cache), w
+        else:
+            pred, G = _predict(p, model, cab, s, E, Y, yc_inv, cache, response=True)
+            ws = w(G)
+        for m in runs:
+            ww = ws[m] ** 2
+            den = float(np.sum(ww * np.abs(pred[m]) ** 2))
+            if den > 0:
+                gain = max(float(np.sum(ww * (np.conj(pred[m]) * U[m]).real)) / den, 0.0)
+                pred[m] = pred[m] * gain
+                if not fixed:
+                    G[m] = G[m] * gain
+        if runs and not fixed:
+            ws = w(G)
+        r = (U - pred) * ws
+        return np.concatenate([r.real, r.imag])
+
+    rss, sol = best_least_squares(resid, starts, lo, hi, "motion test: no fit of the describing "
+                                  "function converged")
+    p = dict(base)
+    p.update(zip(free, sol.x))
+    if tie is not None:
+        tie(p)
+    return rss, p, sol
+
+
+def sml_weights(ld: LineData, reference: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """The lines' weights as a function of the model's response G to −y: ``ld.w`` over the
+    square root of :func:`~hesspipe.identification.lines.remnant_variance` relative to
+    `reference`, the errors-in-variables (sample maximum-likelihood) criterion.
+
+    The weights are ``ld.w`` where G is `reference` (the response of the fit they refine),
+    not where G is the describing function measured at the line: at lines where the remnant
+    makes up most of E that measurement is about the remnant's own U/E, and the levels
+    there come from the other lines (:func:`~hesspipe.identification.lines.line_variances`).
+    Relative to it, a JSBSim-flown Hess pilot's own response weighed 44 times less at the
+    lowest two lines (SYNTHETIC, cohort pilot01, two-input forcing).
+
+    Parameters
+    ----------
+    ld : LineData
+        The lines, with their remnant statistics.
+    reference : ndarray, complex
+        The response to −y at which the weights are ``ld.w`` (control units per output unit).
+
+    Returns
+    -------
+    callable
+        ``weights(G)``: G the model's response to −y at each line (control units per
+        output unit) → one weight per line (1 / control units).
+    """
+    return lambda G: ld.w / np.sqrt(remnant_variance(ld, G, reference))
+
+
+def pilot_start(model, start: Mapping[str, float], k: int) -> dict:
+    """The starting pilot parameters of a describing-function fit: `start` completed for order
+    `k`, K2 held at its default and the start's K1 K2 carried by K1 (only the product is
+    identifiable).
+
+    Parameters
+    ----------
+    model : hesspipe.pilot.hess.PilotModel
+        The model fitted.
+    start : mapping
+        Starting values (missing ones: the model's defaults).
+    k : int
+        Hess model order (1 or 2).
+    """
+    base = model.complete({key: v for key, v in start.items() if key in model.parameter_names()}, k)
+    base["k"] = float(k)
+    k2 = model.defaults(k)["K2"]
+    base["K1"], base["K2"] = float(np.clip(base["K1"] * base["K2"] / k2, 1e-3, 100.0)), k2
+    return base
+
+
+def _standard_errors(sol, free: Sequence[str], rss: float, dof: int) -> dict:
+    """Standard errors of the `free` parameters (:func:`held_covariance`; NaN for one held
+    on its bound)."""
+    cov = held_covariance(sol, rss, dof)
+    return {n_: float(math.sqrt(max(cov[i, i], 0.0))) if math.isfinite(cov[i, i]) else math.nan
+            for i, n_ in enumerate(free)}
