@@ -116,8 +116,10 @@ def _km_profile(model, base, free, lo, hi, best: Mapping[str, float], rss_best: 
     the values whose best fit of the other parameters stays within the F test's critical
     value of the optimum.
 
-    Consistent with the test (its lower end is above 0 exactly when the nested F at Km = 0,
-    from ``rss_zero``, exceeds the critical value), and honest in a valley: where Km trades
+    Consistent with its criterion (the lower end is above 0 exactly when the nested F at
+    Km = 0, from ``rss_zero`` under the same weights, exceeds the critical value; the
+    test's own F, with fixed weights and the lead held, can fall on the other side of it near
+    the threshold), and honest in a valley: where Km trades
     with the proprioceptive loop or the delay the curvature at the optimum gives standard
     errors of 10^3-10^4 for a Km significant at p ~ 1e-25 (generator trials), while the
     profile follows the valley. Along that valley Ke and Km scale together with the
