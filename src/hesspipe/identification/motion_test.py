@@ -274,25 +274,25 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
         # p = 0.27 from there, 17.8 and p ~ 3e-11 with the given start).
         starts_e = [[c[n_] for n_ in core] + [km] + tm for c in (p_o, base)
                     for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"])) for tm in delays]
-        rss_e, p_e, sol = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, ld.w)
+        rss_e, p_e, _ = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, ld.w)
         # Exchange of optima: the original searched again from the expanded optimum's core
         # parameters, so that LR measures what Km adds, not a better local optimum the
         # expanded search happened to find for the shared parameters.
         rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], *data, ld.w)
         if rss_o2 < rss_o:
             rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
-        fits.append((extra, rss_e, p_e, sol, (base_e, free_e, lo_e, hi_e)))
+        fits.append((extra, rss_e, p_e, (base_e, free_e, lo_e, hi_e)))
     tests = []
-    for extra, rss_e, p_e, sol, problem in fits:
+    for extra, rss_e, p_e, problem in fits:
         rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
         q, dof_e = len(extra), n_res - len(free) - len(extra)
         lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
-        tests.append((p, lr, rss_e, p_e, sol, extra, problem))
+        tests.append((p, lr, rss_e, p_e, extra, problem))
     # With both line sets, two pre-planned alternatives - Km alone (the paper's path) and
     # Km with a vestibular delay - and the smaller p, Bonferroni-corrected: the delay alone
     # cost JSBSim-flown motion runs (tau_m = 0) their power, Km alone lost half the
     # generator's runs drawn with tau_m = 0.15 s.
-    p_value, lr, rss_e, p_e, sol, extra, (base_e, free_e, lo_e, hi_e) = min(tests, key=lambda t: t[0])
+    p_value, lr, rss_e, p_e, extra, (base_e, free_e, lo_e, hi_e) = min(tests, key=lambda t: t[0])
     p_value = min(1.0, p_value * len(tests))
     # How much (Km, Km/|Ke|, their intervals): the estimate's own fit (_km_estimate).
     estimate, profile = km_estimate(expanded, base_e, free_e, lo_e, hi_e, p_e, p_o, (eq, lo[-1], hi[-1]),
@@ -309,7 +309,7 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "tau_m": float(p_e.get("tau_m", 0.0)),
             "Km_se": estimate["Km_se"],
             "significant": bool(p_value < ALPHA),
-            "alternatives": {"+".join(t[5]): t[0] for t in tests},
+            "alternatives": {"+".join(t[4]): t[0] for t in tests},
             "delay_bound": delay_bound, "display": display, "target_lines": target,
             "feedforward": None if yc_inv is None else {n_: float(p_e[n_]) for n_ in FEEDFORWARD},
             "degrees_of_freedom": dof}, profile
