@@ -170,7 +170,7 @@ def test_unknown_stage_and_bad_config_are_one_line_errors(reference, tmp_path, c
     (tmp_path / "lab").mkdir()
     (tmp_path / "notplants.json").write_text('{"source": "x"}')
     for table, field, says in (('data = "nolab"', "pilots.data", "nolab not found"),
-                               ('data = "lab"\nplants = "none.json"', "pilots.plants", "none.json not found"),
+                               ('data = "lab"\nplants = "none.json"', "pilots.plants", "none.json: file not found"),
                                ('data = "lab"\nplants = "notplants.json"', "pilots.plants",
                                 "notplants.json: field 'control_to_output' missing")):
         bad.write_text(f"[pilots]\n{table}\n")

@@ -60,7 +60,8 @@ def km_estimate(model, base: dict, free: Sequence[str], lo, hi, test_optimum: Ma
         The visual equaliser's name and bounds, s (freed only where the lines have a target
         and a disturbance set, ``ld.both``).
     dof : int
-        Residual degrees of freedom of the test's expanded fit (one fewer here).
+        Residual degrees of freedom of the test's expanded fit (one fewer here where the
+        equaliser is freed).
     km_small : float
         Where a profile's upward steps from Km = 0 start.
     data : tuple
@@ -87,8 +88,8 @@ def km_estimate(model, base: dict, free: Sequence[str], lo, hi, test_optimum: Ma
         # Km's place (development run, weights not yet anchored at the test's fit: median
         # error of Km/|Ke| 56 % freed against 44 % held, 38 disturbance-only trials).
         free_x, lo_x, hi_x, p_x = list(free), lo, hi, test_optimum
-    cab, s, E, Y = data[:4]
-    _, reference = _predict({**base, **test_optimum}, model, cab, s, E, Y, data[6], response=True)
+    cab, s, E, Y, _, _, yc_inv = data
+    _, reference = _predict(test_optimum, model, cab, s, E, Y, yc_inv, response=True)
     sml = sml_weights(ld, reference)
     rss, best, sol = _fit(model, base, free_x, lo_x, hi_x, [[p_x[n_] for n_ in free_x]], *data, sml)
     dof_x = dof - (len(free_x) - len(free))

@@ -98,15 +98,6 @@ def _in_field(source: str, field: str, check, value) -> None:
         raise HesspipeError(f"{source}: field '{field}': {exc}") from None
 
 
-def _plants_file(path: str) -> None:
-    """Read a plants JSON as the stages will (its own error names the file and the field)."""
-    from ..core.formats import read_plants
-
-    if not Path(path).is_file():
-        raise HesspipeError(f"expected a plants JSON file, {path} not found")
-    read_plants(path)
-
-
 def validate(config: dict, source: str) -> None:
     """Check every stage's table before anything runs, so a typo in the last stage's
     table fails in a second, not after the first stages have run.
@@ -123,6 +114,7 @@ def validate(config: dict, source: str) -> None:
     HesspipeError
         Naming `source` and the first bad field.
     """
+    from ..core.formats import read_plants
     from ..diagnose.settings import DiagnoseConfig
     from ..diagnose.workflow import _resolve_candidates
     from ..flight.aircraft import load_aircraft
@@ -148,7 +140,7 @@ def validate(config: dict, source: str) -> None:
         raise HesspipeError(f"{source}: field 'pilots.data': expected a folder or file of run CSVs, "
                             f"{pilots.data} not found")
     if pilots.plants:
-        _in_field(source, "pilots.plants", _plants_file, pilots.plants)
+        _in_field(source, "pilots.plants", read_plants, pilots.plants)   # as the stages read it
     table, (run, model) = _split(config.get("diagnose", {}), "run", "model")
     diagnose = DiagnoseConfig.from_table(table, source)
     _in_field(source, "diagnose.model", model_from_name, model or "original")
