@@ -35,7 +35,7 @@ Usage::
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
                                         [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired] [--repeats 3]
                                         [--pilot precision] [--remnant-at error] [--gain-drift 0.15]
-                                        [--layout sparse] [--motion-path NUM;DEN]
+                                        [--layout sparse] [--motion-path NUM;DEN] [--known-delay 0.03]
 
 ``--layout sparse``: the forcing on :data:`hesspipe.humanlike.forcing.SPARSE_LAYOUT` (81.92 s
 at 100 Hz, ten lines per set, target lines 1-23 bins from the disturbance's) instead of the
@@ -54,6 +54,10 @@ motion: the multimodal model of motion experiments, its own canal model; see
 ``hesspipe.humanlike.pilots``): pilots whose structure is not the one diagnose fits, as
 real humans' is not.
 
+``--known-delay MARGIN``: diagnose is told the pilot's own visual delay, as a user who
+knows it tells ``hesspipe diagnose --max-pilot-delay`` (the generator pilot's true delay +
+MARGIN s): what one record shows of a simulator's extra delay when the pilot's is known.
+
 ``--paired`` gives every diagnosis a baseline run of the same pilot (``humanlike.retest``:
 the aircraft as drawn, no pilot-side effect, the pilot's run-to-run scatter, its own
 remnant and forcing phases): the within-subject design in which a simulator's extra delay
@@ -71,6 +75,7 @@ import sys
 import tempfile
 import time
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -90,7 +95,7 @@ PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 
 
 def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hess", repeats=1, config=None,
-             **draw):
+             known_delay=None, **draw):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind", fs=50.0, T_m=70.0) if plant == "paper" else dict(fs=50.0, T_m=70.0)
@@ -126,6 +131,8 @@ def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hes
             base.append(read_run(write_trial(Path(folder) / bspec.name, simulate_trial(bspec))))
         except HesspipeError as exc:
             return None, f"baseline run: {exc}"
+    if known_delay is not None:   # the user knows the pilot's own delay (a model pilot's)
+        config = replace(config or DiagnoseConfig(), max_pilot_delay=spec.pilot["tau_v"] + known_delay)
     t = time.process_time()
     d = diagnose(run, plants, seed=seed, baseline_run=base or None, repeat_runs=more, config=config)
     return d, time.process_time() - t
@@ -190,6 +197,9 @@ def main(argv=None) -> int:
     ap.add_argument("--feedforward", type=float, default=None, metavar="KFF",
                     help="a pursuit display: the generator's precision pilots add a feedforward path on "
                          "the target, KFF times the controlled element's inverse (tasks with a target)")
+    ap.add_argument("--known-delay", type=float, default=None, metavar="MARGIN",
+                    help="tell diagnose the pilot's own visual delay: max_pilot_delay = the generator "
+                         "pilot's true delay + MARGIN s (hesspipe diagnose --max-pilot-delay)")
     ap.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
                     help="what diagnose is told the pilot saw (DiagnoseConfig.display)")
     args = ap.parse_args(argv)
@@ -229,7 +239,8 @@ def main(argv=None) -> int:
             for seed in range(args.seed_start, args.seed_start + args.seeds):
                 try:
                     d, cpu = run_case(tmp, plant, output, task, effect, seed, args.paired,
-                                      args.pilot, args.repeats, DiagnoseConfig(display=args.display), **draw)
+                                      args.pilot, args.repeats, DiagnoseConfig(display=args.display),
+                                      args.known_delay, **draw)
                 except HesspipeError as exc:
                     failures.append(f"{plant}/{output}/{task}/{effect}/{seed}: {exc}")
                     print("  REFUSED", failures[-1], flush=True)

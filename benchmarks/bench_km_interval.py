@@ -10,6 +10,7 @@ per trial the estimates, the intervals, the generator's values and the delta-met
 (upper over lower end) and the profiles' extra CPU time.
 
     python benchmarks/bench_km_interval.py [--seeds 10] [--seed-start 0] [--tasks both,disturbance]
+                                                  [--display either|compensatory|pursuit]
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from hesspipe.core.choices import DEFAULT_DISPLAY, DISPLAYS
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
@@ -35,6 +37,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed-start", type=int, default=0)
     ap.add_argument("--tasks", default="both,disturbance")
     ap.add_argument("--level", type=float, default=0.95)
+    ap.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
+                    help="what the motion test is told the pilot saw (the generator's pilots are compensatory)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), Hess pilots with motion feedback")
     total = {"profile": 0, "delta": 0, "ratio": 0, "n": 0, "extra_cpu": [], "width": [], "ratio_width": []}
@@ -55,9 +59,9 @@ def main(argv=None) -> int:
                 plants = read_plants(folder / "plants.json")
                 k = choose_k(plants)[0]
                 t0 = time.process_time()
-                motion_test(run, plants, table1(k), k=k)
+                motion_test(run, plants, table1(k), k=k, display=args.display)
                 t1 = time.process_time()
-                r = motion_test(run, plants, table1(k), k=k, interval=args.level)
+                r = motion_test(run, plants, table1(k), k=k, interval=args.level, display=args.display)
                 t2 = time.process_time()
                 total["extra_cpu"].append((t2 - t1) - (t1 - t0))
                 km, (lo, hi), se = trial.truth["pilot"]["Km"], r["Km_interval"], r["Km_se"]
@@ -76,7 +80,7 @@ def main(argv=None) -> int:
                       f"profile [{lo:.3g}, {hi:.3g}] {'covers' if inside else 'MISSES'} the truth {km:.3g}; "
                       f"+-1.96 se {1.96 * se:.3g} {'covers' if delta else 'misses'}; Km/|Ke| "
                       f"{r['Km_per_Ke']:.3g} [{rlo:.3g}, {rhi:.3g}] {'covers' if r_in else 'MISSES'} "
-                      f"the truth {ratio:.3g}", flush=True)
+                      f"the truth {ratio:.3g}{' (pursuit fit)' if r['feedforward'] else ''}", flush=True)
             print(f"{task}: Km's profile interval covers {cov['profile']}/{cov['n']}, delta method "
                   f"{cov['delta']}/{cov['n']}, Km/|Ke|'s profile interval {cov['ratio']}/{cov['n']} "
                   f"(nominal {100 * args.level:g} %)")

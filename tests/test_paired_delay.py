@@ -166,3 +166,31 @@ def test_with_a_target_the_motion_test_keeps_to_the_diagnosed_run(tmp_path):
     assert d.motion_verdict["runs"] == 1 and d.motion_verdict["forcing"] == "disturbance and target"
     assert d.delay_verdict["runs"] == 2 and d.delay_verdict["baseline_runs"] == 2
     assert not set(d.named_effects) & {"motion_feedback", "extra_delay"}
+
+
+def test_a_known_pilot_delay_lets_one_record_name_the_simulators(tmp_path):
+    # Development seed 101, paper angle with a target (benchmarks/bench_diagnose.py's draw):
+    # pilot 0.302 s, simulator 0.044 s more. Within a human's longest (0.40 s) one record
+    # cannot tell them apart; told the pilot's own delay (+ 0.03 s), the command names it.
+    s = derive_seed(101, "bench-diagnose", "paper", "angle", "both", "extra_delay")
+    spec = draw_trial("paper", s, task="both", pilot="hess", effects=("extra_delay",), output="angle",
+                      disturbance="wind", fs=50.0, T_m=70.0, name="run")
+    path = write_trial(tmp_path, simulate_trial(spec))
+    plants = str(tmp_path / "plants.json")
+    verdicts = []
+    for extra in ([], ["--max-pilot-delay", f"{spec.pilot['tau_v'] + 0.03:.3f}"]):
+        out = tmp_path / f"d{len(extra)}.json"
+        assert main(["diagnose", str(path), "--plants", plants, "--candidates", "extra_delay",
+                     "--json", str(out), *extra]) == 0
+        verdicts.append(json.loads(out.read_text())["delay_verdict"])
+    default, known = verdicts
+    assert default["max_pilot_delay_s"] == DiagnoseConfig().max_pilot_delay and not default["named"]
+    assert known["max_pilot_delay_s"] == pytest.approx(spec.pilot["tau_v"] + 0.03, abs=1e-3)
+    assert known["named"] and known["p_value"] < known["alpha"]
+    assert abs(known["delay_s"] - spec.pilot["tau"]) < 0.03
+
+
+def test_a_negative_pilot_delay_is_refused_naming_the_flag(capsys):
+    assert main(["diagnose", "run.csv", "--plants", "plants.json", "--max-pilot-delay", "-0.1"]) != 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("hesspipe: error: --max-pilot-delay: expected a number >= 0")

@@ -33,6 +33,11 @@ def register(sub) -> None:
                    help="the same pilot's run(s) in the baseline condition (same aircraft and columns): "
                         "the visual delay is tested against theirs, so a simulator's extra delay can be "
                         "told from the pilot's own")
+    p.add_argument("--max-pilot-delay", type=float, metavar="S",
+                   help="longest visual delay the pilot alone can have, s (default 0.40, a human's "
+                        "longest): one record holds the pilot's and the simulator's delay as one, so "
+                        "only delay beyond this is named extra_delay; give the pilot's known delay "
+                        "(a model pilot's, or the baseline condition's identified one) plus a margin")
     p.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
                    help=f"what the pilot saw (default {DEFAULT_DISPLAY}): compensatory (the error alone), "
                         "pursuit (target and output apart: the motion test fits the feedforward humans "
@@ -42,7 +47,8 @@ def register(sub) -> None:
     from ._options import add_run_options, add_seed, add_terms, field_terms
 
     add_run_options(p)
-    add_terms(p, field_terms("DiagnoseConfig", {"alpha": "--alpha", "max_effects": "--max-effects"}))
+    add_terms(p, field_terms("DiagnoseConfig", {"alpha": "--alpha", "max_effects": "--max-effects",
+                                                  "max_pilot_delay": "--max-pilot-delay"}))
     add_seed(p, 0, "seed of the remnant draws")
     p.set_defaults(func=_diagnose)
 
@@ -60,7 +66,8 @@ def _diagnose(args) -> int:
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     # The library checks its settings (DiagnoseConfig); cli_message names the flags.
     cfg = replace(DiagnoseConfig(), display=args.display,
-                  **{k: v for k, v in (("alpha", args.alpha), ("max_effects", args.max_effects)) if v is not None})
+                  **{k: v for k, v in (("alpha", args.alpha), ("max_effects", args.max_effects),
+                                       ("max_pilot_delay", args.max_pilot_delay)) if v is not None})
     candidates = None
     if args.candidates is not None:
         candidates = [c.strip() for c in args.candidates.split(",") if c.strip()]
