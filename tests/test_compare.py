@@ -166,6 +166,35 @@ def test_cli_bad_file_exit_status_and_message(tmp_path, capsys, monkeypatch):
     assert [p["id"] for p in d["pilots"]] == ["p0", "p1"] and d["failures"][0]["id"] == "bad"
 
 
+def test_cli_all_runs_failed_is_an_error_without_a_verdict_or_file(tmp_path, capsys):
+    # A misspelt mapped column fails every run: no table, no "undetermined" verdict that
+    # blames the forcing, no JSON.
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    for i in range(2):   # a logger's files with a target column named Target
+        rows = "".join(f"{0.02 * k:g},{np.sin(k):.4f},{np.cos(k):.4f},{np.sin(2 * k):.4f},{0.1 * k:g}\n"
+                       for k in range(1100))
+        (folder / f"p{i}.csv").write_text("time,disturbance,output,control,Target\n" + rows)
+    plants = write_plants(tmp_path / "plants.json", paper_plants())
+    out_json = tmp_path / "out.json"
+    code = main(["pilots", str(folder), "--plants", str(plants), "--columns", "reference=Tgt",
+                 "--json", str(out_json)])
+    captured = capsys.readouterr()
+    assert code == 1 and not out_json.exists() and "VERDICT" not in captured.out
+    err = captured.err.strip().splitlines()
+    assert len(err) == 3 and all(line.startswith("hesspipe: error:") for line in err)
+    assert "column 'Tgt' missing (role reference)" in err[0] and "--columns reference=NAME" in err[0]
+    assert err[-1] == "hesspipe: error: all 2 run(s) failed; nothing to compare"
+
+
+def test_verdict_without_pilots_says_none_was_identified():
+    from hesspipe.pilots.verdict import cohort_verdict
+
+    assert cohort_verdict({})["sentence"] == "undetermined: no pilot was identified"
+    no_lines = cohort_verdict({"p1": {"available": False, "reason": "no lines"}})
+    assert no_lines["answer"] == "undetermined" and "multisine forcing lines" in no_lines["sentence"]
+
+
 @pytest.mark.parametrize("argv, code, words", [
     (["pilots", "{runs}", "--plants", "{plants}", "--workers", "0"], 1, "--workers: expected"),
     (["pilots", "{tmp}/none", "--plants", "{plants}"], 1, "not found"),

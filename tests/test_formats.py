@@ -87,6 +87,18 @@ def test_missing_column_names_file_column_and_hint(tmp_path):
     assert "\n" not in msg
 
 
+def test_a_mapped_optional_column_must_exist(tmp_path):
+    # A misspelt target column read as "no target" would change the answer without a word.
+    path = _csv(tmp_path / "f.csv", ("t", "wind", "p", "stick", "Target"), [r + (0.0,) for r in _rows()])
+    cols = "time=t,disturbance=wind,output=p,control=stick"
+    assert np.all(read_run(path, columns=cols).reference == 0.0)        # not mapped: optional
+    with pytest.raises(HesspipeError) as info:
+        read_run(path, columns=cols + ",reference=Tgt")
+    msg = str(info.value)
+    assert str(path) in msg and "'Tgt'" in msg and "reference" in msg and "Target" in msg
+    assert "\n" not in msg
+
+
 def test_non_finite_value_names_column_and_row(tmp_path):
     rows = _rows()
     rows[7] = (rows[7][0], rows[7][1], "abc", rows[7][3])

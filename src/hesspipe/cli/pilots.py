@@ -87,6 +87,11 @@ def _run(args) -> int:
     result = compare_pilots(args.dir, plants, settings, workers=args.workers, scheduler=args.scheduler,
                             pilot_id=args.pilot_id, **run_options(args))
     print_reading(result.reading)
+    if not result.pilots:   # nothing was identified: no table, no verdict, no output file
+        for f in result.failures:
+            print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
+        print(f"hesspipe: error: all {len(result.failures)} run(s) failed; nothing to compare", file=sys.stderr)
+        return 1
     print(result.table())
     if args.json:
         write_json(args.json, result.to_dict())

@@ -195,8 +195,10 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     path = Path(path)
     mapping = _parse_columns(columns)
     names = {role: mapping.get(role, role) for role in RUN_COLUMNS + OPTIONAL_COLUMNS}
-    table = read_table(path, names, optional=OPTIONAL_COLUMNS, what="a measured-run CSV",
-                       hint="columns")
+    # An optional role the caller mapped to a column is required: a misspelt reference
+    # column read as no target at all would change the answer without a word.
+    optional = tuple(role for role in OPTIONAL_COLUMNS if role not in mapping)
+    table = read_table(path, names, optional=optional, what="a measured-run CSV", hint="columns")
     data, comments = table.data, table.comments
     n = len(data["time"])
     if n < max(min_samples, 2):

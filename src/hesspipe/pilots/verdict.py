@@ -150,9 +150,10 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
               f"cohort: yes if at least half of the pilots show it, median-pilot order-statistic test "
               f"p < {alpha:g} (Fisher's combination, reported beside it, tests 'at least one')")
     if not done:
+        why = ("no pilot's record has multisine forcing lines, so no describing function could be "
+               "tested for motion feedback") if tests else "no pilot was identified"
         return {"answer": "undetermined", "n_tested": 0, "n_significant": 0, "method": method,
-                "sentence": "undetermined: no pilot's record has multisine forcing lines, so no "
-                            "describing function could be tested for motion feedback",
+                "sentence": f"undetermined: {why}",
                 "per_pilot": _per_pilot_out(tests, {}, groups, alpha)}
     n_runs = len(done)
     pilots = _per_pilot(done, groups or {})
