@@ -127,3 +127,20 @@ def test_analytic_plants_write_the_paper_motion_path(tmp_path):
     ref = paper_motion_path()
     w = np.array([0.3, 1.0, 3.0, 10.0])
     assert np.allclose(mp(1j * w), ref(1j * w), rtol=1e-9)
+
+
+def test_an_integrating_element_without_a_motion_path_gets_a_note(tmp_path, capsys):
+    from hesspipe.cli._options import read_cli_plants
+    from hesspipe.pilot.motion import motion_path_note
+
+    yaw = Plants(ct.tf([1.5], [1.0, 0.0]), ct.tf([1.5], [1.0, 0.0]))
+    note = motion_path_note(yaw)
+    assert "no motion_path" in note and '"motion_path": {"num": [1, 0], "den": [0.01, 1]}' in note
+    assert motion_path_note(dataclasses.replace(yaw, motion_path=ct.tf(*ANGLE_NO_WASHOUT))) is None
+    assert motion_path_note(ROLL) is None                   # a rate output: the paper's default fits
+    path = write_plants(tmp_path / "yaw.json", yaw)
+    read_cli_plants(path)
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(f"hesspipe: note: {path}: no motion_path")
+    read_cli_plants(write_plants(tmp_path / "roll.json", ROLL))
+    assert capsys.readouterr().err == ""

@@ -88,6 +88,19 @@ def print_reading(reading) -> None:
         print(line, file=sys.stderr)
 
 
+def read_cli_plants(path):
+    """:func:`hesspipe.core.formats.read_plants` of `path`, with a note on stderr where its
+    motion path is likely wrong for the motion test (:func:`hesspipe.pilot.motion.motion_path_note`)."""
+    from ..core.formats import read_plants
+    from ..pilot.motion import motion_path_note
+
+    plants = read_plants(path)
+    note = motion_path_note(plants)
+    if note:
+        print(f"hesspipe: note: {path}: {note}", file=sys.stderr)
+    return plants
+
+
 def read_cli_runs(paths, args: argparse.Namespace, **kwargs) -> list:
     """:func:`hesspipe.core.formats.read_run` of each path with the command's run options;
     the notes of all of them on stderr once they are read (:func:`reading_lines`)."""

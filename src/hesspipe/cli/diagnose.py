@@ -55,7 +55,6 @@ def register(sub) -> None:
 
 def _diagnose(args) -> int:
     from ..core.errors import HesspipeError
-    from ..core.formats import read_plants
     from ..core.io import write_json
     from ..core.paper import WELCH_SEGMENT
     from ..diagnose.report import format_report
@@ -73,8 +72,9 @@ def _diagnose(args) -> int:
         candidates = [c.strip() for c in args.candidates.split(",") if c.strip()]
         if not candidates:
             raise HesspipeError("--candidates: expected effect ids separated by commas, got nothing")
-    plants = read_plants(args.plants)
-    from ._options import read_cli_runs
+    from ._options import read_cli_plants, read_cli_runs
+
+    plants = read_cli_plants(args.plants)
 
     runs = read_cli_runs([*args.run, *(args.baseline_run or [])], args, min_samples=WELCH_SEGMENT)
     run, *repeats = runs[:len(args.run)]

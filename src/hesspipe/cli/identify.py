@@ -9,7 +9,7 @@ import math
 
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.errors import HesspipeError
-from ._options import add_run_options, add_seed, add_terms, read_cli_runs
+from ._options import add_run_options, add_seed, add_terms, read_cli_plants, read_cli_runs
 
 #: The library's names of identify's settings → this command's options.
 TERMS = {r"(^|: )free: ": r"\1--free: ", r"(^|: )fixed: ": r"\1--fix: ",
@@ -172,7 +172,9 @@ def run(args) -> int:
     from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
-    plants = read_plants(args.plants)
+    # The motion path's note only where the model has one (the expanded model, a motion effect).
+    plants = read_cli_plants(args.plants) if "expanded" in args.model or "motion" in args.model \
+        else read_plants(args.plants)
     recs = read_cli_runs(args.run, args, min_samples=PaperWelch().nperseg)
     rec = recs[0]
     free = None

@@ -60,12 +60,11 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
-    from ..core.formats import read_plants
     from ..core.io import check_output_dir, check_output_file, staged_output, write_json
     from ..pilots.batch import check_scheduler_address
     from ..pilots.compare import compare_pilots
     from ..pilots.settings import CompareSettings
-    from ._options import cli_message, print_reading, run_options
+    from ._options import cli_message, print_reading, read_cli_plants, run_options
 
     # Every output and the scheduler address are checked before any work.
     if args.json:
@@ -83,7 +82,7 @@ def _run(args) -> int:
         from ..pilots.batch import check_workers
 
         check_workers(args.workers)
-    plants = read_plants(args.plants)
+    plants = read_cli_plants(args.plants)
     result = compare_pilots(args.dir, plants, settings, workers=args.workers, scheduler=args.scheduler,
                             pilot_id=args.pilot_id, **run_options(args))
     print_reading(result.reading)

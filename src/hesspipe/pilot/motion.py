@@ -56,6 +56,30 @@ def motion_block(plants) -> Block | None:
     return None if mp is None else from_tf(mp)
 
 
+def motion_path_note(plants) -> str | None:
+    """Why a plants file without ``motion_path`` may be wrong for the motion test, or None.
+
+    Absent, the cab's angular velocity is the paper's platform × washout acting on the
+    output, which must then be an angular rate (SPEC.md "Data formats"). A controlled
+    element with a free integrator (a pole at s = 0) usually displays an angle, for which
+    the cab's rate is the output differentiated: the vestibular path would then be
+    modelled one integration off, and the motion test and Km would mean nothing.
+
+    Parameters
+    ----------
+    plants : hesspipe.core.formats.Plants
+    """
+    if getattr(plants, "motion_path", None) is not None:
+        return None
+    den = np.atleast_1d(np.asarray(plants.control_to_output.den[0][0], dtype=float))
+    if den.size < 2 or abs(den[-1]) > 1e-12 * float(np.max(np.abs(den))):
+        return None
+    return ("no motion_path, so the vestibular path takes the output for the cab's angular rate "
+            "(the paper's washout and platform); the controlled element integrates, as on an angle "
+            "display: if the cab turns with the displayed angle, add \"motion_path\": "
+            "{\"num\": [1, 0], \"den\": [0.01, 1]}")
+
+
 @functools.lru_cache(maxsize=512)
 def _product(num_a, den_a, num_b, den_b) -> tuple[tuple, tuple]:
     """``(num_a num_b, den_a den_b)`` with common roots at s = 0 cancelled.
