@@ -169,7 +169,12 @@ def test_unknown_stage_and_bad_config_are_one_line_errors(reference, tmp_path, c
     # So does a data folder or plants file of the pilots stage that is not there or not plants.
     (tmp_path / "lab").mkdir()
     (tmp_path / "notplants.json").write_text('{"source": "x"}')
+    (tmp_path / "lab2").mkdir()   # and a column mapping that names a column the runs do not have
+    (tmp_path / "lab2" / "s01_r1.csv").write_text("time,disturbance,output,control,Target\n"
+                                                   + "".join(f"{0.02 * k:g},0,0,0,0\n" for k in range(100)))
     for table, field, says in (('data = "nolab"', "pilots.data", "nolab not found"),
+                               ('data = "lab2"\ncolumns = "reference=Tgt"', "pilots.columns",
+                                "s01_r1.csv: column 'Tgt' missing (role reference)"),
                                ('data = "lab"\nplants = "none.json"', "pilots.plants", "none.json: file not found"),
                                ('data = "lab"\nplants = "notplants.json"', "pilots.plants",
                                 "notplants.json: field 'control_to_output' missing")):

@@ -114,14 +114,14 @@ def validate(config: dict, source: str) -> None:
     HesspipeError
         Naming `source` and the first bad field.
     """
-    from ..core.formats import read_plants
+    from ..core.formats import read_plants, read_run
     from ..diagnose.settings import DiagnoseConfig
     from ..diagnose.workflow import _resolve_candidates
     from ..flight.aircraft import load_aircraft
     from ..flight.approach import FlightConfig
     from ..pilot.hess import model_from_name
     from ..pilots.batch import check_scheduler_address
-    from ..pilots.compare import PilotsConfig
+    from ..pilots.compare import PilotsConfig, list_runs
     from ..plants.analytic import load_analytic
     from ..plants.settings import AnalyticConfig, PlantsConfig
 
@@ -141,6 +141,13 @@ def validate(config: dict, source: str) -> None:
                             f"{pilots.data} not found")
     if pilots.plants:
         _in_field(source, "pilots.plants", read_plants, pilots.plants)   # as the stages read it
+    if pilots.data and pilots.columns:
+        # The data's first run read as the pilots stage reads it: a misspelt column name fails
+        # here, not after flight and plants (any other fault of that file would fail the
+        # stage too).
+        first = list_runs(pilots.data)[0]
+        _in_field(source, "pilots.columns",
+                  lambda c: read_run(first, columns=c, resample=pilots.resample), pilots.columns)
     table, (run, model) = _split(config.get("diagnose", {}), "run", "model")
     diagnose = DiagnoseConfig.from_table(table, source)
     _in_field(source, "diagnose.model", model_from_name, model or "original")
