@@ -144,3 +144,9 @@ def test_an_integrating_element_without_a_motion_path_gets_a_note(tmp_path, caps
     assert len(err) == 1 and err[0].startswith(f"hesspipe: note: {path}: no motion_path")
     read_cli_plants(write_plants(tmp_path / "roll.json", ROLL))
     assert capsys.readouterr().err == ""
+    # The pilots' result keeps the note (and the motion path where given) for its record.
+    from hesspipe.pilots.compare import plants_record
+
+    assert plants_record(yaw)["motion_path_note"] == note and "motion_path" not in plants_record(yaw)
+    kept = plants_record(dataclasses.replace(yaw, motion_path=ct.tf(*ANGLE_NO_WASHOUT)))
+    assert kept["motion_path"] == {"num": [1.0, 0.0], "den": [0.01, 1.0]} and "motion_path_note" not in kept

@@ -257,7 +257,10 @@ def test_own_recordings_with_their_own_plants_and_persons(reference, tmp_path, c
     verdict = comp["motion_verdict"]
     assert verdict["n_tested"] == 2 and "2 pilots, 4 runs" in verdict["sentence"]
     assert json.loads((work / "diagnose" / "diagnosis.json").read_text())["run"] == "s1_r1"
-    assert "Plants the runs were identified with: Yc = `" in (work / "report.md").read_text()
+    report = (work / "report.md").read_text()
+    assert "Plants the runs were identified with: Yc = `" in report
+    assert comp["plants"]["motion_path"] == plants_dict(spec)["motion_path"]
+    assert "the cab's motion path `" in report and "motion_path_note" not in comp["plants"]
     (tmp_path / "yaw.json").write_text(json.dumps({**plants_dict(spec), "source": "edited"}))
     assert main(["status", "--config", str(own), "--out", str(work)]) == 0
     state = {ln.split()[0]: ln.split()[1] for ln in capsys.readouterr().out.splitlines()}

@@ -41,6 +41,7 @@ from ..identification.fit import identify
 from ..identification.problem import SpectralObjective
 from ..pilot.crossover import gain_scale, loop_crossover, tracking_crossover
 from ..pilot.hess import PilotModel, model_from_name
+from ..pilot.motion import motion_path_note
 from ..plants.consistency import check_consistent
 from .batch import run_batch
 from .cohort import cohort_spec, synth_cohort
@@ -420,9 +421,21 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     failures.sort(key=lambda f: order.get(f.source, len(order)))
 
     return Comparison(pilots=pilots, failures=tuple(failures), settings=settings, groups=groups,
-                      reading={r.source: r.notes for r in runs if r.notes},
-                      plants={"control_to_output": tf_coefficients(plants.control_to_output),
-                              "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)})
+                      reading={r.source: r.notes for r in runs if r.notes}, plants=plants_record(plants))
+
+
+def plants_record(plants: Plants) -> dict:
+    """The plants' coefficients for a result's record: both paths, the cab's motion path
+    where the file gives one, and the note of :func:`hesspipe.pilot.motion.motion_path_note`
+    where it applies (the motion test's vestibular path rests on it)."""
+    out = {"control_to_output": tf_coefficients(plants.control_to_output),
+           "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}
+    if getattr(plants, "motion_path", None) is not None:
+        out["motion_path"] = tf_coefficients(plants.motion_path)
+    note = motion_path_note(plants)
+    if note:
+        out["motion_path_note"] = note
+    return out
 
 
 def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed: int = 0,

@@ -131,8 +131,12 @@ def _pilots(folder: Path, root: Path) -> list[str]:
     plants = comp.get("plants") or {}
     if _load(folder / "cohort" / "cohort.json") is None and {"control_to_output", "disturbance_to_output"} <= set(plants):
         # A data folder's runs may come with their own task's plants ([pilots] plants): say which.
+        cab = (f", the cab's motion path `{format_tf(plants['motion_path'])}`" if plants.get("motion_path")
+               else " (no motion path: the paper's washout and platform on the output)")
         out += [f"Plants the runs were identified with: Yc = `{format_tf(plants['control_to_output'])}`, "
-                f"Yd = `{format_tf(plants['disturbance_to_output'])}`.", ""]
+                f"Yd = `{format_tf(plants['disturbance_to_output'])}`{cab}.", ""]
+        if plants.get("motion_path_note"):
+            out += [f"**Note:** {plants['motion_path_note']}.", ""]
     crit = (comp.get("settings") or {}).get("criterion", "paper")
     fit_text = ("Fitness is the paper's Eq. 10 (RMS difference of control PSDs, lower is better). "
                 if crit == "paper" else
