@@ -134,6 +134,7 @@ def _terminate(pool: ProcessPoolExecutor) -> None:
     # ProcessPoolExecutor has no public way to stop running items before Python 3.14
     # (terminate_workers); its process table is the documented-in-source fallback.
     processes = list(getattr(pool, "_processes", {}).values())
+    manager = getattr(pool, "_executor_manager_thread", None)   # shutdown() forgets both
     pool.shutdown(wait=False, cancel_futures=True)
     for proc in processes:
         if proc.is_alive():
@@ -143,6 +144,12 @@ def _terminate(pool: ProcessPoolExecutor) -> None:
         if proc.is_alive():
             proc.kill()
             proc.join(timeout=5)
+    # Let the pool's manager thread see its workers gone and close its wake-up pipe before
+    # the interpreter exits: on Python 3.11 the exit hook of concurrent.futures otherwise
+    # races that close and can write to the closed pipe ("Exception ignored ... Bad file
+    # descriptor" after "hesspipe: terminated", 1 of 3 CI runs of the SIGTERM test).
+    if manager is not None:
+        manager.join(timeout=5)
 
 
 #: A Dask scheduler address: optional protocol, host (name, IPv4 or [IPv6]) and port;

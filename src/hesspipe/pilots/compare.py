@@ -427,7 +427,20 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
 def plants_record(plants: Plants) -> dict:
     """The plants' coefficients for a result's record: both paths, the cab's motion path
     where the file gives one, and the note of :func:`hesspipe.pilot.motion.motion_path_note`
-    where it applies (the motion test's vestibular path rests on it)."""
+    where it applies (the motion test's vestibular path rests on it).
+
+    Parameters
+    ----------
+    plants : hesspipe.core.formats.Plants
+        The plants the runs were identified with.
+
+    Returns
+    -------
+    dict
+        ``control_to_output``, ``disturbance_to_output`` and, where given,
+        ``motion_path`` as ``{"num", "den"}`` (descending powers of s); ``motion_path_note``
+        where it applies.
+    """
     out = {"control_to_output": tf_coefficients(plants.control_to_output),
            "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}
     if getattr(plants, "motion_path", None) is not None:
