@@ -169,12 +169,13 @@ def run(args) -> int:
     from ..core.formats import read_plants
     from ..identification.fit import identify
     from ..identification.spectra import PaperWelch
+    from ..pilot.hess import model_from_name
     from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
-    # The motion path's note only where the model has one (the expanded model, a motion effect).
-    plants = read_cli_plants(args.plants) if "expanded" in args.model or "motion" in args.model \
-        else read_plants(args.plants)
+    # The motion path's note only where the model feels the cab (vestibular or otolith path).
+    cab = {"motion_feedback", "otoliths"} & set(model_from_name(args.model).effects)
+    plants = read_cli_plants(args.plants) if cab else read_plants(args.plants)
     recs = read_cli_runs(args.run, args, min_samples=PaperWelch().nperseg)
     rec = recs[0]
     free = None
@@ -185,7 +186,6 @@ def run(args) -> int:
     fixed = dict(args.fix)
     if free is None:
         from ..identification.problem import default_free
-        from ..pilot.hess import model_from_name
 
         defaults = default_free(model_from_name(args.model))
         if all(n in fixed for n in defaults):

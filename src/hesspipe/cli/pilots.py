@@ -86,21 +86,20 @@ def _run(args) -> int:
     result = compare_pilots(args.dir, plants, settings, workers=args.workers, scheduler=args.scheduler,
                             pilot_id=args.pilot_id, **run_options(args))
     print_reading(result.reading)
-    if not result.pilots:   # nothing was identified: no table, no verdict, no output file
-        for f in result.failures:
-            print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
-        print(f"hesspipe: error: all {len(result.failures)} run(s) failed; nothing to compare", file=sys.stderr)
-        return 1
-    print(result.table())
-    if args.json:
-        write_json(args.json, result.to_dict())
-    if args.figures:
-        from ..viz.compare import draw_pilots
+    if result.pilots:   # with none identified: no table, no verdict, no output file
+        print(result.table())
+        if args.json:
+            write_json(args.json, result.to_dict())
+        if args.figures:
+            from ..viz.compare import draw_pilots
 
-        with staged_output(args.figures, kind="figures") as stage:
-            draw_pilots(stage, result.pilots)
+            with staged_output(args.figures, kind="figures") as stage:
+                draw_pilots(stage, result.pilots)
     for f in result.failures:
         print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
+    if not result.pilots:
+        print(f"hesspipe: error: all {len(result.failures)} run(s) failed; nothing to compare", file=sys.stderr)
+        return 1
     if result.failures:
         print(f"hesspipe: error: {len(result.failures)} of {len(result.failures) + len(result.pilots)} "
               "run(s) failed; the others are in the table", file=sys.stderr)
