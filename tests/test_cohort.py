@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import control as ct
@@ -10,11 +11,12 @@ import pytest
 
 from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
-from hesspipe.core.formats import Plants, read_run, write_plants
+from hesspipe.core.formats import Plants, plants_coefficients, read_run, write_plants
 from hesspipe.core.paper import EQ14, EQ16
 from hesspipe.identification.spectra import psd
 from hesspipe.pilot.crossover import gain_scale
 from hesspipe.pilot.hess import PilotModel, table1
+from hesspipe.pilot.motion import paper_motion_path
 from hesspipe.pilots import cohort as cohort_mod
 from hesspipe.pilots.cohort import CohortSpec, disturbance, draw_parameters, pilot_ids, synth_cohort
 
@@ -45,6 +47,16 @@ def test_cohort_files_truth_and_labels(tmp_path):
         np.testing.assert_allclose(run.disturbance, disturbance(SHORT, truth["seeds"]["gust"])[1], atol=1e-8)
     summary = json.loads((out / "cohort.json").read_text())
     assert summary["synthetic"] is True and summary["note"].startswith("SYNTHETIC DATA")
+    assert summary["plants"] == plants_coefficients(paper_plants()) and "motion_path" not in summary["plants"]
+
+
+def test_cohort_records_the_plants_motion_path_it_was_drawn_with(tmp_path):
+    # The cohort's motion pilots feel the cab through the plants' motion path, so the
+    # cohort's record of its plants carries it (one record for every output: formats).
+    plants = dataclasses.replace(paper_plants(), motion_path=paper_motion_path())
+    synth_cohort(plants, 1, 11, ["motion_feedback"], tmp_path, spec=SHORT)
+    record = json.loads((tmp_path / "cohort.json").read_text())["plants"]
+    assert record["motion_path"] == plants_coefficients(plants)["motion_path"]
 
 
 def test_same_seed_same_bytes_and_pilot_independent_of_cohort_size(tmp_path):

@@ -8,7 +8,7 @@ import pytest
 
 from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
-from hesspipe.core.formats import Plants, read_run, write_plants
+from hesspipe.core.formats import Plants, plants_coefficients, read_run, write_plants
 from hesspipe.core.io import MARKER
 from hesspipe.flight.approach import FlightConfig
 from hesspipe.flight.closed_loop import AircraftEffects, fly_pilot_record, pilot_loop
@@ -249,6 +249,7 @@ def test_cohort_is_the_synthetic_cohorts_draw_flown_in_jsbsim(tmp_path):
     paths = fly_cohort(PLANTS, 2, 11, ["motion_feedback"], tmp_path / "cohort", config=SHORT)
     cohort = json.loads((tmp_path / "cohort" / "cohort.json").read_text())
     assert cohort["simulator"] == "jsbsim" and cohort["synthetic"] and cohort["dt_s"] == pytest.approx(0.025)
+    assert cohort["plants"] == plants_coefficients(PLANTS)
     for path in paths:
         pid = path.stem
         truth = json.loads(path.with_suffix(".truth.json").read_text())

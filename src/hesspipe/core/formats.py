@@ -28,6 +28,8 @@ import numpy as np
 import pandas as pd
 
 from ._csv import decode, read_table
+from ._tf import _read_tf, tf_coefficients
+from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
 from .errors import HesspipeError
 from .io import write_json, write_text
 from .paper import WELCH_SEGMENT
@@ -453,76 +455,6 @@ class Plants:
         return self.disturbance_to_output
 
 
-def siso_coefficients(sys) -> tuple[np.ndarray, np.ndarray]:
-    """Numerator and denominator of a SISO transfer function as 1-D float arrays.
-
-    The one place that reaches into python-control's nested ``num[0][0]``.
-
-    Parameters
-    ----------
-    sys : control.TransferFunction
-        Single-input single-output, continuous or discrete.
-
-    Returns
-    -------
-    num, den : ndarray
-        Coefficients in descending powers of s (or z), at least one each, as
-        stored (not normalised; leading zeros kept).
-    """
-    num = np.atleast_1d(np.squeeze(sys.num[0][0])).astype(float)
-    den = np.atleast_1d(np.squeeze(sys.den[0][0])).astype(float)
-    return num, den
-
-
-def tf_coefficients(sys: ct.TransferFunction) -> dict:
-    """Return ``{"num": [...], "den": [...]}`` of a SISO continuous transfer function.
-
-    Parameters
-    ----------
-    sys : control.TransferFunction
-        Single-input single-output.
-
-    Returns
-    -------
-    dict
-        Lists of floats, descending powers of s (see :func:`siso_coefficients`).
-    """
-    num, den = siso_coefficients(sys)
-    return {"num": num.tolist(), "den": den.tolist()}
-
-
-def _read_tf(obj, path, key, *, excess: int = 0) -> ct.TransferFunction:
-    if not isinstance(obj, Mapping):
-        raise HesspipeError(f"{path}: field '{key}': expected an object with 'num' and 'den', got {obj!r}")
-    dt = obj.get("dt")
-    # python-control's convention: dt None or 0 is continuous time; anything else is a
-    # sampled system whose coefficients mean powers of z, not s.
-    if dt is not None and not (isinstance(dt, (int, float)) and not isinstance(dt, bool) and dt == 0):
-        raise HesspipeError(f"{path}: field '{key}.dt': {dt!r} makes it a discrete-time transfer "
-                            "function; expected continuous time (dt null or 0, or no dt): convert "
-                            "it to continuous time first")
-    coeffs = {}
-    for part in ("num", "den"):
-        value = obj.get(part)
-        if (not isinstance(value, list) or not value
-                or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                           and math.isfinite(v) for v in value)):
-            raise HesspipeError(f"{path}: field '{key}.{part}': expected a non-empty list of finite "
-                                f"numbers (descending powers of s), got {value!r}")
-        coeffs[part] = np.trim_zeros(np.asarray(value, dtype=float), "f")
-    num, den = coeffs["num"], coeffs["den"]
-    if den.size == 0:
-        raise HesspipeError(f"{path}: field '{key}.den': expected a non-zero polynomial")
-    if num.size == 0:
-        num = np.zeros(1)
-    if num.size > den.size + excess:
-        what = ("a proper transfer function" if not excess else
-                f"a numerator degree at most {excess} above the denominator's (s: the rate of an angle)")
-        raise HesspipeError(f"{path}: field '{key}': not proper (numerator degree {num.size - 1} "
-                            f"> denominator degree {den.size - 1}); expected {what}")
-    return ct.tf(num, den)
-
-
 def read_plants(path: str | Path) -> Plants:
     """Read a plants JSON file (SPEC.md format) into :class:`Plants`.
 
@@ -565,6 +497,29 @@ def read_plants(path: str | Path) -> Plants:
                   None if motion is None else _read_tf(motion, path, "motion_path", excess=1))
 
 
+def plants_coefficients(plants: Plants) -> dict:
+    """The plants' transfer functions as SPEC.md's JSON writes them: the one record of a
+    plants file's paths in every output that carries them.
+
+    Parameters
+    ----------
+    plants : Plants
+        Yc (control → output), Yd (disturbance → output) and the optional motion path
+        (output → the cab's angular velocity).
+
+    Returns
+    -------
+    dict
+        ``control_to_output``, ``disturbance_to_output`` and, where given,
+        ``motion_path``, each ``{"num": [...], "den": [...]}`` in descending powers of s.
+    """
+    obj = {"control_to_output": tf_coefficients(plants.control_to_output),
+           "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}
+    if plants.motion_path is not None:
+        obj["motion_path"] = tf_coefficients(plants.motion_path)
+    return obj
+
+
 def write_plants(path: str | Path, plants: Plants, **extra) -> Path:
     """Write `plants` in the SPEC.md JSON format, atomically.
 
@@ -583,10 +538,7 @@ def write_plants(path: str | Path, plants: Plants, **extra) -> Path:
     Path
         `path`.
     """
-    obj = {"control_to_output": tf_coefficients(plants.control_to_output),
-           "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}
-    if plants.motion_path is not None:
-        obj["motion_path"] = tf_coefficients(plants.motion_path)
+    obj = plants_coefficients(plants)
     obj.update(plants.meta)
     obj.update(extra)
     return write_json(path, obj)

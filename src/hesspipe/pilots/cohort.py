@@ -72,7 +72,7 @@ from typing import Sequence
 import numpy as np
 
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, record_samples, tf_coefficients, write_run
+from ..core.formats import Plants, plants_coefficients, record_samples, write_run
 from ..core.io import staged_output, write_json
 from ..core.provenance import versions
 from ..core.seeds import check_seed, derive_seed
@@ -564,7 +564,6 @@ def synth_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str] = ("m
             "spec": {"duration_s": spec.duration_s, "dt_s": spec.dt_s, "k": spec.k,
                      "distributions": spec.describe(),
                      "side_wind": vars(spec.side_wind), "gust": spec.gust.describe("ft/s")},
-            "plants": {"control_to_output": tf_coefficients(plants.control_to_output),
-                       "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)},
+            "plants": plants_coefficients(plants),
             "pilots": summary, "versions": versions()})
     return [out_dir / f"{pid}.csv" for pid in ids]

@@ -33,7 +33,7 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..core.errors import HesspipeError
-from ..core.formats import RUN_SUFFIXES, Plants, Run, _parse_columns, read_run, tf_coefficients
+from ..core.formats import RUN_SUFFIXES, Plants, Run, _parse_columns, plants_coefficients, read_run
 from ..core.seeds import derive_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import benchmark as mcruer_benchmark
@@ -441,10 +441,7 @@ def plants_record(plants: Plants) -> dict:
         ``motion_path`` as ``{"num", "den"}`` (descending powers of s); ``motion_path_note``
         where it applies.
     """
-    out = {"control_to_output": tf_coefficients(plants.control_to_output),
-           "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}
-    if getattr(plants, "motion_path", None) is not None:
-        out["motion_path"] = tf_coefficients(plants.motion_path)
+    out = plants_coefficients(plants)
     note = motion_path_note(plants)
     if note:
         out["motion_path_note"] = note

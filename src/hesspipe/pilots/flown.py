@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Sequence
 
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, tf_coefficients, write_run
+from ..core.formats import Plants, plants_coefficients, write_run
 from ..core.io import staged_output, write_json
 from ..core.provenance import versions
 from ..core.seeds import derive_seed
@@ -104,8 +104,7 @@ def fly_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str], out_di
             "target": None if target is None else target.describe(),
             "aircraft": aircraft, "n": n, "seed": seed, "effects": list(summary and truth["effects"]),
             "dt_s": config.dt_s * every, "simulation_dt_s": config.dt_s,
-            "plants": {"control_to_output": tf_coefficients(plants.control_to_output),
-                       "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)},
+            "plants": plants_coefficients(plants),
             "pilots": summary, "versions": versions()})
     return [out_dir / f"{pid}.csv" for pid in ids]
 
