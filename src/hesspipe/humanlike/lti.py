@@ -122,14 +122,14 @@ class StateSpace:
         """
         w = np.atleast_1d(np.asarray(w, dtype=float))
         n = self.order
-        out = np.empty(w.shape, dtype=complex)
-        for i, wi in enumerate(w):
-            if n:
-                x = np.linalg.solve(1j * wi * np.eye(n) - self.A, self.B[:, inp])
-                out[i] = self.C @ x + self.D[inp]
-            else:
-                out[i] = self.D[inp]
-        return out
+        if not n:
+            return np.full(w.shape, self.D[inp], dtype=complex)
+        # One stacked solve for all frequencies: the pilots' draws evaluate the plant ~10^3
+        # times with a few points each, and a solve per frequency took 60 % of a precision
+        # pilot's draw with motion (the same LAPACK solve per matrix: equal to the bit).
+        m = 1j * w.reshape(-1, 1, 1) * np.eye(n) - self.A
+        x = np.linalg.solve(m, np.broadcast_to(self.B[:, inp], (w.size, n))[..., None])[..., 0]
+        return (x @ self.C).reshape(w.shape) + self.D[inp]
 
 
 def ss_from_tf(num, den) -> StateSpace:
