@@ -8,7 +8,7 @@ import sys
 import hesspipe
 
 REQUIRED = ("read_run", "read_plants", "fly", "fit_plants", "PilotModel", "simulate", "identify",
-            "estimate_frf", "average_frf", "compare_pilots", "diagnose", "DiagnoseConfig")
+            "estimate_frf", "average_frf", "compare_pilots", "compare_conditions", "diagnose", "DiagnoseConfig")
 
 
 def test_api_names_are_exported_and_documented():

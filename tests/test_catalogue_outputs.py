@@ -92,6 +92,8 @@ BUILDERS: dict[str, Callable[[Path, Path], list[str]]] = {
     "fly-pilot": lambda i, out: ["fly-pilot", "--plants", str(i / "plants.json"), "--out", str(out)],
     "frf": lambda i, out: ["frf", str(i / "runs" / "p0.csv"), "--plants", str(i / "plants.json"),
                            "--json", str(out / "f.json")],
+    "conditions": lambda i, out: ["conditions", str(i / "runs"), str(i / "runs"), "--plants",
+                                  str(i / "plants.json"), "--json", str(out / "c.json")],
 }
 
 #: Commands that only read (a read-only output folder is fine for them).

@@ -28,7 +28,7 @@ _API = {
     "fit_plants": "plants", "PlantsConfig": "plants",
     "PilotModel": "pilot", "simulate": "pilot", "Simulator": "pilot",
     "identify": "identification", "estimate_frf": "identification", "average_frf": "identification",
-    "compare_pilots": "pilots", "PilotsConfig": "pilots",
+    "compare_pilots": "pilots", "PilotsConfig": "pilots", "compare_conditions": "pilots",
     "DiagnoseConfig": "diagnose", "Diagnosis": "diagnose",
 }
 

@@ -13,7 +13,7 @@ _NAMES = [
     "plants",
     "identify",
     "frf",
-    "synth_pilots", "pilots",
+    "synth_pilots", "pilots", "conditions",
     "fly_pilot",
     "diagnose",
 ]

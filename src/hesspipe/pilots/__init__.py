@@ -9,4 +9,5 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "PilotsConfig": "settings", "CompareSettings": "settings", "compare_pilots": "compare",
     "compare_run": "compare", "fly_cohort": "flown",
     "cohort_verdict": "verdict", "motion_test": "verdict", "pilot_groups": "verdict",
+    "compare_conditions": "conditions", "ConditionComparison": "conditions",
 })

@@ -1,0 +1,367 @@
+"""Two conditions flown by the same persons: does their behaviour change between them?
+
+The field's direct answer to "does the pilot need motion?" compares what the same persons do
+with and without the cue, not only how well a model with a vestibular path fits each run
+(:func:`~hesspipe.pilots.verdict.cohort_verdict`, ``hesspipe pilots``). Motion experiments
+report, per person and condition, the crossover frequency and phase margin of the loop the
+disturbance sees, the tracking performance and the control effort, and test the differences
+across persons with a repeated-measures analysis; with two conditions that is a paired t
+test (Zaal et al. 2009, roll tracking; Pool et al. 2010, yaw; in both the disturbance loop's
+crossover and phase margin rose with motion).
+
+Per person and condition, from the person's runs alone (no pilot model is fitted):
+
+* the describing function H = U/E at the disturbance's lines, the runs averaged line by line
+  (:func:`~hesspipe.identification.frf_average.average_frf`; broadband runs: each run by
+  Welch, the metrics averaged), and the crossover and phase margin of L = H Yc
+  (:mod:`~hesspipe.identification.frf_crossover`). With a compensatory display, H at those
+  lines is the visual and the vestibular response together (e = -y there), the classical
+  "disturbance open loop";
+* the variances of the displayed error e = r - y and of the control u over the analysed
+  window (the runs' mean), and the remnant's share of the control power.
+
+Across the persons who flew both conditions, each metric's difference (variances as log
+ratios) gets a two-sided paired t test. The primary metrics (crossover, phase margin, error
+variance) are Holm-adjusted together (family-wise error at :data:`ALPHA`) and make the verdict,
+which names those that differ or says that none was found; the control variance and the
+remnant share are reported beside them, unadjusted.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+from scipy import stats
+
+from ..core.errors import HesspipeError
+from ..core.seeds import derive_seed
+from ..identification.frf import estimate_frf
+from ..identification.frf_average import average_frf
+from ..identification.lines import windowed
+from .verdict import pilot_groups
+
+ALPHA = 0.05
+"""Family-wise error rate of the paired tests over all metrics (Holm)."""
+MIN_PERSONS = 3
+"""Fewest persons with both conditions for a paired test (two leave one degree of freedom)."""
+
+
+@dataclass(frozen=True)
+class Metric:
+    """A per-person measure the conditions are compared on.
+
+    Attributes
+    ----------
+    key : str
+        Its key in the records.
+    label : str
+        Its name in words.
+    unit : str
+        Its unit ("" for a fraction).
+    log : bool
+        Compared as a ratio (a variance): the test is on the logarithms, the effect a ratio.
+    primary : bool
+        In the verdict (Holm-adjusted with the other primary metrics); a secondary metric's
+        test is reported beside them, unadjusted.
+    """
+
+    key: str
+    label: str
+    unit: str
+    log: bool = False
+    primary: bool = True
+
+
+METRICS = (
+    Metric("crossover_rad_s", "disturbance-loop crossover", "rad/s"),
+    Metric("phase_margin_deg", "phase margin", "deg"),
+    Metric("error_variance", "error variance", "output unit^2", log=True),
+    Metric("control_variance", "control variance", "control unit^2", log=True, primary=False),
+    Metric("remnant_share", "remnant share of control power", "", primary=False),
+)
+"""The loop the disturbance sees and the tracking performance are the primary measures of motion
+experiments; control effort and remnant are reported beside them."""
+
+
+@dataclass(frozen=True)
+class ConditionComparison:
+    """Result of :func:`compare_conditions`.
+
+    Attributes
+    ----------
+    labels : (str, str)
+        The two conditions' names; differences are the second's minus the first's.
+    persons : dict
+        Person id → ``{label: metrics}`` for every person with runs in a condition; the
+        metrics are those of :data:`METRICS` plus ``runs`` (ids), ``crossover_std`` (rad/s)
+        and ``phase_margin_std_deg``.
+    tests : dict
+        Metric key → ``{"n", "higher", "effect", "t", "p_value", "p_holm"}`` (``effect``: the
+        mean difference, or for a log metric the geometric-mean ratio; ``p_holm`` None for a
+        secondary metric); None where fewer than :data:`MIN_PERSONS` persons have the metric
+        in both conditions.
+    verdict : str
+        In words (:func:`conditions_verdict`).
+    synthetic : bool
+        Some run is labelled synthetic.
+    notes : tuple of str
+        Persons in one condition only, metrics not found.
+    """
+
+    labels: tuple
+    persons: dict
+    tests: dict
+    verdict: str
+    synthetic: bool
+    notes: tuple = ()
+
+    def to_dict(self) -> dict:
+        """JSON-ready, with the definitions of the metrics and the test."""
+        return {"synthetic": self.synthetic, "labels": list(self.labels), "verdict": self.verdict,
+                "alpha": ALPHA, "test": "two-sided paired t test per metric across persons, Holm-"
+                "adjusted over the primary metrics; variances compared as log ratios",
+                "metrics": {m.key: {"label": m.label, "unit": m.unit, "log": m.log, "primary": m.primary}
+                            for m in METRICS},
+                "tests": self.tests, "persons": self.persons, "notes": list(self.notes)}
+
+
+def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
+    """The metrics of one person in one condition (module doc).
+
+    Parameters
+    ----------
+    runs : sequence of hesspipe.core.formats.Run
+        The person's runs of the condition: repeats of one forcing.
+    plants : hesspipe.core.formats.Plants
+        Yc for the crossover of L = H Yc.
+    seed : int
+        Seed of the crossover's uncertainty draws.
+
+    Returns
+    -------
+    dict
+        ``runs`` (ids), ``crossover_rad_s`` and ``crossover_std`` (rad/s; NaN when |L| does not
+        fall through 1 between the lines), ``phase_margin_deg`` and ``phase_margin_std_deg``
+        (deg), ``error_variance`` (output unit², e = reference - output), ``control_variance``
+        (control unit²), ``remnant_share`` (0-1).
+
+    Raises
+    ------
+    HesspipeError
+        What the describing function's estimate raises (e.g. runs of different forcings).
+    """
+    runs = list(runs)
+    if not runs:
+        raise HesspipeError("person_metrics: expected at least one run, got none")
+    if estimate_frf(runs[0], seed=seed).method == "multisine":
+        frf = average_frf(runs, plants, seed=seed)
+        c = frf.crossover
+        wc, wc_sd, pm, pm_sd, rem = (c.frequency_rad_s, c.frequency_std, c.phase_margin_deg,
+                                     c.phase_margin_std_deg, frf.remnant_share)
+    else:   # broadband forcing: no lines to average over, so each run's metrics are averaged
+        per = np.array([(f.crossover.frequency_rad_s, f.crossover.frequency_std, f.crossover.phase_margin_deg,
+                         f.crossover.phase_margin_std_deg, f.remnant_share)
+                        for f in (estimate_frf(r, plants, seed=seed) for r in runs)])
+        wc, wc_sd, pm, pm_sd, rem = per.mean(axis=0)
+        # The mean's uncertainty from each run's own
+        wc_sd, pm_sd = (float(np.sqrt(np.sum(per[:, i] ** 2))) / len(runs) for i in (1, 3))
+    cut = [windowed(r) for r in runs]
+    return {"runs": [r.id for r in runs], "crossover_rad_s": float(wc), "crossover_std": float(wc_sd),
+            "phase_margin_deg": float(pm), "phase_margin_std_deg": float(pm_sd),
+            "error_variance": float(np.mean([np.var(np.asarray(r.error)) for r in cut])),
+            "control_variance": float(np.mean([np.var(np.asarray(r.control)) for r in cut])),
+            "remnant_share": float(rem)}
+
+
+def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) -> dict:
+    """Each metric's paired t test across the persons with both conditions, the primary ones
+    Holm-adjusted together.
+
+    Parameters
+    ----------
+    persons : mapping
+        Person → condition label → :func:`person_metrics`.
+    labels : (str, str)
+        The conditions; a difference is the second's minus the first's.
+
+    Returns
+    -------
+    dict
+        Metric key → ``{"n", "higher", "effect", "t", "p_value", "p_holm"}`` or None (module
+        doc and :class:`ConditionComparison`).
+    """
+    a, b = labels
+    tests: dict = {}
+    for m in METRICS:
+        pairs = [(float(c[a][m.key]), float(c[b][m.key])) for c in persons.values() if a in c and b in c]
+        pairs = [(x, y) for x, y in pairs if math.isfinite(x) and math.isfinite(y) and (not m.log or min(x, y) > 0)]
+        if len(pairs) < MIN_PERSONS:
+            tests[m.key] = None
+            continue
+        x, y = np.array(pairs).T
+        d = np.log(y) - np.log(x) if m.log else y - x
+        if np.all(d == d[0]):   # no spread: the t statistic is undefined
+            t, p = (0.0, 1.0) if d[0] == 0 else (math.copysign(math.inf, d[0]), 0.0)
+        else:
+            t, p = (float(v) for v in stats.ttest_1samp(d, 0.0))
+        tests[m.key] = {"n": len(pairs), "higher": int(np.sum(d > 0)),
+                        "effect": float(np.exp(np.mean(d))) if m.log else float(np.mean(d)),
+                        "t": t, "p_value": p, "p_holm": None}
+    primary = {m.key for m in METRICS if m.primary}
+    done = sorted((k for k, v in tests.items() if v is not None and k in primary), key=lambda k: tests[k]["p_value"])
+    running = 0.0
+    for i, key in enumerate(done):   # Holm's step-down, kept monotone
+        running = max(running, min(1.0, (len(done) - i) * tests[key]["p_value"]))
+        tests[key]["p_holm"] = running
+    return tests
+
+
+def conditions_verdict(tests: Mapping[str, Mapping | None], labels: tuple, n_both: int) -> str:
+    """The comparison in words.
+
+    Parameters
+    ----------
+    tests : mapping
+        :func:`paired_tests`' result.
+    labels : (str, str)
+        The conditions.
+    n_both : int
+        Persons with runs in both conditions.
+
+    Returns
+    -------
+    str
+        "undetermined: ...", "the conditions differ: ..." or "no difference found: ...".
+    """
+    a, b = labels
+    done = {m.key: tests[m.key] for m in METRICS if m.primary and tests.get(m.key) is not None}
+    if not done:
+        return (f"undetermined: {n_both} person(s) flew both {a} and {b} with the metrics found; "
+                f"a paired test needs at least {MIN_PERSONS}")
+    found = [m for m in METRICS if m.key in done and done[m.key]["p_holm"] < ALPHA]
+    if not found:
+        best = min(done.values(), key=lambda v: v["p_holm"])
+        return (f"no difference found between {a} and {b} in the primary metrics ({best['n']} persons; smallest "
+                f"Holm-adjusted p = {best['p_holm']:.2g}, needs < {ALPHA:g})")
+    return f"the conditions differ: {b} against {a}: " + "; ".join(_effect(m, done[m.key]) for m in found)
+
+
+def _effect(m: Metric, t: Mapping) -> str:
+    more = "higher" if (t["effect"] > 1 if m.log else t["effect"] > 0) else "lower"
+    return (f"{m.label} {more} ({_size(m, t['effect'])} on average; higher for {t['higher']} of {t['n']} persons, "
+            f"p = {t['p_value']:.2g}, Holm {t['p_holm']:.2g})")
+
+
+def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tuple = ("A", "B"),
+                       pilot_id: str | None = None, seed: int = 0) -> ConditionComparison:
+    """Compare two conditions flown by the same persons (module doc).
+
+    Parameters
+    ----------
+    runs_a, runs_b : sequence of hesspipe.core.formats.Run
+        Each condition's runs.
+    plants : hesspipe.core.formats.Plants
+        The controlled element of both conditions (Yc for the crossover).
+    labels : (str, str)
+        The conditions' names (e.g. ``("static", "motion")``); differences are the second's
+        minus the first's.
+    pilot_id : str, optional
+        Regular expression that finds the person in each run id
+        (:func:`~hesspipe.pilots.verdict.pilot_groups`); None: the run id is the person, so a
+        person's run has the same file name in both conditions.
+    seed : int
+        Base seed of the crossovers' uncertainty draws (one stream per person and condition).
+
+    Returns
+    -------
+    ConditionComparison
+
+    Raises
+    ------
+    HesspipeError
+        Equal labels, a condition without runs, a pattern that does not match a run id, or
+        what :func:`person_metrics` raises (naming the run).
+    """
+    labels = tuple(str(x) for x in labels)
+    if len(labels) != 2 or labels[0] == labels[1] or not all(labels):
+        raise HesspipeError(f"labels: expected two different non-empty names, got {labels!r}")
+    persons: dict[str, dict] = {}
+    synthetic = False
+    for label, runs in zip(labels, (runs_a, runs_b)):
+        runs = list(runs)
+        if not runs:
+            raise HesspipeError(f"condition {label!r}: no runs; expected at least one")
+        synthetic |= any(getattr(r, "synthetic", False) for r in runs)
+        groups = pilot_groups([r.id for r in runs], pilot_id, {r.id: r.source for r in runs if r.source}) \
+            or {r.id: r.id for r in runs}
+        by: dict[str, list] = {}
+        for r in runs:
+            by.setdefault(groups[r.id], []).append(r)
+        for person, own in sorted(by.items()):
+            persons.setdefault(person, {})[label] = person_metrics(
+                own, plants, seed=derive_seed(seed, "conditions", label, person))
+    notes = [f"{p}: flew only {next(iter(c))}; left out of the paired tests"
+             for p, c in sorted(persons.items()) if len(c) < 2]
+    for p, c in sorted(persons.items()):
+        notes += [f"{p} ({label}): no crossover found (|L| does not fall through 1 between the lines)"
+                  for label, v in c.items() if not math.isfinite(v["crossover_rad_s"])]
+    tests = paired_tests(persons, labels)
+    n_both = sum(len(c) == 2 for c in persons.values())
+    return ConditionComparison(labels=labels, persons=persons, tests=tests,
+                               verdict=conditions_verdict(tests, labels, n_both), synthetic=synthetic,
+                               notes=tuple(notes))
+
+
+def format_conditions(result: ConditionComparison) -> str:
+    """The comparison as the command line prints it.
+
+    Parameters
+    ----------
+    result : ConditionComparison
+        From :func:`compare_conditions`.
+
+    Returns
+    -------
+    str
+        The verdict first, then each metric's test and a line per person (crossover in rad/s,
+        phase margin in deg, the error variance's ratio, the remnant's share), then the notes.
+    """
+    a, b = result.labels
+    out = (["*** SYNTHETIC DATA: generated by a model, not measured ***"] if result.synthetic else []) \
+        + [f"CONDITIONS VERDICT: {result.verdict}", f"paired tests ({b} against {a}, two-sided paired t "
+           f"across persons; the primary metrics Holm-adjusted together, alpha {ALPHA:g}):"]
+    for m in METRICS:
+        t = result.tests.get(m.key)
+        held = "secondary, unadjusted" if t is None or t["p_holm"] is None else f"Holm {t['p_holm']:.2g}"
+        out.append(f"  {m.label:32s} " + (f"fewer than {MIN_PERSONS} persons with both" if t is None else
+                   f"{'ratio' if m.log else 'mean difference'} {_size(m, t['effect'])}, higher for "
+                   f"{t['higher']} of {t['n']}, p = {t['p_value']:.2g} ({held})"))
+    out.append(f"{'person':10s} {'wc ' + a:>12s} {'wc ' + b:>12s} {'PM ' + a:>10s} {'PM ' + b:>10s} "
+               f"{'var(e) ratio':>13s} {'remnant':>15s}")
+    for p, c in sorted(result.persons.items()):
+        x, y = c.get(a), c.get(b)
+        ratio = (f"{y['error_variance'] / x['error_variance']:.3g}" if x and y and x["error_variance"] > 0
+                 else "-")
+        rem = f"{_pct(x)} -> {_pct(y)}"
+        out.append(f"{p:10s} {_num(x, 'crossover_rad_s'):>12s} {_num(y, 'crossover_rad_s'):>12s} "
+                   f"{_num(x, 'phase_margin_deg', '.1f'):>10s} {_num(y, 'phase_margin_deg', '.1f'):>10s} "
+                   f"{ratio:>13s} {rem:>15s}")
+    out += [f"note: {n}" for n in result.notes]
+    return "\n".join(out)
+
+
+def _size(m: Metric, effect: float) -> str:
+    if m.log:
+        return f"x{effect:.3g}"
+    return f"{effect:+.3g} {m.unit}" if m.unit else f"{100 * effect:+.3g} points"
+
+
+def _num(c, key, spec=".3g") -> str:
+    return "-" if c is None or not math.isfinite(c[key]) else format(c[key], spec)
+
+
+def _pct(c) -> str:
+    return "-" if c is None else f"{100 * c['remnant_share']:.0f} %"

@@ -1,0 +1,152 @@
+"""Two conditions of the same persons compared (hesspipe.pilots.conditions, ``hesspipe
+conditions``), on runs of the independent generator (hesspipe.humanlike; SYNTHETIC)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from hesspipe.cli import main
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.seeds import derive_seed
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.humanlike.pilots import loop_metrics, parts
+from hesspipe.humanlike.plants import make_plant
+from hesspipe.pilots.conditions import ALPHA, METRICS, compare_conditions, conditions_verdict, paired_tests
+
+KW = dict(task="both", pilot="precision", output="angle", tau_m=0.15)
+
+
+# Three persons (precision pilots, single integrator, yaw angle), each with one visual strategy
+# and the cab's lead on or off: gains (rad/rad), delays (s), neuromuscular modes (rad/s) and
+# vestibular gains of the generator's draws, fixed here so that the test draws nothing.
+PERSONS = [dict(tau_v=0.28, wn=10.5, zn=0.37, Kp=2.6, TL=0.0, TI=0.0, Km=0.22),
+           dict(tau_v=0.31, wn=7.6, zn=0.35, Kp=2.2, TL=0.0, TI=0.03, Km=0.25),
+           dict(tau_v=0.20, wn=12.0, zn=0.28, Kp=3.2, TL=0.0, TI=0.05, Km=0.30)]
+
+
+@pytest.fixture(scope="module")
+def cohort(tmp_path_factory):
+    """Folders ``static`` and ``motion``: persons p1-p3, one run each, the same file names."""
+    root = tmp_path_factory.mktemp("conditions")
+    yc = make_plant("1/s", output="angle").yc
+    for i, person in enumerate(PERSONS):
+        motion = {"structure": "precision", "tau": person["tau_v"], "tau_m": 0.15, **person}
+        static = {k: v for k, v in motion.items() if k not in ("Km", "tau_m")}
+        m = loop_metrics(lambda w: sum(parts(static, w, None)) * yc(w))
+        assert m["n_crossings"] == 1 and 15.0 <= m["phase_margin_deg"] <= 60.0   # a loop a person flies
+        for cond, pilot, effects in (("static", static, ()), ("motion", motion, ("motion_feedback",))):
+            spec = draw_trial("1/s", derive_seed(7, cond, str(i)), effects=effects, pilot_params=pilot,
+                              name=f"p{i + 1}", **KW)
+            write_trial(root / cond, simulate_trial(spec))
+    return root
+
+
+def test_the_cabs_lead_raises_every_persons_phase_margin(cohort, capsys):
+    # The same visual strategy with the vestibular path added: the loop the disturbance sees
+    # gains the cab's lead, so its phase margin rises for each person.
+    out = cohort / "c.json"
+    code = main(["conditions", str(cohort / "static"), str(cohort / "motion"), "--plants",
+                 str(cohort / "static" / "plants.json"), "--json", str(out)])
+    printed = capsys.readouterr().out
+    assert code == 0
+    assert printed.startswith("*** SYNTHETIC DATA") and "CONDITIONS VERDICT: " in printed
+    result = json.loads(out.read_text())
+    assert result["labels"] == ["static", "motion"] and result["synthetic"] is True
+    assert sorted(result["persons"]) == ["p1", "p2", "p3"]
+    pm = result["tests"]["phase_margin_deg"]
+    assert pm["n"] == 3 and pm["higher"] == 3 and pm["effect"] > 5.0
+    for person in result["persons"].values():
+        for m in person.values():
+            assert len(m["runs"]) == 1 and m["error_variance"] > 0 and 0 < m["remnant_share"] < 1
+
+
+def test_paired_tests_are_scipys_t_test_holm_adjusted_over_the_primary_metrics():
+    rng = np.random.default_rng(3)
+    persons = {}
+    for i in range(6):
+        a = {"crossover_rad_s": 2.0 + rng.normal(0, 0.2), "phase_margin_deg": 40 + rng.normal(0, 5),
+             "error_variance": 0.01 * np.exp(rng.normal(0, 0.2)), "control_variance": 1 + rng.random(),
+             "remnant_share": 0.2 + 0.1 * rng.random()}
+        b = dict(a, crossover_rad_s=a["crossover_rad_s"] + 0.5 + rng.normal(0, 0.05),
+                 phase_margin_deg=a["phase_margin_deg"] + rng.normal(0, 5),
+                 error_variance=a["error_variance"] * 0.7 * np.exp(rng.normal(0, 0.05)))
+        persons[f"s{i}"] = {"static": a, "motion": b}
+    persons["only"] = {"motion": dict(b)}    # one condition only: left out
+    tests = paired_tests(persons, ("static", "motion"))
+    x = np.array([[p["static"]["phase_margin_deg"], p["motion"]["phase_margin_deg"]]
+                  for k, p in persons.items() if k != "only"])
+    assert tests["phase_margin_deg"]["p_value"] == pytest.approx(stats.ttest_rel(x[:, 1], x[:, 0]).pvalue)
+    ev = np.array([[p["static"]["error_variance"], p["motion"]["error_variance"]]
+                   for k, p in persons.items() if k != "only"])
+    assert tests["error_variance"]["effect"] == pytest.approx(np.exp(np.mean(np.log(ev[:, 1] / ev[:, 0]))))
+    primary = sorted((tests[m.key]["p_value"], m.key) for m in METRICS if m.primary)
+    assert [tests[k]["p_holm"] for _, k in primary] == pytest.approx(
+        np.maximum.accumulate([min(1.0, (3 - i) * p) for i, (p, _) in enumerate(primary)]))
+    assert tests["control_variance"]["p_holm"] is None and tests["crossover_rad_s"]["n"] == 6
+    verdict = conditions_verdict(tests, ("static", "motion"), 6)
+    assert verdict.startswith("the conditions differ: motion against static: disturbance-loop crossover higher")
+    assert "error variance lower (x0.6" in verdict and "phase margin" not in verdict
+
+
+def test_too_few_persons_or_no_difference_say_so():
+    same = {f"s{i}": {"A": {m.key: 1.0 + i for m in METRICS}, "B": {m.key: 1.0 + i for m in METRICS}}
+            for i in range(4)}
+    tests = paired_tests(same, ("A", "B"))
+    assert all(t["p_value"] == 1.0 for t in tests.values())
+    assert conditions_verdict(tests, ("A", "B"), 4).startswith("no difference found between A and B")
+    two = {k: v for k, v in list(same.items())[:2]}
+    tests = paired_tests(two, ("A", "B"))
+    assert all(t is None for t in tests.values())
+    assert conditions_verdict(tests, ("A", "B"), 2).startswith("undetermined: 2 person(s) flew both")
+
+
+def test_persons_found_by_pattern_and_a_person_in_one_condition(cohort, tmp_path):
+    from hesspipe.core.formats import read_plants, read_run
+
+    runs = {c: [read_run(p) for p in sorted((cohort / c).glob("p*.csv"))] for c in ("static", "motion")}
+    plants = read_plants(cohort / "static" / "plants.json")
+    result = compare_conditions(runs["static"], runs["motion"][:2], plants, labels=("off", "on"),
+                                pilot_id=r"^(?P<pilot>p\d)")
+    assert result.persons["p3"].keys() == {"off"}
+    assert any(n.startswith("p3: flew only off") for n in result.notes)
+    assert result.tests["phase_margin_deg"] is None    # two persons with both
+    assert result.verdict.startswith("undetermined")
+    with pytest.raises(HesspipeError, match="labels: expected two different"):
+        compare_conditions(runs["static"], runs["motion"], plants, labels=("x", "x"))
+    with pytest.raises(HesspipeError, match="does not match the run id"):
+        compare_conditions(runs["static"], runs["motion"], plants, pilot_id=r"^s\d")
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--labels", "a,a"], "--labels: expected two different"),
+    (["--pilot-id", "^q"], "--pilot-id"),
+    (["--json", "FILE/x.json"], "is a file, not a folder"),
+])
+def test_command_line_errors_are_one_line(cohort, capsys, args, words):
+    args = [a.replace("FILE", str(cohort / "static" / "p1.csv")) for a in args]
+    code = main(["conditions", str(cohort / "static"), str(cohort / "motion"), "--plants",
+                 str(cohort / "static" / "plants.json"), *args])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code != 0 and len(err) == 1 and words in err[0] and "Traceback" not in err[0]
+
+
+def test_missing_folder_names_it(cohort, capsys):
+    code = main(["conditions", str(cohort / "static"), str(cohort / "nope"), "--plants",
+                 str(cohort / "static" / "plants.json")])
+    err = capsys.readouterr().err.strip()
+    assert code != 0 and "nope" in err and "not found" in err
+
+
+def test_alpha_and_metrics_are_documented_in_the_json(cohort, tmp_path):
+    out = tmp_path / "c.json"
+    assert main(["conditions", str(cohort / "static"), str(cohort / "motion"), "--plants",
+                 str(cohort / "static" / "plants.json"), "--json", str(out), "--seed", "5"]) == 0
+    obj = json.loads(out.read_text())
+    assert obj["alpha"] == ALPHA and obj["metrics"]["remnant_share"]["primary"] is False
+    assert obj["first"][0].endswith("p1.csv") and obj["plants"].endswith("plants.json")
+    assert all(math.isfinite(t["p_value"]) for t in obj["tests"].values() if t)
