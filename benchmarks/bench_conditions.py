@@ -33,37 +33,30 @@ import argparse
 import contextlib
 import io
 import json
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from hesspipe.cli import main as hesspipe
-from hesspipe.core.errors import HesspipeError
-from hesspipe.core.seeds import derive_seed
-from hesspipe.humanlike import csv_bytes, draw_trial, simulate_trial
-from hesspipe.humanlike.forcing import SPARSE_LAYOUT
-from hesspipe.humanlike.pilots import loop_metrics, parts
-from hesspipe.humanlike.plants import make_plant
-from hesspipe.humanlike.writer import LAB, plants_dict
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import bench_lab_experiment as lab  # noqa: E402  (the same persons, files and columns)
+from hesspipe.cli import main as hesspipe  # noqa: E402
+from hesspipe.core.errors import HesspipeError  # noqa: E402
+from hesspipe.core.seeds import derive_seed  # noqa: E402
+from hesspipe.humanlike import draw_trial, simulate_trial  # noqa: E402
+from hesspipe.humanlike.pilots import loop_metrics, parts  # noqa: E402
+from hesspipe.humanlike.plants import make_plant  # noqa: E402
+from hesspipe.humanlike.writer import plants_dict  # noqa: E402
 
-COLUMNS = ",".join(f"{role}={LAB['names'][role]}" for role in ("reference", "disturbance", "output", "control"))
-PLANTS = {"SI": "1/s", "DI": "K/s2"}
-KW = dict(task="both", pilot="precision", output="angle", tau_m=0.15, gain_drift=0.15,
-          line_bins=SPARSE_LAYOUT["line_bins"], fs=SPARSE_LAYOUT["fs"], T_m=SPARSE_LAYOUT["T_m"])
-NO_MOTION = ("Km", "tau_m")
+KW = lab.TRIAL
 MIN_PM, MAX_PM, MIN_GM = 15.0, 90.0, 1.5
 """The ``motion`` design's person with motion: phase margin (deg) and gain margin of the loop."""
 
 
-def _draw(plant: str, seed: int, effects, **kw):
-    for attempt in range(20):   # a person whose pilot meets the generator's ranges
-        try:
-            return draw_trial(plant, derive_seed(seed, "attempt", str(attempt)), effects=effects, **KW, **kw)
-        except HesspipeError:
-            continue
-    raise HesspipeError(f"no pilot drawn for {plant} after 20 attempts (seed {seed})")
+def _draw(plant: str, seed: int, effects):
+    return lab.draw_person(plant, effects, seed, **KW)
 
 
 def _person_pair(plant: str, seed: int) -> tuple[dict, dict]:
@@ -111,7 +104,7 @@ def write_cohort(root: Path, design: str, plant: str, persons: int, runs: int, s
             for r in range(runs):
                 spec = draw_trial(plant, derive_seed(ps, cond, str(r)), effects=effects, pilot_params=person,
                                   name=f"s{s + 1:02d}_{cond}_r{r + 1}", **KW)
-                (root / cond / f"{spec.name}.csv").write_bytes(csv_bytes(simulate_trial(spec), LAB))
+                lab.lab_file(simulate_trial(spec), root / cond / f"{spec.name}.csv")
     (root / "plants.json").write_text(json.dumps(plants_dict(spec), indent=1))
     return root
 
@@ -121,7 +114,7 @@ def compare(root: Path) -> tuple[dict, float]:
     t0 = time.perf_counter()
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
         code = hesspipe(["conditions", str(root / "A"), str(root / "B"), "--plants", str(root / "plants.json"),
-                         "--labels", "A,B", "--pilot-id", "^(s[0-9]+)_", "--columns", COLUMNS,
+                         "--labels", "A,B", "--pilot-id", "^(s[0-9]+)_", "--columns", lab.COLUMNS,
                          "--json", str(root / "conditions.json")])
     if code != 0:
         raise HesspipeError(f"hesspipe conditions exited {code}: {err.getvalue().strip()}")
@@ -145,7 +138,7 @@ def main(argv=None) -> int:
             seeds = range(args.seed_start, args.seed_start + args.seeds)
             for seed in seeds:
                 with tempfile.TemporaryDirectory() as tmp:
-                    result, wall = compare(write_cohort(Path(tmp), design, PLANTS[tag], args.persons,
+                    result, wall = compare(write_cohort(Path(tmp), design, lab.PLANTS[tag], args.persons,
                                                         args.runs, seed))
                 walls.append(wall)
                 hits = [k for k, t in result["tests"].items()

@@ -32,6 +32,7 @@ import argparse
 import contextlib
 import io
 import json
+import math
 import statistics
 import sys
 import tempfile
@@ -49,6 +50,9 @@ from hesspipe.humanlike.writer import LAB, plants_dict
 
 COLUMNS = ",".join(f"{role}={LAB['names'][role]}" for role in ("reference", "disturbance", "output", "control"))
 PLANTS = {"SI": "1/s", "DI": "K/s2"}
+TRIAL = dict(task="both", pilot="precision", output="angle", tau_m=0.15, gain_drift=0.15,
+             line_bins=SPARSE_LAYOUT["line_bins"], fs=SPARSE_LAYOUT["fs"], T_m=SPARSE_LAYOUT["T_m"])
+"""The trials' options (module doc)."""
 
 
 def lab_file(trial, path: Path) -> None:
@@ -76,9 +80,7 @@ def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, 
     for s in range(persons):
         person = None
         for r in range(runs):
-            kw = dict(task="both", pilot="precision", output="angle", tau_m=0.15, gain_drift=0.15,
-                      line_bins=SPARSE_LAYOUT["line_bins"], fs=SPARSE_LAYOUT["fs"], T_m=SPARSE_LAYOUT["T_m"],
-                      name=f"s{s + 1:02d}_{cond}_r{r + 1}")
+            kw = dict(TRIAL, name=f"s{s + 1:02d}_{cond}_r{r + 1}")
             seed_r = derive_seed(seed, tag, cond, str(s), str(r))
             if person is None:
                 spec = draw_person(PLANTS[tag], effects, seed_r, **kw)
@@ -125,13 +127,15 @@ def diagnose_runs(folder: Path, plants: Path) -> tuple[int, int, dict, float]:
 
 def variation(comparison: dict) -> tuple[float, float]:
     """Median over persons of the coefficient of variation of Km/|Ke| and of Km over their runs
-    (the motion tests' fits)."""
+    (the motion tests' fits); NaN without a person of two runs or more (``--runs 1``)."""
     by: dict[str, list] = {}
     for p in comparison["pilots"]:
         t = p["motion_test"]
         if t.get("available"):
             by.setdefault(comparison["pilot_of_run"].get(p["id"], p["id"]), []).append((t["Km_per_Ke"], t["Km"]))
     cv = [[np.std(v, ddof=1) / np.mean(v) for v in zip(*runs)] for runs in by.values() if len(runs) > 1]
+    if not cv:
+        return math.nan, math.nan
     return statistics.median(c[0] for c in cv), statistics.median(c[1] for c in cv)
 
 

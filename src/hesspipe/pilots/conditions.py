@@ -166,7 +166,7 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
                          f.crossover.phase_margin_std_deg, f.remnant_share)
                         for f in (estimate_frf(r, plants, seed=seed) for r in runs)])
         wc, wc_sd, pm, pm_sd, rem = per.mean(axis=0)
-        # The mean's uncertainty from each run's own
+        # Independent runs: the mean's variance is the sum of theirs over N squared.
         wc_sd, pm_sd = (float(np.sqrt(np.sum(per[:, i] ** 2))) / len(runs) for i in (1, 3))
     cut = [windowed(r) for r in runs]
     return {"runs": [r.id for r in runs], "crossover_rad_s": float(wc), "crossover_std": float(wc_sd),
