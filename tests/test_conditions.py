@@ -150,3 +150,24 @@ def test_alpha_and_metrics_are_documented_in_the_json(cohort, tmp_path):
     assert obj["alpha"] == ALPHA and obj["metrics"]["remnant_share"]["primary"] is False
     assert obj["first"][0].endswith("p1.csv") and obj["plants"].endswith("plants.json")
     assert all(math.isfinite(t["p_value"]) for t in obj["tests"].values() if t)
+
+
+def test_runs_of_different_forcings_are_averaged_run_by_run_and_a_record_twice_is_an_error(cohort, tmp_path):
+    # A lab whose person flew two forcing realisations of a condition (another record length
+    # and so other lines): not averaged line by line, but still compared, and said so.
+    from hesspipe.core.formats import read_plants, read_run
+
+    static = {k: v for k, v in {"structure": "precision", "tau": PERSONS[0]["tau_v"], **PERSONS[0]}.items()
+              if k != "Km"}
+    spec = draw_trial("1/s", 99, pilot_params=static, name="p1_other", T_m=40.0, **KW)
+    other = read_run(write_trial(tmp_path, simulate_trial(spec)))
+    runs = {c: [read_run(p) for p in sorted((cohort / c).glob("p*.csv"))] for c in ("static", "motion")}
+    plants = read_plants(cohort / "static" / "plants.json")
+    result = compare_conditions([*runs["static"], other], runs["motion"], plants, pilot_id=r"^(p\d)")
+    p1 = result.persons["p1"]["A"]
+    assert p1["averaged"].startswith("run by run: ") and len(p1["runs"]) == 2
+    assert math.isfinite(p1["phase_margin_deg"]) and math.isfinite(p1["error_variance"])
+    assert any(n.startswith("p1 (A): 2 runs averaged run by run") for n in result.notes)
+    assert result.persons["p2"]["A"]["averaged"] == "line by line"
+    with pytest.raises(HesspipeError, match="the same record as"):
+        compare_conditions([*runs["static"], runs["static"][0]], runs["motion"], plants, pilot_id=r"^(p\d)")

@@ -39,7 +39,7 @@ from scipy import stats
 from ..core.errors import HesspipeError
 from ..core.seeds import derive_seed
 from ..identification.frf import estimate_frf
-from ..identification.frf_average import average_frf
+from ..identification.frf_average import average_frf, check_repeats
 from ..identification.lines import windowed
 from .verdict import pilot_groups
 
@@ -143,7 +143,8 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
     Returns
     -------
     dict
-        ``runs`` (ids), ``crossover_rad_s`` and ``crossover_std`` (rad/s; NaN when |L| does not
+        ``runs`` (ids), ``averaged`` (how the runs were combined: "line by line", or "run by
+        run: " and why), ``crossover_rad_s`` and ``crossover_std`` (rad/s; NaN when |L| does not
         fall through 1 between the lines), ``phase_margin_deg`` and ``phase_margin_std_deg``
         (deg), ``error_variance`` (output unit², e = reference - output), ``control_variance``
         (control unit²), ``remnant_share`` (0-1).
@@ -151,17 +152,27 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
     Raises
     ------
     HesspipeError
-        What the describing function's estimate raises (e.g. runs of different forcings).
+        A record given twice; what a run's describing function raises.
     """
     runs = list(runs)
     if not runs:
         raise HesspipeError("person_metrics: expected at least one run, got none")
-    if estimate_frf(runs[0], seed=seed).method == "multisine":
-        frf = average_frf(runs, plants, seed=seed)
+    check_repeats([], runs)   # a record given twice is an error, not a repeat
+    frf, averaged = None, "line by line"
+    if estimate_frf(runs[0], seed=seed).method != "multisine":
+        averaged = "run by run: broadband forcing, no lines to average"
+    else:
+        try:
+            frf = average_frf(runs, plants, seed=seed)
+        except HesspipeError as exc:
+            # Runs of different forcings (lengths, line sets) are not averaged line by line;
+            # each run's own estimate still is (an error of one run recurs there).
+            averaged = f"run by run: {exc}"
+    if frf is not None:
         c = frf.crossover
         wc, wc_sd, pm, pm_sd, rem = (c.frequency_rad_s, c.frequency_std, c.phase_margin_deg,
                                      c.phase_margin_std_deg, frf.remnant_share)
-    else:   # broadband forcing: no lines to average over, so each run's metrics are averaged
+    else:
         per = np.array([(f.crossover.frequency_rad_s, f.crossover.frequency_std, f.crossover.phase_margin_deg,
                          f.crossover.phase_margin_std_deg, f.remnant_share)
                         for f in (estimate_frf(r, plants, seed=seed) for r in runs)])
@@ -169,7 +180,8 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         # Independent runs: the mean's variance is the sum of theirs over N squared.
         wc_sd, pm_sd = (float(np.sqrt(np.sum(per[:, i] ** 2))) / len(runs) for i in (1, 3))
     cut = [windowed(r) for r in runs]
-    return {"runs": [r.id for r in runs], "crossover_rad_s": float(wc), "crossover_std": float(wc_sd),
+    return {"runs": [r.id for r in runs], "averaged": averaged,
+            "crossover_rad_s": float(wc), "crossover_std": float(wc_sd),
             "phase_margin_deg": float(pm), "phase_margin_std_deg": float(pm_sd),
             "error_variance": float(np.mean([np.var(np.asarray(r.error)) for r in cut])),
             "control_variance": float(np.mean([np.var(np.asarray(r.control)) for r in cut])),
@@ -308,6 +320,8 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
     for p, c in sorted(persons.items()):
         notes += [f"{p} ({label}): no crossover found (|L| does not fall through 1 between the lines)"
                   for label, v in c.items() if not math.isfinite(v["crossover_rad_s"])]
+        notes += [f"{p} ({label}): {len(v['runs'])} runs averaged {v['averaged']}"
+                  for label, v in c.items() if v["averaged"] != "line by line" and len(v["runs"]) > 1]
     tests = paired_tests(persons, labels)
     n_both = sum(len(c) == 2 for c in persons.values())
     return ConditionComparison(labels=labels, persons=persons, tests=tests,
