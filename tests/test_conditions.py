@@ -124,6 +124,7 @@ def test_persons_found_by_pattern_and_a_person_in_one_condition(cohort, tmp_path
 
 @pytest.mark.parametrize("args, words", [
     (["--labels", "a,a"], "--labels: expected two different"),
+    (["--labels", "static"], "--labels: expected two different"),
     (["--pilot-id", "^q"], "--pilot-id"),
     (["--json", "FILE/x.json"], "is a file, not a folder"),
 ])
@@ -171,3 +172,19 @@ def test_runs_of_different_forcings_are_averaged_run_by_run_and_a_record_twice_i
     assert result.persons["p2"]["A"]["averaged"] == "line by line"
     with pytest.raises(HesspipeError, match="the same record as"):
         compare_conditions([*runs["static"], runs["static"][0]], runs["motion"], plants, pilot_id=r"^(p\d)")
+
+
+def test_no_person_in_both_conditions_is_an_error_that_names_the_persons(cohort, capsys):
+    # The lab's files name the condition too (s01_static_r1, s01_motion_r1): without a pattern
+    # no file name is in both folders.
+    import dataclasses
+
+    from hesspipe.core.formats import read_plants, read_run
+
+    runs = {c: [dataclasses.replace(read_run(p), id=f"{read_run(p).id}_{c}") for p in sorted((cohort / c).glob("p*.csv"))]
+            for c in ("static", "motion")}
+    plants = read_plants(cohort / "static" / "plants.json")
+    with pytest.raises(HesspipeError, match=r"no person flew both 'A' and 'B': the persons \(a run's file name\) "
+                                            r"are p1_static, p2_static, p3_static and p1_motion, .*set pilot_id"):
+        compare_conditions(runs["static"], runs["motion"], plants)
+    assert compare_conditions(runs["static"], runs["motion"], plants, pilot_id=r"^(p\d)").tests["phase_margin_deg"]

@@ -42,7 +42,7 @@ def run(args) -> int:
     check_file_outputs(json=args.json)  # before any work
     labels = (tuple(x.strip() for x in args.labels.split(",")) if args.labels is not None
               else (Path(args.first).resolve().name or "A", Path(args.second).resolve().name or "B"))
-    if labels[0] == labels[1] and args.labels is None:
+    if args.labels is None and labels[0] == labels[1]:
         labels = (f"{labels[0]} (A)", f"{labels[1]} (B)")
     plants = read_plants(args.plants)
     files = [list_runs(args.first), list_runs(args.second)]

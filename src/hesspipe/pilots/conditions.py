@@ -294,14 +294,14 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
     Raises
     ------
     HesspipeError
-        Equal labels, a condition without runs, a pattern that does not match a run id, or
-        what :func:`person_metrics` raises (naming the run).
+        Equal labels, a condition without runs, a pattern that does not match a run id, no
+        person in both conditions, or what :func:`person_metrics` raises (naming the run).
     """
     labels = tuple(str(x) for x in labels)
     if len(labels) != 2 or labels[0] == labels[1] or not all(labels):
         raise HesspipeError(f"labels: expected two different non-empty names, got {labels!r}")
     persons: dict[str, dict] = {}
-    synthetic = False
+    synthetic, grouped = False, []
     for label, runs in zip(labels, (runs_a, runs_b)):
         runs = list(runs)
         if not runs:
@@ -312,6 +312,16 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
         by: dict[str, list] = {}
         for r in runs:
             by.setdefault(groups[r.id], []).append(r)
+        grouped.append(by)
+    both = set(grouped[0]) & set(grouped[1])
+    if not both:
+        how = ("a run's file name" if pilot_id is None else f"as the pilot_id pattern {pilot_id!r} finds them")
+        raise HesspipeError(
+            f"no person flew both {labels[0]!r} and {labels[1]!r}: the persons ({how}) are "
+            f"{_some(grouped[0])} and {_some(grouped[1])}; expected the same persons in both "
+            + ("(set pilot_id to a pattern that finds the person in each file name, e.g. '^(s[0-9]+)_')"
+               if pilot_id is None else "(a pattern that finds the person, not the condition)"))
+    for label, by in zip(labels, grouped):
         for person, own in sorted(by.items()):
             persons.setdefault(person, {})[label] = person_metrics(
                 own, plants, seed=derive_seed(seed, "conditions", label, person))
@@ -365,6 +375,11 @@ def format_conditions(result: ConditionComparison) -> str:
                    f"{ratio:>13s} {rem:>15s}")
     out += [f"note: {n}" for n in result.notes]
     return "\n".join(out)
+
+
+def _some(by: Mapping) -> str:
+    names = sorted(by)
+    return ", ".join(names[:3]) + (f" ... ({len(names)})" if len(names) > 3 else "")
 
 
 def _size(m: Metric, effect: float) -> str:
