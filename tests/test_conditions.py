@@ -143,10 +143,12 @@ def test_missing_folder_names_it(cohort, capsys):
     assert code != 0 and "nope" in err and "not found" in err
 
 
-def test_alpha_and_metrics_are_documented_in_the_json(cohort, tmp_path):
+def test_alpha_and_metrics_are_documented_in_the_json_and_the_figure_is_written(cohort, tmp_path):
     out = tmp_path / "c.json"
     assert main(["conditions", str(cohort / "static"), str(cohort / "motion"), "--plants",
-                 str(cohort / "static" / "plants.json"), "--json", str(out), "--seed", "5"]) == 0
+                 str(cohort / "static" / "plants.json"), "--json", str(out), "--seed", "5",
+                 "--figure", str(tmp_path / "c.png")]) == 0
+    assert (tmp_path / "c.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     obj = json.loads(out.read_text())
     assert obj["alpha"] == ALPHA and obj["metrics"]["remnant_share"]["primary"] is False
     assert obj["first"][0].endswith("p1.csv") and obj["plants"].endswith("plants.json")

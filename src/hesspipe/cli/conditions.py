@@ -26,6 +26,7 @@ def register(subparsers) -> None:
     add_run_options(p)
     add_seed(p, 0, "seed of the crossovers' uncertainty draws")
     p.add_argument("--json", metavar="OUT.json", help="write the comparison as JSON")
+    p.add_argument("--figure", metavar="OUT.png", help="write a figure: each person's metrics in both conditions")
     add_terms(p, {r"pilot_id( pattern)?": "--pilot-id", r"(^|: )labels: ": r"\1--labels: "})
     p.set_defaults(func=run)
 
@@ -39,7 +40,7 @@ def run(args) -> int:
     from ._options import read_cli_runs
     from ._outputs import check_file_outputs, write_result_json
 
-    check_file_outputs(json=args.json)  # before any work
+    check_file_outputs(json=args.json, figure=args.figure)  # before any work
     labels = (tuple(x.strip() for x in args.labels.split(",")) if args.labels is not None
               else (Path(args.first).resolve().name or "A", Path(args.second).resolve().name or "B"))
     if args.labels is None and labels[0] == labels[1]:
@@ -52,4 +53,8 @@ def run(args) -> int:
     if args.json:
         write_result_json(args.json, result, first=[str(f) for f in files[0]],
                           second=[str(f) for f in files[1]], plants=args.plants)
+    if args.figure:
+        from ..viz.conditions import conditions_figure
+
+        conditions_figure(args.figure, result)
     return 0
