@@ -21,7 +21,8 @@ wander). Three designs, each over several cohorts (seeds):
   differ when nothing changed (family-wise alpha 0.05 is the target).
 
 Prints per cohort the verdict and per design how many cohorts found a difference and in
-which metrics, and the wall time per comparison.
+which metrics, the wall time per comparison, and how far each person's crossover and phase
+margin lie from the generator's truth (its loop with the true plant and the pilot drawn).
 
     python benchmarks/bench_conditions.py [--persons 6] [--runs 3] [--seeds 5] [--seed-start 0]
                                           [--plants SI,DI] [--designs motion,adapted,null]
@@ -85,9 +86,11 @@ def _person_pair(plant: str, seed: int) -> tuple[dict, dict]:
     raise HesspipeError(f"no person for {plant} flies a loop with motion after 20 draws (seed {seed})")
 
 
-def write_cohort(root: Path, design: str, plant: str, persons: int, runs: int, seed: int) -> Path:
-    """Folders ``A`` and ``B`` of one cohort under `root` and its ``plants.json``."""
-    spec = None
+def write_cohort(root: Path, design: str, plant: str, persons: int, runs: int, seed: int) -> dict:
+    """Folders ``A`` and ``B`` of one cohort under `root` and its ``plants.json``; returns the
+    truth: person → condition → the generator's crossover (rad/s) and phase margin (deg) of
+    the loop the disturbance sees (its first run's, the gain's wander aside)."""
+    spec, truth = None, {}
     for s in range(persons):
         ps = derive_seed(seed, design, plant, str(s))
         if design == "null":
@@ -104,13 +107,17 @@ def write_cohort(root: Path, design: str, plant: str, persons: int, runs: int, s
             for r in range(runs):
                 spec = draw_trial(plant, derive_seed(ps, cond, str(r)), effects=effects, pilot_params=person,
                                   name=f"s{s + 1:02d}_{cond}_r{r + 1}", **KW)
-                lab.lab_file(simulate_trial(spec), root / cond / f"{spec.name}.csv")
+                trial = simulate_trial(spec)
+                lab.lab_file(trial, root / cond / f"{spec.name}.csv")
+                c = trial.truth["crossover"]
+                truth.setdefault(f"s{s + 1:02d}", {}).setdefault(cond, (c["frequency_rad_s"], c["phase_margin_deg"]))
     (root / "plants.json").write_text(json.dumps(plants_dict(spec), indent=1))
-    return root
+    return truth
 
 
 def compare(root: Path) -> tuple[dict, float]:
-    """``hesspipe conditions`` on a cohort, as a user types it: (its JSON, wall s)."""
+    """``hesspipe conditions`` on a cohort folder (:func:`write_cohort`), as a user types it:
+    (its JSON, wall s)."""
     t0 = time.perf_counter()
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
         code = hesspipe(["conditions", str(root / "A"), str(root / "B"), "--plants", str(root / "plants.json"),
@@ -134,13 +141,19 @@ def main(argv=None) -> int:
           "writes them; A and B are two conditions of the same persons")
     for design in args.designs.split(","):
         for tag in args.plants.split(","):
-            found, which, walls = 0, {}, []
+            found, which, walls, err_wc, err_pm = 0, {}, [], [], []
             seeds = range(args.seed_start, args.seed_start + args.seeds)
             for seed in seeds:
                 with tempfile.TemporaryDirectory() as tmp:
-                    result, wall = compare(write_cohort(Path(tmp), design, lab.PLANTS[tag], args.persons,
-                                                        args.runs, seed))
+                    truth = write_cohort(Path(tmp), design, lab.PLANTS[tag], args.persons, args.runs, seed)
+                    result, wall = compare(Path(tmp))
                 walls.append(wall)
+                for person, conds in truth.items():
+                    for cond, (wc, pm) in conds.items():
+                        got = result["persons"][person][cond]
+                        if np.isfinite(got["crossover_rad_s"]):
+                            err_wc.append(abs(got["crossover_rad_s"] / wc - 1))
+                            err_pm.append(abs(got["phase_margin_deg"] - pm))
                 hits = [k for k, t in result["tests"].items()
                         if t and t["p_holm"] is not None and t["p_holm"] < result["alpha"]]
                 found += bool(hits)
@@ -152,7 +165,9 @@ def main(argv=None) -> int:
             print(f"== {design} {tag}: a difference found in {found}/{len(seeds)} cohorts "
                   f"({', '.join(f'{k} {v}' for k, v in which.items()) or 'no metric'}); median wall "
                   f"{sorted(walls)[len(walls) // 2]:.1f} s per comparison ({args.persons} persons x "
-                  f"{args.runs} runs x 2 conditions)", flush=True)
+                  f"{args.runs} runs x 2 conditions); against the generator's truth, median error of "
+                  f"the crossover {100 * np.median(err_wc):.0f} %, of the phase margin {np.median(err_pm):.1f} deg "
+                  f"({len(err_wc)} person-conditions with a crossover found)", flush=True)
     return 0
 
 
