@@ -159,15 +159,13 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         raise HesspipeError("person_metrics: expected at least one run, got none")
     check_repeats([], runs)   # a record given twice is an error, not a repeat
     frf, averaged = None, "line by line"
-    if estimate_frf(runs[0], seed=seed).method != "multisine":
-        averaged = "run by run: broadband forcing, no lines to average"
-    else:
-        try:
-            frf = average_frf(runs, plants, seed=seed)
-        except HesspipeError as exc:
-            # Runs of different forcings (lengths, line sets) are not averaged line by line;
-            # each run's own estimate still is (an error of one run recurs there).
-            averaged = f"run by run: {exc}"
+    try:
+        frf = average_frf(runs, plants, seed=seed)
+    except HesspipeError as exc:
+        # Broadband forcing (no lines) or runs of different forcings (lengths, line sets) are
+        # not averaged line by line; each run's own estimate still is, and an error of one
+        # run recurs there.
+        averaged = f"run by run: {exc}"
     if frf is not None:
         c = frf.crossover
         wc, wc_sd, pm, pm_sd, rem = (c.frequency_rad_s, c.frequency_std, c.phase_margin_deg,
