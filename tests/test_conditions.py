@@ -190,3 +190,16 @@ def test_no_person_in_both_conditions_is_an_error_that_names_the_persons(cohort,
                                             r"are p1_static, p2_static, p3_static and p1_motion, .*set pilot_id"):
         compare_conditions(runs["static"], runs["motion"], plants)
     assert compare_conditions(runs["static"], runs["motion"], plants, pilot_id=r"^(p\d)").tests["phase_margin_deg"]
+
+
+def test_one_folder_for_both_conditions_is_an_error_naming_the_record(cohort, capsys, tmp_path):
+    # A typo that names one folder twice (or a copied file) compared records with themselves
+    # and reported "no difference found" with exit 0.
+    import shutil
+
+    shutil.copytree(cohort / "static", tmp_path / "copy")
+    for second in (cohort / "static", tmp_path / "copy"):
+        code = main(["conditions", str(cohort / "static"), str(second), "--plants",
+                     str(cohort / "static" / "plants.json")])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code != 0 and len(err) == 1 and "p1.csv: the same record as" in err[0]

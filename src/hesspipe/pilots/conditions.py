@@ -293,16 +293,20 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
     Raises
     ------
     HesspipeError
-        Equal labels, a condition without runs, a pattern that does not match a run id, no
-        person in both conditions, or what :func:`person_metrics` raises (naming the run).
+        Equal labels, a condition without runs, a record in both conditions (or twice in one), a
+        pattern that does not match a run id, no person in both conditions, or what
+        :func:`person_metrics` raises (naming the run).
     """
     labels = tuple(str(x) for x in labels)
     if len(labels) != 2 or labels[0] == labels[1] or not all(labels):
         raise HesspipeError(f"labels: expected two different non-empty names, got {labels!r}")
     persons: dict[str, dict] = {}
     synthetic, grouped = False, []
+    runs_a, runs_b = list(runs_a), list(runs_b)
+    # One folder given for both conditions (or a file copied into the other) would compare
+    # records with themselves and report "no difference" for nothing.
+    check_repeats([], [*runs_a, *runs_b])
     for label, runs in zip(labels, (runs_a, runs_b)):
-        runs = list(runs)
         if not runs:
             raise HesspipeError(f"condition {label!r}: no runs; expected at least one")
         synthetic |= any(getattr(r, "synthetic", False) for r in runs)
