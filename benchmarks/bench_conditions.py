@@ -21,7 +21,8 @@ wander). Three designs, each over several cohorts (seeds):
   differ when nothing changed (family-wise alpha 0.05 is the target).
 
 Prints per cohort the verdict and per design how many cohorts found a difference and in
-which metrics, the wall time per comparison, and how far each person's crossover and phase
+which metrics, how many found the output channel (``frf_channels``' model-free |Hpy|/|Hpe|,
+a secondary metric) higher in B at p < 0.05, the wall time per comparison, and how far each person's crossover and phase
 margin lie from the generator's truth (its loop with the true plant and the pilot drawn).
 
     python benchmarks/bench_conditions.py [--persons 6] [--runs 3] [--seeds 5] [--seed-start 0]
@@ -141,7 +142,7 @@ def main(argv=None) -> int:
           "writes them; A and B are two conditions of the same persons")
     for design in args.designs.split(","):
         for tag in args.plants.split(","):
-            found, which, walls, err_wc, err_pm = 0, {}, [], [], []
+            found, which, walls, err_wc, err_pm, channel = 0, {}, [], [], [], 0
             seeds = range(args.seed_start, args.seed_start + args.seeds)
             for seed in seeds:
                 with tempfile.TemporaryDirectory() as tmp:
@@ -157,13 +158,16 @@ def main(argv=None) -> int:
                 hits = [k for k, t in result["tests"].items()
                         if t and t["p_holm"] is not None and t["p_holm"] < result["alpha"]]
                 found += bool(hits)
+                ch = result["tests"].get("output_channel")
+                channel += bool(ch and ch["p_value"] < result["alpha"] and ch["effect"] > 1)
                 for k in hits:
                     which[k] = which.get(k, 0) + 1
                 effects = ", ".join(f"{k} {t['effect']:.3g} ({t['higher']}/{t['n']} higher, p {t['p_value']:.2g})"
                                     for k, t in result["tests"].items() if t)
                 print(f"{design} {tag} seed {seed}: {result['verdict'][:60]}... | {effects}", flush=True)
             print(f"== {design} {tag}: a difference found in {found}/{len(seeds)} cohorts "
-                  f"({', '.join(f'{k} {v}' for k, v in which.items()) or 'no metric'}); median wall "
+                  f"({', '.join(f'{k} {v}' for k, v in which.items()) or 'no metric'}); the output "
+                  f"channel (secondary, unadjusted) higher in B at p < {result['alpha']:g} in {channel}/{len(seeds)}; median wall "
                   f"{sorted(walls)[len(walls) // 2]:.1f} s per comparison ({args.persons} persons x "
                   f"{args.runs} runs x 2 conditions); against the generator's truth, median error of "
                   f"the crossover {100 * np.median(err_wc):.0f} %, of the phase margin {np.median(err_pm):.1f} deg "

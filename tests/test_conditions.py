@@ -60,6 +60,12 @@ def test_the_cabs_lead_raises_every_persons_phase_margin(cohort, capsys):
     assert sorted(result["persons"]) == ["p1", "p2", "p3"]
     pm = result["tests"]["phase_margin_deg"]
     assert pm["n"] == 3 and pm["higher"] == 3 and pm["effect"] > 5.0
+    # The vestibular path seen apart from the visual one, without a model (frf_channels): on
+    # one run each the remnant raises the static persons' ratio too (0.18-0.30 here), and
+    # the weakest vestibular path (p3) stands only just above it.
+    ch = result["tests"]["output_channel"]
+    assert ch["higher"] >= 2 and ch["effect"] > 1.2
+    assert "output channel |Hpy|/|Hpe|" in printed
     for person in result["persons"].values():
         for m in person.values():
             assert len(m["runs"]) == 1 and m["error_variance"] > 0 and 0 < m["remnant_share"] < 1

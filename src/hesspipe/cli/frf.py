@@ -14,7 +14,10 @@ def register(subparsers) -> None:
         description="Estimate the pilot's describing function from error to control at the lines "
                     "of a multisine disturbance (and, separately, of the reference), or by Welch "
                     "cross-spectra for a broadband disturbance; per-line uncertainty, the remnant "
-                    "share of control power, and the crossover and phase margin of L = H Yc.")
+                    "share of control power, and the crossover and phase margin of L = H Yc. With "
+                    "target and disturbance on their own lines, also the response to the error and "
+                    "the response to the output itself apart (U = Hpe E - Hpy Y; with a moving cab, "
+                    "the vestibular path).")
     p.add_argument("run", metavar="RUN.csv", nargs="+",
                    help="measured run (time, disturbance, output, control); several runs of one pilot "
                         "in one condition (one multisine forcing) are averaged line by line")
@@ -32,6 +35,8 @@ def register(subparsers) -> None:
 
 
 def format_table(frf) -> str:
+    import numpy as np
+
     tag = "  [SYNTHETIC DATA]" if frf.synthetic else ""
     r = frf.feedback
     lines = [f"run {frf.run_id}: describing function H = U/E, {frf.method} "
@@ -44,6 +49,20 @@ def format_table(frf) -> str:
                      f"{d['magnitude_db_std'][i]:6.2f} {d['phase_deg'][i]:10.1f} {d['phase_deg_std'][i]:6.1f}")
     if frf.reference is not None:
         lines.append(f"reference lines: {frf.reference.freq_rad_s.size} (their own response, in the JSON)")
+    ch = frf.channels
+    if ch is not None:
+        lines += ["channels at the reference lines, U = Hpe E - Hpy Y (Hpy: the response to the "
+                  "output itself; the vestibular path with a compensatory display and motion, minus a "
+                  "feedforward on a pursuit display, zero without either):",
+                  f"{'w rad/s':>9} {'|Hpe| dB':>9} {'phase deg':>10} {'|Hpy| dB':>9} {'phase deg':>10} "
+                  f"{'+-dB':>6} {'|Hpy/Hpe|':>9}"]
+        rel = ch.sigma_Hpy / np.abs(ch.Hpy)
+        for w, pe, py, r in zip(ch.freq_rad_s, ch.Hpe, ch.Hpy, rel):
+            lines.append(f"{w:9.3f} {20 * np.log10(abs(pe)):9.2f} {np.degrees(np.angle(pe)):10.1f} "
+                         f"{20 * np.log10(abs(py)):9.2f} {np.degrees(np.angle(py)):10.1f} "
+                         f"{20 / np.log(10) * r:6.2f} {abs(py) / abs(pe):9.3f}")
+        lines.append(f"median |Hpy|/|Hpe| at {ch.lines_in_band} line(s) between 1 and 5 rad/s: "
+                     f"{ch.ratio_median:.3g} (remnant raises it; compare conditions, not zero)")
     lines.append(f"remnant share of control power  {frf.remnant_share:.3f}")
     c = frf.crossover
     if math.isfinite(c.frequency_rad_s):

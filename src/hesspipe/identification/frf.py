@@ -51,6 +51,7 @@ import numpy as np
 from scipy import signal
 
 from ..core.errors import HesspipeError
+from .frf_channels import Channels, separate_channels
 from .frf_crossover import FrfCrossover, nonparametric_crossover  # noqa: F401  (re-exported)
 
 LINE_RATIO = 100.0
@@ -136,13 +137,27 @@ class Frf:
     notes: tuple = field(default=())
     repeats: dict | None = None
 
+    @property
+    def channels(self) -> Channels | None:
+        """The error and output channels apart (:func:`~.frf_channels.separate_channels`), for
+        a record with target and disturbance on their own lines; else None."""
+        if self.method != "multisine" or self.reference is None:
+            return None
+        try:
+            return separate_channels(self)
+        except HesspipeError:
+            return None
+
     def to_dict(self) -> dict:
-        """JSON-ready: the method, both responses, the remnant share and the crossover."""
+        """JSON-ready: the method, both responses, the two channels (None without both line
+        sets), the remnant share and the crossover."""
+        channels = self.channels
         return {"run_id": self.run_id, "synthetic": self.synthetic, "method": self.method,
                 "definition": "H = U/E, E = reference - output; feedback response at the "
                               "disturbance's lines",
                 "feedback": self.feedback.to_dict(),
                 "reference": None if self.reference is None else self.reference.to_dict(),
+                "channels": None if channels is None else channels.to_dict(),
                 "remnant_share_of_control_power": self.remnant_share,
                 "crossover": self.crossover.to_dict(),
                 "window": {"start_sample": int(self.window[0]), "samples": int(self.window[1]),

@@ -18,7 +18,12 @@ Per person and condition, from the person's runs alone (no pilot model is fitted
   lines is the visual and the vestibular response together (e = -y there), the classical
   "disturbance open loop";
 * the variances of the displayed error e = r - y and of the control u over the analysed
-  window (the runs' mean), and the remnant's share of the control power.
+  window (the runs' mean), and the remnant's share of the control power;
+* with target and disturbance on their own lines, the output channel apart from the error
+  channel (:mod:`~hesspipe.identification.frf_channels`, no model): the median |Hpy|/|Hpe|
+  between 1 and 5 rad/s, the person's response to the output itself (with a compensatory
+  display and a moving cab, the vestibular path) relative to the visual one. The remnant
+  alone raises it above zero, so it is compared between conditions, not against zero.
 
 Across the persons who flew both conditions, each metric's difference (variances as log
 ratios) gets a two-sided paired t test. The primary metrics (crossover, phase margin, error
@@ -82,9 +87,10 @@ METRICS = (
     Metric("error_variance", "error variance", "output unit^2", log=True),
     Metric("control_variance", "control variance", "control unit^2", log=True, primary=False),
     Metric("remnant_share", "remnant share of control power", "", primary=False),
+    Metric("output_channel", "output channel |Hpy|/|Hpe|", "", log=True, primary=False),
 )
 """The loop the disturbance sees and the tracking performance are the primary measures of motion
-experiments; control effort and remnant are reported beside them."""
+experiments; control effort, remnant and the output channel are reported beside them."""
 
 
 @dataclass(frozen=True)
@@ -148,7 +154,9 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         run: " and why), ``crossover_rad_s`` and ``crossover_std`` (rad/s; NaN when |L| does not
         fall through 1 between the lines), ``phase_margin_deg`` and ``phase_margin_std_deg``
         (deg), ``error_variance`` (output unit², e = reference - output), ``control_variance``
-        (control unit²), ``remnant_share`` (0-1).
+        (control unit²), ``remnant_share`` (0-1), ``output_channel`` (the median |Hpy|/|Hpe| at
+        1-5 rad/s, :attr:`~hesspipe.identification.frf_channels.Channels.ratio_median`; NaN
+        without both line sets).
 
     Raises
     ------
@@ -169,13 +177,13 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         averaged = f"run by run: {exc}"
     if frf is not None:
         c = frf.crossover
-        wc, wc_sd, pm, pm_sd, rem = (c.frequency_rad_s, c.frequency_std, c.phase_margin_deg,
-                                     c.phase_margin_std_deg, frf.remnant_share)
+        wc, wc_sd, pm, pm_sd, rem, ch = (c.frequency_rad_s, c.frequency_std, c.phase_margin_deg,
+                                         c.phase_margin_std_deg, frf.remnant_share, _channel(frf))
     else:
         per = np.array([(f.crossover.frequency_rad_s, f.crossover.frequency_std, f.crossover.phase_margin_deg,
-                         f.crossover.phase_margin_std_deg, f.remnant_share)
+                         f.crossover.phase_margin_std_deg, f.remnant_share, _channel(f))
                         for f in (estimate_frf(r, plants, seed=seed) for r in runs)])
-        wc, wc_sd, pm, pm_sd, rem = per.mean(axis=0)
+        wc, wc_sd, pm, pm_sd, rem, ch = per.mean(axis=0)
         # Independent runs: the mean's variance is the sum of theirs over N squared.
         wc_sd, pm_sd = (float(np.sqrt(np.sum(per[:, i] ** 2))) / len(runs) for i in (1, 3))
     cut = [windowed(r) for r in runs]
@@ -184,7 +192,12 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
             "phase_margin_deg": float(pm), "phase_margin_std_deg": float(pm_sd),
             "error_variance": float(np.mean([np.var(np.asarray(r.error)) for r in cut])),
             "control_variance": float(np.mean([np.var(np.asarray(r.control)) for r in cut])),
-            "remnant_share": float(rem)}
+            "remnant_share": float(rem), "output_channel": float(ch)}
+
+
+def _channel(frf) -> float:
+    ch = frf.channels
+    return math.nan if ch is None else ch.ratio_median
 
 
 def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) -> dict:
@@ -194,7 +207,8 @@ def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) ->
     Parameters
     ----------
     persons : mapping
-        Person → condition label → :func:`person_metrics`.
+        Person → condition label → :func:`person_metrics` (a metric missing or not finite
+        there leaves the person out of that metric's test).
     labels : (str, str)
         The conditions; a difference is the second's minus the first's.
 
@@ -207,7 +221,8 @@ def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) ->
     a, b = labels
     tests: dict = {}
     for m in METRICS:
-        pairs = [(float(c[a][m.key]), float(c[b][m.key])) for c in persons.values() if a in c and b in c]
+        pairs = [(float(c[a].get(m.key, math.nan)), float(c[b].get(m.key, math.nan)))
+                 for c in persons.values() if a in c and b in c]
         pairs = [(x, y) for x, y in pairs if math.isfinite(x) and math.isfinite(y) and (not m.log or min(x, y) > 0)]
         if len(pairs) < MIN_PERSONS:
             tests[m.key] = None
