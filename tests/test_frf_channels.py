@@ -89,8 +89,9 @@ def test_command_line_prints_and_writes_the_channels(tmp_path, capsys):
     (tmp_path / "p.json").write_text('{"control_to_output": {"num": [1], "den": [1, 0]}, '
                                      '"disturbance_to_output": {"num": [1], "den": [1, 0]}}')
     assert main(["frf", str(tmp_path / "r.csv"), "--plants", str(tmp_path / "p.json"),
-                 "--json", str(tmp_path / "o.json")]) == 0
+                 "--json", str(tmp_path / "o.json"), "--figure", str(tmp_path / "o.png")]) == 0
     assert "channels at the reference lines, U = Hpe E - Hpy Y" in capsys.readouterr().out
+    assert (tmp_path / "o.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     ch = json.loads((tmp_path / "o.json").read_text())["channels"]
     assert len(ch["Hpy_magnitude"]) == R_BINS.size - 1 and ch["lines_in_band"] >= 2
 

@@ -40,6 +40,13 @@ def frf_figure(path: str | Path, frf, models: Mapping[str, object] | None = None
         a1.plot(r.freq_rad_s, 20 * np.log10(np.abs(r.H)), "s", color="gray", ms=4,
                 label="reference lines")
         a2.plot(r.freq_rad_s, np.degrees(np.unwrap(np.angle(r.H))), "s", color="gray", ms=4)
+    ch = frf.channels
+    if ch is not None:
+        # The response to the output itself (the vestibular path with a moving cab), apart
+        # from the error's: identification.frf_channels.
+        a1.plot(ch.freq_rad_s, 20 * np.log10(np.abs(ch.Hpy)), "^", color="purple", ms=5,
+                label="output channel Hpy (U = Hpe E - Hpy Y)")
+        a2.plot(ch.freq_rad_s, np.degrees(np.angle(ch.Hpy)), "^", color="purple", ms=5)
     wf = np.logspace(np.log10(w.min() / 1.5), np.log10(w.max() * 1.5), 300)
     if frf.crossover.estimate == "smoothed":
         # the fit the headline crossover comes from, so a reader can judge it against the points
