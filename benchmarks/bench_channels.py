@@ -20,7 +20,6 @@ person's of the same plant.
 
 from __future__ import annotations
 
-import argparse
 import json
 import statistics
 import sys
@@ -29,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_lab_experiment import COLUMNS, PLANTS, write_condition
+from bench_lab_experiment import COLUMNS, PLANTS, experiment_arguments, write_condition
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.humanlike import pilots
 from hesspipe.identification import average_frf, estimate_frf
@@ -53,12 +52,7 @@ def _summary(values) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--persons", type=int, default=6)
-    ap.add_argument("--runs", type=int, default=3)
-    ap.add_argument("--seed", type=int, default=7)
-    ap.add_argument("--plants", default="SI,DI", help="comma list of SI (1/s) and DI (K/s2)")
-    args = ap.parse_args(argv)
+    args = experiment_arguments(__doc__).parse_args(argv)
     print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, files as a lab writes them")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)

@@ -139,12 +139,19 @@ def variation(comparison: dict) -> tuple[float, float]:
     return statistics.median(c[0] for c in cv), statistics.median(c[1] for c in cv)
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def experiment_arguments(doc: str) -> argparse.ArgumentParser:
+    """The experiment's options (persons, runs, seed, plants), shared by the benchmarks that
+    draw it."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--persons", type=int, default=6)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--plants", default="SI,DI", help="comma list of SI (1/s) and DI (K/s2)")
+    return ap
+
+
+def main(argv=None) -> int:
+    ap = experiment_arguments(__doc__)
     ap.add_argument("--out", default=None, help="keep the experiment's files here (default: a temporary folder)")
     ap.add_argument("--diagnose", action="store_true", help="also diagnose every run on its own")
     args = ap.parse_args(argv)

@@ -13,23 +13,12 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Run, write_run
 from hesspipe.identification.frf import estimate_frf
 from hesspipe.identification.frf_channels import BAND_RAD_S, separate_channels
+from test_frf import FS, _apply, _multisine
 
-FS, T = 50.0, 80.0
+T = 80.0
 N = int(FS * T)
 D_BINS = np.array([4, 9, 15, 23, 33, 45, 60, 80, 105, 140])
 R_BINS = D_BINS + 2
-
-
-def _multisine(bins, seed):
-    rng = np.random.default_rng(seed)
-    X = np.zeros(N // 2 + 1, complex)
-    X[bins] = np.exp(1j * rng.uniform(0, 2 * np.pi, bins.size)) * N / 2
-    return np.fft.irfft(X, N)
-
-
-def _apply(x, fn):
-    X = np.fft.rfft(x)
-    return np.fft.irfft(X * fn(1j * 2 * np.pi * np.fft.rfftfreq(x.size, 1 / FS)), x.size)
 
 
 def HPE(s):
@@ -43,8 +32,8 @@ def HPY(s):
 def _record(hpy, noise=0.0, target=True):
     # u = Hpe e - Hpy y with y any signal carrying both sets (here: the two forcings through
     # different filters) and e = r - y, so the disturbance lines carry no target power.
-    d = _multisine(D_BINS, 1)
-    r = _multisine(R_BINS, 2) if target else np.zeros(N)
+    d = _multisine(D_BINS, 1, N)
+    r = _multisine(R_BINS, 2, N) if target else np.zeros(N)
     y = _apply(d, lambda s: 1 / (s + 0.5)) + _apply(r, lambda s: 0.8 / (0.3 * s + 1))
     e = r - y
     u = _apply(e, HPE) - _apply(y, hpy) + noise * np.random.default_rng(3).standard_normal(N)
