@@ -152,7 +152,7 @@ def main(argv=None) -> int:
                 for person, conds in truth.items():
                     for cond, (wc, pm) in conds.items():
                         got = result["persons"][person][cond]
-                        if np.isfinite(got["crossover_rad_s"]):
+                        if got["crossover_rad_s"] is not None:   # JSON null: no crossover found
                             err_wc.append(abs(got["crossover_rad_s"] / wc - 1))
                             err_pm.append(abs(got["phase_margin_deg"] - pm))
                 hits = [k for k, t in result["tests"].items()
