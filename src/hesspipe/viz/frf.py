@@ -64,7 +64,7 @@ def frf_figure(path: str | Path, frf, models: Mapping[str, object] | None = None
     if np.isfinite(c.frequency_rad_s):
         for a in (a1, a2):
             a.axvline(c.frequency_rad_s, color="k", ls=":", lw=1)
-        a1.set_title(title or f"{frf.run_id}: pilot describing function; nonparametric crossover "
+        a1.set_title(title or f"{frf.run_id}: pilot describing function\nnonparametric crossover "
                      f"{c.frequency_rad_s:.2f} ± {c.frequency_std:.2f} rad/s, PM "
                      f"{c.phase_margin_deg:.0f} ± {c.phase_margin_std_deg:.0f} deg", fontsize=9)
     else:
