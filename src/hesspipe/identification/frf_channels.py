@@ -19,9 +19,10 @@ At the disturbance lines R has no power, E = -Y, and the measured U/E is their s
 
     Hpy(w_t) = (Hsum(w_t) - (U/E)(w_t)) * (E/R)(w_t),    Hpe = Hsum - Hpy
 
-(van der Vaart's two-input method, as the Fourier-coefficient analyses of motion
-experiments apply it; Zaal et al. 2009, J. Guid. Control Dyn. 32(4), interpolate the same
-way). Hsum is interpolated linearly in ln w, its log magnitude and unwrapped phase apart;
+(two independent forcings let two responses be told apart: the reason motion experiments
+force target and disturbance, e.g. Zaal et al. 2009, J. Guid. Control Dyn. 32(4); the
+interpolation is this module's choice). Hsum is interpolated linearly in ln w, its log
+magnitude and unwrapped phase apart;
 target lines outside the disturbance lines' range are not estimated. The interpolation is
 exact only where Hsum is straight in those coordinates between two lines: elsewhere it
 leaves a bias in Hpy (under 2 % of |Hpe| at 1-5 rad/s on the built records of
