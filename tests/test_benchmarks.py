@@ -4,7 +4,8 @@
 ``_fit`` and ``_predict`` to build their oracle; a change of those signatures broke both
 once without any test noticing. ``bench_drift_sidebands`` reads the generator's realised gain
 wander. ``bench_cohort_rule`` draws cohorts through the verdict. ``bench_lab_experiment`` writes
-files as a lab does, which must read back as the trial. One seed each, the cheapest case.
+files as a lab does, which must read back as the trial; ``bench_channels`` reads them back
+against the generator's paths. One seed each, the cheapest case.
 """
 
 from __future__ import annotations
@@ -84,3 +85,16 @@ def test_lab_experiment_files_read_back_as_the_trial(tmp_path):
                       for i, r, k in (("a1", 0.1, 1.0), ("a2", 0.3, 3.0))]}
     cv = np.std([0.1, 0.3], ddof=1) / 0.2
     assert np.allclose(m.variation(cmp), (cv, cv), rtol=1e-12, atol=0)
+
+
+def test_channels_benchmark_runs_against_the_truth(capsys, monkeypatch):
+    # bench_channels reads the lab stand-in's files back and compares the channels with the
+    # generator's own paths; one person, one run, the single integrator.
+    monkeypatch.syspath_prepend(str(BENCH))   # it imports bench_lab_experiment, as a script does
+    assert _load("bench_channels").main(["--persons", "1", "--runs", "1", "--plants", "SI"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("SYNTHETIC DATA")
+    motion = re.search(r"SI \(1/s\), motion, 1 persons: .* one run ([\d.]+) .* truth ([\d.]+) ", out)
+    static = re.search(r"SI \(1/s\), static, 1 persons: .* truth 0\.00 ", out)
+    assert motion and static, out
+    assert float(motion.group(2)) > 0.1
