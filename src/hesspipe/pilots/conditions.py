@@ -377,7 +377,7 @@ def format_conditions(result: ConditionComparison) -> str:
     for m in METRICS:
         t = result.tests.get(m.key)
         held = "secondary, unadjusted" if t is None or t["p_holm"] is None else f"Holm {t['p_holm']:.2g}"
-        out.append(f"  {m.label:32s} " + (f"fewer than {MIN_PERSONS} persons with both" if t is None else
+        out.append(f"  {m.label:32s} " + (f"fewer than {MIN_PERSONS} persons with it in both" if t is None else
                    f"{'ratio' if m.log else 'mean difference'} {_size(m, t['effect'])}, higher for "
                    f"{t['higher']} of {t['n']}, p = {t['p_value']:.2g} ({held})"))
     out.append(f"{'person':10s} {'wc ' + a:>12s} {'wc ' + b:>12s} {'PM ' + a:>10s} {'PM ' + b:>10s} "

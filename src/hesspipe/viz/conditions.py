@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..pilots.conditions import METRICS
+from ..pilots.conditions import METRICS, MIN_PERSONS
 from . import save_figure, subplots
 
 
@@ -47,7 +47,7 @@ def conditions_figure(path: str | Path, result) -> Path:
         ax.set_ylabel(f"{m.label} ({unit})" if unit else m.label, fontsize=8)
         t = result.tests.get(m.key)
         held = "" if t is None or t["p_holm"] is None else f", Holm {t['p_holm']:.2g}"
-        ax.set_title("fewer than 3 persons" if t is None else
+        ax.set_title(f"fewer than {MIN_PERSONS} persons with it in both" if t is None else
                      f"p = {t['p_value']:.2g}{held}\n{t['higher']} of {t['n']} higher", fontsize=8)
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=6, ncol=2)
