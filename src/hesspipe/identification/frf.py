@@ -46,6 +46,7 @@ no bias there; only averaging over periods or bins would tell them apart.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy import signal
@@ -137,7 +138,7 @@ class Frf:
     notes: tuple = field(default=())
     repeats: dict | None = None
 
-    @property
+    @cached_property   # the table, the JSON and the figure each ask for it
     def channels(self) -> Channels | None:
         """The error and output channels apart (:func:`~.frf_channels.separate_channels`), for
         a record with target and disturbance on their own lines; else None."""

@@ -92,17 +92,19 @@ class Channels:
 
 
 def _interpolate(w_from, H, sigma, w_to):
-    # Hsum and its sigma at w_to, linear in ln w on log|H| and the unwrapped phase; NaN
-    # outside [w_from[0], w_from[-1]].
+    # Hsum and its sigma at w_to, linear in ln w on log|H| and the unwrapped phase, the
+    # relative sigmas with the same weights; NaN outside [w_from[0], w_from[-1]].
     lw, lt = np.log(w_from), np.log(w_to)
-    mag = np.interp(lt, lw, np.log(np.abs(H)), left=np.nan, right=np.nan)
-    phase = np.interp(lt, lw, np.unwrap(np.angle(H)), left=np.nan, right=np.nan)
     i = np.clip(np.searchsorted(lw, lt) - 1, 0, lw.size - 2)
     a = np.clip((lt - lw[i]) / (lw[i + 1] - lw[i]), 0.0, 1.0)
+    inside = (lt >= lw[0]) & (lt <= lw[-1])
+
+    def lerp(v):
+        return np.where(inside, (1 - a) * v[i] + a * v[i + 1], np.nan)
+
+    H_t = np.exp(lerp(np.log(np.abs(H))) + 1j * lerp(np.unwrap(np.angle(H))))
     rel = sigma / np.abs(H)
-    rel_t = np.hypot((1 - a) * rel[i], a * rel[i + 1])
-    H_t = np.exp(mag + 1j * phase)
-    return H_t, rel_t * np.abs(H_t)
+    return H_t, np.hypot((1 - a) * rel[i], a * rel[i + 1]) * np.abs(H_t)
 
 
 def separate_channels(frf) -> Channels:
