@@ -24,6 +24,7 @@ counts): how many runs of each condition are named ``motion_feedback``, what els
 and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
+        [--style lab|daq]
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import csv_bytes, draw_trial, simulate_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
-from hesspipe.humanlike.writer import LAB, plants_dict
+from hesspipe.humanlike.writer import DAQ, LAB, plants_dict
 
 COLUMNS = ",".join(f"{role}={LAB['names'][role]}" for role in ("reference", "disturbance", "output", "control"))
 PLANTS = {"SI": "1/s", "DI": "K/s2"}
@@ -55,10 +56,11 @@ TRIAL = dict(task="both", pilot="precision", output="angle", tau_m=0.15, gain_dr
 """The trials' options (module doc)."""
 
 
-def lab_file(trial, path: Path) -> None:
+def lab_file(trial, path: Path, style=LAB) -> None:
     """`trial` as a lab's logger writes it (the generator's :data:`~hesspipe.humanlike.writer.LAB`
-    style, module doc), labelled synthetic in its comment line."""
-    path.write_bytes(csv_bytes(trial, LAB))
+    style, module doc, or another, e.g. :data:`~hesspipe.humanlike.writer.DAQ`), labelled
+    synthetic in its comment line."""
+    path.write_bytes(csv_bytes(trial, style))
 
 
 def draw_person(plant: str, effects, seed: int, **kw):
@@ -72,7 +74,8 @@ def draw_person(plant: str, effects, seed: int, **kw):
     raise HesspipeError(f"no pilot drawn for {plant} after 20 attempts (seed {seed})")
 
 
-def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, seed: int) -> dict:
+def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, seed: int,
+                    style=LAB) -> dict:
     """Write one condition's runs; return person -> the generator's pilot (its truth)."""
     folder.mkdir(parents=True, exist_ok=True)
     effects = ("motion_feedback",) if cond == "motion" else ()
@@ -88,7 +91,7 @@ def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, 
                 truth[f"s{s + 1:02d}"] = {k: v for k, v in person.items() if isinstance(v, (int, float, str))}
             else:   # the same person again: only forcing phases, remnant and wander are new
                 spec = draw_trial(PLANTS[tag], seed_r, effects=effects, pilot_params=person, **kw)
-            lab_file(simulate_trial(spec), folder / f"{spec.name}.csv")
+            lab_file(simulate_trial(spec), folder / f"{spec.name}.csv", style)
     (folder.parent / f"plants_{tag}.json").write_text(json.dumps(plants_dict(spec), indent=1))
     return truth
 
@@ -154,6 +157,9 @@ def main(argv=None) -> int:
     ap = experiment_arguments(__doc__)
     ap.add_argument("--out", default=None, help="keep the experiment's files here (default: a temporary folder)")
     ap.add_argument("--diagnose", action="store_true", help="also diagnose every run on its own")
+    ap.add_argument("--style", choices=("lab", "daq"), default="lab",
+                    help="the files' style: lab (LAB: semicolons, decimal commas) or daq (DAQ: metadata above "
+                         "the header, a units row, clock times across midnight, frames written twice, UTF-16)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, files as a lab writes them")
     with tempfile.TemporaryDirectory() as tmp:
@@ -162,7 +168,8 @@ def main(argv=None) -> int:
             for cond in ("motion", "static"):
                 folder = root / f"{tag}_{cond}"
                 t0 = time.perf_counter()
-                truth = write_condition(folder, tag, cond, args.persons, args.runs, args.seed)
+                truth = write_condition(folder, tag, cond, args.persons, args.runs, args.seed,
+                                        DAQ if args.style == "daq" else LAB)
                 print(f"\n== {tag} ({PLANTS[tag]}), {cond}: {args.persons} persons x {args.runs} runs written "
                       f"in {time.perf_counter() - t0:.0f} s")
                 out_json = root / f"{tag}_{cond}.json"

@@ -20,12 +20,26 @@ def _signals():
     return t, np.sin(0.7 * t), 0.1 * np.cos(1.3 * t), np.sin(2.1 * t), 0.05 * np.sin(0.4 * t)
 
 
-def _text(header, sep=",", decimal=".", scale=(1, 1, 1, 1, 1)):
+def _text(header, sep=",", decimal=".", scale=(1, 1, 1, 1, 1), quote=False):
     cols = _signals()
-    lines = [sep.join(header)]
+    q = '"' if quote else ""
+    lines = [sep.join(f"{q}{h}{q}" for h in header)]
     for row in zip(*cols):
-        lines.append(sep.join(f"{v * k:.9g}".replace(".", decimal) for v, k in zip(row, scale)))
+        lines.append(sep.join(f"{q}{v * k:.9g}{q}".replace(".", decimal) for v, k in zip(row, scale)))
     return "\n".join(lines) + "\n"
+
+
+def _clock_text(stamp):
+    lines = _text(PLAIN).split("\n")
+    return "\n".join([lines[0]] + [stamp(k) + ln[ln.index(","):] for k, ln in enumerate(lines[1:-1])]
+                     + [""]).encode()
+
+
+def _units_row(sep, decimal, brackets=False):
+    units = ("ms", "m/s", "deg/s", "-", "deg/s")
+    lines = _text(PLAIN, sep, decimal, scale=(1000, 0.3048, 180 / math.pi, 1, 180 / math.pi)).split("\n")
+    lines.insert(1, sep.join(f"[{u}]" if brackets else u for u in units))
+    return "\n".join(lines).encode()
 
 
 PLAIN = ("time", "disturbance", "output", "control", "reference")
@@ -46,6 +60,21 @@ PLAIN = ("time", "disturbance", "output", "control", "reference")
     ("lab-units.csv", _text(["Time [ms]", "Disturbance [m/s]", "Output [deg/s]", "Control [N]",
                              "Reference [deg/s]"],
                             scale=(1000, 0.3048, 180 / math.pi, 1, 180 / math.pi)).encode(), "converted"),
+    # Units in a row of their own under the names (LabVIEW, DEWESoft, MATLAB exports).
+    ("units-row.csv", _units_row(";", ","), "as the columns' units"),
+    ("units-row-brackets.tsv", _units_row("\t", ".", brackets=True), "as the columns' units"),
+    # A logger's metadata above the header, not marked as comments.
+    ("preamble.csv", ("Subject: s02\r\nDate: 2026-11-01; 14:03\r\nCondition = motion\r\n"
+                      + _text(PLAIN, ";", ",").replace("\n", "\r\n")).encode("cp1252"),
+     "3 line(s) above the header"),
+    # Every cell quoted, decimal commas inside the quotes.
+    ("quoted.csv", _text(PLAIN, ";", ",", quote=True).encode(), "decimal commas"),
+    # Excel's separator line.
+    ("excel-sep.csv", ("sep=;\n" + _text(PLAIN, ";", ",")).encode(), "1 line(s) above the header"),
+    # Clock times: the time of day across midnight, and ISO 8601 stamps with a zone.
+    ("clock.csv", _clock_text(lambda k: "{:02d}:{:02d}:{:06.3f}".format(
+        *(lambda s: (int(s // 3600) % 24, int(s % 3600 // 60), s % 60))(86395.0 + k * DT))), "clock times"),
+    ("iso.csv", _clock_text(lambda k: f"2026-11-28T09:00:{k * DT:06.3f}+01:00"), "clock times"),
 ])
 def test_same_run_whatever_the_writer(tmp_path, name, data, note):
     path = tmp_path / name
@@ -203,3 +232,78 @@ def test_incomplete_rows_at_the_edges_are_dropped_and_said(tmp_path):
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(HesspipeError, match="column 'reference': expected finite numbers, got an empty or NaN cell in data row 100"):
         read_run(path)
+
+
+def test_a_sample_missing_is_found_even_where_the_times_end_in_zeros(tmp_path):
+    # Written with five decimals, 0.02 s steps: 30.00000 reads back as the float 30.0, whose
+    # own digits would allow a whole second; the written digits allow 1e-5 s.
+    lines = _text(PLAIN).splitlines()
+    rows = [",".join([f"{float(r.split(',')[0]):.5f}"] + r.split(",")[1:]) for r in lines[1:]]
+    path = tmp_path / "gap.csv"
+    path.write_text("\n".join([lines[0]] + rows[:150] + rows[151:]) + "\n")
+    with pytest.raises(HesspipeError, match=r"gap.csv: column 'time': expected uniform sampling .* "
+                                            r"from 0.02 to 0.04 s .*after data row 150\)"):
+        read_run(path)
+    run = read_run(path, resample=True)
+    assert len(run) == N and run.dt == pytest.approx(DT)
+    np.testing.assert_allclose(run.output[151:], _signals()[2][151:], rtol=1e-6, atol=1e-9)
+
+
+def test_a_frame_written_twice_is_read_once_and_said(tmp_path):
+    lines = _text(PLAIN, ";", ",").splitlines()
+    path = tmp_path / "twice.csv"
+    path.write_text("\n".join(lines[:101] + [lines[100]] + lines[101:]) + "\n")
+    run = read_run(path)
+    np.testing.assert_allclose(run.control, _signals()[3], rtol=1e-6, atol=1e-9)
+    assert any("dropped 1 row(s) repeating the row before" in n for n in run.notes), run.notes
+    # The same time with other values is not a repeat: refused, row named.
+    fields = lines[100].split(";")
+    path.write_text("\n".join(lines[:101] + [";".join(fields[:2] + ["9,5"] + fields[3:])] + lines[101:]) + "\n")
+    with pytest.raises(HesspipeError, match="expected strictly increasing time, not at data row 101"):
+        read_run(path)
+
+
+def test_a_text_cell_in_a_decimal_comma_column_spoils_only_its_row(tmp_path):
+    # pandas leaves such a column as text, commas and all: read as NaN everywhere, the
+    # message used to blame the first row's good value.
+    lines = _text(PLAIN, ";", ",").splitlines()
+    lines.append("6,00;---;---;---;---")
+    path = tmp_path / "dashes.csv"
+    path.write_text("\n".join(lines) + "\n")
+    run = read_run(path)
+    np.testing.assert_allclose(run.reference, _signals()[4], rtol=1e-6, atol=1e-9)
+    lines.insert(50, "0,99;1,0;---;1,0;1,0")
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(HesspipeError, match="column 'output': expected finite numbers, got '---' in data row 50"):
+        read_run(path)
+
+
+@pytest.mark.parametrize("unit, turn", [(" [deg]", 360.0), ("", 360.0), (" [rad]", 2 * math.pi)])
+def test_a_heading_logged_within_one_turn_is_unwrapped(tmp_path, unit, turn):
+    # A yaw task logging the simulator's heading: target and yaw wrap at different samples
+    # near north. Unwrapped, and kept within half a turn of each other, the error is the
+    # error; without a unit the turn is 360.
+    t, d, y, u, r = _signals()
+    k = (180 / math.pi) if turn == 360.0 else 1.0
+    head_r, head_y = np.mod(k * (r + 0.01), turn), np.mod(k * (y + 0.01), turn)
+    lines = [f"time,disturbance,output{unit},control,reference{unit}"]
+    lines += [f"{a:.9g},{b:.9g},{c:.9g},{e:.9g},{f:.9g}" for a, b, c, e, f in zip(t, d, head_y, u, head_r)]
+    path = tmp_path / "heading.csv"
+    path.write_text("\n".join(lines) + "\n")
+    run = read_run(path)
+    scale = 1.0 if unit else k   # a column without a unit is read as written
+    np.testing.assert_allclose(run.reference - run.output, scale * (r - y), atol=1e-7 * turn)
+    assert np.max(np.abs(np.diff(run.output))) < 0.25 * scale * np.pi
+    assert any("step(s) of one turn" in n and "output" in n for n in run.notes), run.notes
+
+
+def test_an_angle_that_does_not_wrap_is_left_as_read(tmp_path):
+    # Large swings, but no step of about a turn: nothing to unwrap.
+    t, d, y, u, r = _signals()
+    lines = ["time,disturbance,output [deg],control,reference [deg]"]
+    lines += [f"{a:.9g},{b:.9g},{170 * np.sin(0.2 * a):.9g},{e:.9g},{0:.9g}" for a, b, e in zip(t, d, u)]
+    path = tmp_path / "swing.csv"
+    path.write_text("\n".join(lines) + "\n")
+    run = read_run(path)
+    np.testing.assert_allclose(run.output, np.radians(170 * np.sin(0.2 * t)), rtol=1e-7, atol=1e-9)
+    assert not any("turn" in n for n in run.notes)

@@ -120,6 +120,8 @@ def test_non_uniform_time_fails_unless_resampled(tmp_path):
         read_run(path)
     run = read_run(path, resample=True)
     assert len(run) == 101
+    assert any("0.02 to 0.04 s resampled linearly onto a uniform 0.02 s grid (100 samples read, 101 kept)" in n
+               for n in run.notes), run.notes
     np.testing.assert_allclose(np.diff(run.time), 0.02, rtol=1e-9)
     # Linear signals are reproduced exactly by linear interpolation, the gap included.
     np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(101), rtol=1e-9, atol=1e-9)
@@ -217,7 +219,7 @@ def test_jitter_beyond_tolerance_refused_with_spread(tmp_path):
     rng = np.random.default_rng(2)
     t = 0.02 * np.arange(2000) + rng.uniform(-1e-5, 1e-5, 2000)   # 1e-3 of the interval
     path = _time_csv(tmp_path / "j.csv", [f"{v:.9f}" for v in t])
-    with pytest.raises(HesspipeError, match=r"within 0\.0001 of .*up to [0-9.e-]+ of the interval off\); "
+    with pytest.raises(HesspipeError, match=r"within 0\.0001 of .*up to [0-9.e-]+ of the interval off, after data row [0-9]+\); "
                                             r"set resample"):
         read_run(path)
     ok = _time_csv(tmp_path / "k.csv", [f"{v:.9f}" for v in 0.02 * np.arange(2000)

@@ -268,16 +268,18 @@ def test_readable_by_hesspipe_rounded_times(tmp_path, time_style):
 
 
 @pytest.mark.parametrize("style", [{}, {"sep": "\t", "encoding": "utf-16"},
-                                   {"sep": ",", "decimal": ",", "degrees": True}])
+                                   {"sep": ",", "decimal": ",", "degrees": True}, "DAQ"])
 def test_a_laboratorys_own_files_read_back_as_the_trial(tmp_path, style):
     # The LAB style (semicolons, decimal commas, degrees, CRLF, Windows-1252, the lab's own
     # names) and variations of it; a separator that is also the decimal mark is refused.
+    # DAQ: metadata above the header, a units row, clock times across midnight, two
+    # frames written twice.
     from hesspipe.core.errors import HesspipeError
     from hesspipe.core.formats import read_run
-    from hesspipe.humanlike.writer import LAB
+    from hesspipe.humanlike.writer import DAQ, LAB
 
     tr = simulate_trial(draw_trial("1/s", 6, **SHORT))
-    st = {**LAB, **style}
+    st = {**DAQ, "repeat": (10, len(tr.time) // 2), "clock0": 86395.0} if style == "DAQ" else {**LAB, **style}
     if st["sep"] == st["decimal"]:
         with pytest.raises(HesspipeError, match="fields 'sep' and 'decimal'"):
             write_trial(tmp_path, tr, style=st)
@@ -286,9 +288,15 @@ def test_a_laboratorys_own_files_read_back_as_the_trial(tmp_path, style):
     run = read_run(path, columns=",".join(f"{r}={LAB['names'][r]}" for r in ("reference", "disturbance",
                                                                            "output", "control")))
     assert run.synthetic and len(run.time) == len(tr.time)
+    assert run.dt == pytest.approx(tr.time[1] - tr.time[0], rel=1e-6)
     for name in ("reference", "disturbance", "output", "control"):
         want = getattr(tr, name)
         assert np.allclose(getattr(run, name), want, rtol=0, atol=1e-6 * (1 + np.abs(want).max())), name
+    if style == "DAQ":
+        said = " | ".join(run.notes)
+        for words in ("3 line(s) above the header", "as the columns' units", "clock times",
+                      "dropped 2 row(s) repeating", "tab-separated with decimal commas"):
+            assert words in said, said
 
 
 @pytest.mark.parametrize("output", ["rate", "angle"])

@@ -97,16 +97,22 @@ def test_reference_line_df_equals_a_brute_force_closed_loop():
                        model_df(loop0, 1j * w), rtol=1e-12)
 
 
-def test_df_objective_fits_the_reference_lines_of_a_two_input_run():
+def _two_input_run():
+    """A two-input run of the expanded model on the equivalent plants: two periods from
+    rest, the second (steady state) kept. Returns (run, plants, model, params, dt, n)."""
     plants = eq_plants()
     dt, n = 0.025, 1400
     wind, ref = TargetForcing(target_rms=0.2, wind_rms=1.0).signals(np.arange(n) * dt, seed=7)
     m = PilotModel(("motion_feedback",))
     p = m.complete(PARAMS, 1)
-    # Two periods from rest; the second (steady state) is analysed.
     full = synthetic_run(m, p, plants, np.tile(wind, 2), dt, seed=1, reference=np.tile(ref, 2))
     run = Run(time=full.time[:n], disturbance=wind, output=full.output[n:], control=full.control[n:],
               reference=ref, id="two-input", synthetic=True)
+    return run, plants, m, p, dt, n
+
+
+def test_df_objective_fits_the_reference_lines_of_a_two_input_run():
+    run, plants, m, p, dt, n = _two_input_run()
     frf = estimate_frf(run, plants)
     kd, kt = interleaved_lines(n * dt, 12, 0.03, 2.0)
     assert frf.reference is not None and frf.reference.bins.tolist() == kt.tolist()
@@ -214,3 +220,22 @@ def test_pilots_forcing_two_input_flies_a_run_in_and_records_both_line_sets(tmp_
     for bad, field in (({"forcing": "two_input", "simulator": "fft"}, "forcing"), ({"forcing": "gusts"}, "forcing")):
         with pytest.raises(HesspipeError, match=field):
             PilotsConfig.from_table(bad, "x.toml")
+
+
+def test_a_constant_in_the_reference_is_where_the_loop_operates_not_a_step():
+    # A heading task logs target and yaw in compass terms (270 deg = 4.71 rad): the same run
+    # about another constant. Simulated from rest, that constant was a step into the model's
+    # loop and moved the spectral fitness; the analyses take the reference less its mean.
+    from hesspipe.identification.problem import SpectralObjective
+
+    run, plants, m, p, dt, n = _two_input_run()
+    wind, ref = run.disturbance, run.reference
+    heading = Run(time=run.time, disturbance=wind, output=run.output + 4.71, control=run.control,
+                  reference=ref + 4.71, id="heading", synthetic=True)
+    np.testing.assert_allclose(heading.reference_forcing, run.reference_forcing, atol=1e-12)
+    values = [SpectralObjective(r, plants, m, p)(dict()) for r in (run, heading)]
+    assert values[0] == pytest.approx(values[1], rel=1e-9)
+    # The step itself: the same objective fed the offset reference differs by far more.
+    stepped = SpectralObjective(run, plants, m, p)
+    stepped.sim = Simulator(plants, wind, dt, reference=ref + 4.71)
+    assert abs(stepped(dict()) - values[0]) > 1e-3 * abs(values[0]), (stepped(dict()), values)

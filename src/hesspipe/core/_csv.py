@@ -4,9 +4,11 @@ The measured-run format (SPEC.md) is a comma-separated file with a header row. F
 recorders and spreadsheets are that format written in other hands: UTF-16 from Excel's
 "Unicode text", Windows-1252 from older tools, tab or semicolon separators (the latter
 with decimal commas in European locales), capitalised headers, and a unit beside a name
-(``Time [s]``, ``roll rate (deg/s)``). They are valid input; this module reads them into
-the roles the caller asks for and converts the units it knows to SPEC.md's
-(:data:`UNIT_FACTORS`), saying what it did (:attr:`Table.notes`).
+(``Time [s]``, ``roll rate (deg/s)``), or in a row of their own under the names; lines of
+metadata above the header (``Subject: s02``); quoted cells; a frame the logger wrote twice.
+They are valid input; this module reads them into the roles the caller asks for and
+converts the units it knows to SPEC.md's (:data:`UNIT_FACTORS`), saying what it did
+(:attr:`Table.notes`).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import io as _io
 import math
 import re
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
 
@@ -62,12 +64,17 @@ class Table:
     notes : tuple of str
         What reading did beyond the plain format (a delimiter, a unit converted or taken as
         written), one sentence each.
+    resolution : dict of str to ndarray
+        ``"time"`` → the place value of the last digit each time was written with, in
+        SPEC.md's unit (1e-5 s for ``30,01000``): how much of an interval's deviation the
+        writing explains. Empty without a time role.
     """
 
     data: dict
     comments: tuple
     columns: dict
     notes: tuple
+    resolution: dict = field(default_factory=dict)
 
 
 def decode(path: str | Path, what: str) -> tuple[str, str]:
@@ -134,8 +141,86 @@ def _dialect(text: str) -> tuple[str, str]:
     if best is None:
         return (r"\s+", ".") if len(header.split()) > 1 else (",", ".")
     decimal = "." if best == "," else (
-        "," if any(_DECIMAL_COMMA.match(f) for ln in body for f in ln.split(best)) else ".")
+        "," if any(_DECIMAL_COMMA.match(f.strip().strip('"')) for ln in body for f in ln.split(best))
+        else ".")
     return best, decimal
+
+
+def _number(cell: str) -> bool:
+    try:
+        float(cell.strip().strip('"').replace(",", "."))
+    except ValueError:
+        return False
+    return True
+
+
+def _cells(line: str, sep: str) -> list[str]:
+    return [c.strip().strip('"').strip() for c in line.split(sep)]
+
+
+_UNIT_WORDS = {u for units in UNIT_FACTORS.values() for u in units} | {u for u in _DIMENSIONLESS if u}
+
+
+def _layout(lines: list[str]) -> tuple[int, bool]:
+    """(header, units) of a table's non-comment lines: the index of the header (lines above
+    it are metadata a logger writes, ``Subject: s02``) and whether the line under it holds
+    units rather than values (``s;deg;deg``).
+
+    The header is the first line that splits like the middle of the file (a separator
+    ending the data lines allowed) and is not all numbers, under the separator that finds
+    it earliest (a decimal comma splits data lines into cells that are not numbers); a
+    file whose first line is one is left to the plain reading."""
+    header = 0
+    if len(lines) > 2:
+        mid = lines[len(lines) // 2: len(lines) // 2 + 50]
+        found = []
+        for sep in (",", "\t", ";"):
+            counts = sorted(len(ln.split(sep)) for ln in mid)
+            n = counts[len(counts) // 2]
+            if n < 2 or any(c not in (n - 1, n) for c in counts):
+                continue
+            i = next((i for i, ln in enumerate(lines[:len(lines) // 2])
+                      if len(ln.split(sep)) in (n - 1, n)
+                      and not all(_number(c) for c in ln.split(sep) if c.strip())), None)
+            if i is not None:
+                found.append(i)
+        header = min(found, default=0)
+    units = False
+    if header + 1 < len(lines):
+        row = lines[header + 1]
+        sep = next((c for c in (",", "\t", ";") if c in lines[header]), None)
+        cells = _cells(row, sep) if sep else row.split()
+        words = [c.strip("[]()").lower().replace(" ", "") for c in cells if c]
+        units = bool(words) and not any(_number(c) for c in cells if c) and \
+            any(w in _UNIT_WORDS for w in words)
+    return header, units
+
+
+def _with_units(header: str, units_row: str, sep: str) -> str:
+    """`header` with each name lacking a unit given the one written under it."""
+    names = header.split(sep) if sep != r"\s+" else header.split()
+    units = _cells(units_row, sep) if sep != r"\s+" else units_row.split()
+    out = []
+    for i, name in enumerate(names):
+        unit = units[i].strip("[]()").strip() if i < len(units) else ""
+        bare = name.strip().strip('"')
+        out.append(f"{bare} [{unit}]" if unit and _split_unit(bare)[1] is None else name)
+    return (sep if sep != r"\s+" else " ").join(out)
+
+
+def _resolution(cells) -> np.ndarray:
+    """Place value of the last digit each cell was written with (``30,01000`` → 1e-5;
+    ``20`` → 1; ``1.5e-3`` → 1e-4); NaN where a cell is not a number."""
+    out = np.full(len(cells), np.nan)
+    for i, cell in enumerate(cells):
+        text = str(cell).strip().strip('"').replace(",", ".")
+        mant, _, exp = text.lower().partition("e")
+        frac = re.match(r"\d*", mant.partition(".")[2]).group()   # a clock's zone ends the digits
+        try:
+            out[i] = 10.0 ** (int(exp or 0) - len(frac))
+        except ValueError:
+            pass
+    return out
 
 
 def _split_unit(header: str) -> tuple[str, str | None]:
@@ -190,12 +275,9 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
     path = Path(path)
     text, encoding = decode(path, what)
     notes = [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"]
+    text, sep, decimal = _prepare(text, notes)
     comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
                      if line.lstrip().startswith("#"))
-    sep, decimal = _dialect(text)
-    if sep != ",":
-        notes.append({"\t": "tab-separated", ";": "semicolon-separated"}.get(sep, "whitespace-separated")
-                     + (" with decimal commas" if decimal == "," else ""))
     try:
         with warnings.catch_warnings():
             # index_col=False: a separator ending every data line (loggers write one) must not
@@ -234,7 +316,12 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
             label = f" (role {role})" if role != name else ""
             raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
                                 f"{', '.join(headers)}{tail}")
-        data[role], used[role] = pd.to_numeric(df[col], errors="coerce").to_numpy(dtype=float), col
+        data[role], used[role] = _numeric(df[col], decimal), col
+        if role == "time" and data[role].size and np.mean(np.isfinite(data[role])) < 0.5:
+            clock = _clock(df[col])
+            if clock is not None:
+                data[role] = clock
+                notes.append(f"column '{col}' ({role}): clock times read as seconds from the first")
     first, stop = _complete_rows(data)
     bad = {role: first + int(np.argmax(~np.isfinite(v[first:stop]))) for role, v in data.items()
            if not np.isfinite(v[first:stop]).all()}
@@ -248,8 +335,25 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
     if (first, stop) != (0, len(df)):
         notes.append(f"dropped {first} incomplete row(s) at the start and {len(df) - stop} at the end "
                      f"(a value missing or not a number); data rows {first + 1}-{stop} read")
+    keep = np.arange(first, stop)
+    if "time" in used and keep.size > 1:
+        # A logger that writes a frame twice repeats the whole row, time included: the
+        # record holds it once. Rows that share a time but not their values stay, for
+        # the caller to refuse.
+        block = np.column_stack([data[role][keep] for role in used])
+        again = np.all(block[1:] == block[:-1], axis=1)
+        if again.any():
+            notes.append(f"dropped {int(again.sum())} row(s) repeating the row before in every column "
+                         f"(first data row {int(keep[1:][again][0]) + 1}: a frame written twice)")
+            keep = keep[np.concatenate(([True], ~again))]
+    resolution = {}
+    if "time" in used:
+        raw = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
+                          usecols=[used["time"]], dtype=str,
+                          engine="python" if sep == r"\s+" else "c")[used["time"]]
+        resolution["time"] = _resolution(raw.to_numpy()[keep])
     for role, col in used.items():
-        values = data[role][first:stop]
+        values = data[role][keep]
         if role in flipped:
             values = -values
             notes.append(f"column '{col}' ({role}): sign flipped, as mapped")
@@ -261,8 +365,109 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
             elif factor is not None and factor != 1.0:
                 values = values * factor
                 notes.append(f"column '{col}' ({role}): {unit} converted to SPEC.md's units (x {factor:.6g})")
+                if role in resolution:
+                    resolution[role] = resolution[role] * factor
         data[role] = values
-    return Table(data, comments, used, tuple(notes))
+    return Table(data, comments, used, tuple(notes), resolution)
+
+
+_TIME_OF_DAY = re.compile(r"^(\d{1,2}):(\d{2}):(\d{2}(?:[.,]\d+)?)$")
+
+
+def _clock(column: pd.Series) -> np.ndarray | None:
+    """Seconds from the first row of a column of clock times (``14:03:05.120``, a day
+    rolled over at midnight, or ISO 8601 ``2026-11-01T14:03:05.120``), NaN where a cell is
+    not one; None unless at least 90 % of the cells are."""
+    cells = column.astype(str).str.strip().str.strip('"')
+    parts = cells.str.extract(_TIME_OF_DAY)
+    if parts.notna().all(axis=1).mean() >= 0.9:
+        sec = (parts[0].astype(float) * 3600 + parts[1].astype(float) * 60
+               + parts[2].str.replace(",", ".", regex=False).astype(float)).to_numpy()
+        held = pd.Series(sec).ffill().bfill().to_numpy()   # a cell that is not a time counts no day
+        days = np.concatenate(([0], np.cumsum(np.diff(held) < -43200)))
+        sec = sec + 86400.0 * days
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            stamps = pd.to_datetime(cells.str.replace(",", ".", regex=False), errors="coerce",
+                                    format="ISO8601")
+        if stamps.notna().mean() < 0.9:
+            return None
+        if getattr(stamps.dt, "tz", None) is not None:
+            stamps = stamps.dt.tz_convert(None)
+        sec = (stamps - stamps[stamps.notna()].iloc[0]).dt.total_seconds().to_numpy(dtype=float)
+    first = sec[np.isfinite(sec)][0]
+    return sec - first
+
+
+def _numeric(column: pd.Series, decimal: str) -> np.ndarray:
+    """Floats of a column, NaN where a cell is not a number. pandas applies a decimal comma
+    only to columns it reads as numbers: one text cell (``---``, a units row) leaves the
+    whole column as text, whose commas are converted here."""
+    if decimal == "," and not pd.api.types.is_numeric_dtype(column):
+        column = column.astype(str).str.strip().str.strip('"').str.replace(",", ".", regex=False)
+    return pd.to_numeric(column, errors="coerce").to_numpy(dtype=float)
+
+
+def _prepare(text: str, notes: list) -> tuple[str, str, str]:
+    """(text, delimiter, decimal) for pandas: metadata lines above the header turned into
+    comments, a units row merged into the header's names; what was done appended to
+    `notes`."""
+    lines = text.splitlines()
+    content = [i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")]
+    header, units = _layout([lines[i] for i in content])
+    if header:
+        above = content[:header]
+        notes.append(f"read {len(above)} line(s) above the header as comments "
+                     f"(from {lines[above[0]].strip()[:40]!r})")
+        for i in above:
+            lines[i] = "# " + lines[i]
+    units_row = None
+    if units:
+        units_row = lines[content[header + 1]]
+        lines[content[header + 1]] = ""
+    text = "\n".join(lines)
+    sep, decimal = _dialect(text)
+    if units_row is not None:
+        h = content[header]
+        lines[h] = _with_units(lines[h], units_row, sep)
+        text = "\n".join(lines)
+        notes.append(f"read the row under the header as the columns' units ({units_row.strip()[:40]!r})")
+    if sep != ",":
+        notes.append({"\t": "tab-separated", ";": "semicolon-separated"}.get(sep, "whitespace-separated")
+                     + (" with decimal commas" if decimal == "," else ""))
+    return text, sep, decimal
+
+
+def unwrap_turns(values: np.ndarray) -> tuple[np.ndarray, float | None, int]:
+    """An angle logged within one turn (a heading from 0 to 360 deg), unwrapped.
+
+    A step of about one turn (2 pi, or 360 in a column without a unit) between samples whose
+    other steps are all below a quarter turn, in a column whose values span at most one
+    turn, is the logger wrapping the angle, not motion.
+
+    Parameters
+    ----------
+    values : ndarray
+        The column as read (radians if its unit was given).
+
+    Returns
+    -------
+    values : ndarray
+        Unwrapped (`values` itself when nothing wrapped).
+    period : float or None
+        The turn found (2 pi or 360), None when nothing wrapped.
+    jumps : int
+        How many wraps were undone.
+    """
+    steps = np.diff(values)
+    for period in (2.0 * math.pi, 360.0):
+        wrap = np.abs(np.abs(steps) - period) < 0.1 * period
+        rest = np.abs(steps[~wrap])
+        if wrap.any() and (rest.size == 0 or rest.max() < 0.25 * period) and \
+                np.ptp(values) <= 1.001 * period:
+            return np.unwrap(values, period=period), period, int(wrap.sum())
+    return values, None, 0
 
 
 def _complete_rows(data: Mapping[str, np.ndarray]) -> tuple[int, int]:

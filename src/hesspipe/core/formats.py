@@ -27,7 +27,7 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from ._csv import decode, read_table
+from ._csv import decode, read_table, unwrap_turns
 from ._tf import _read_tf, tf_coefficients
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
 from .errors import HesspipeError
@@ -108,6 +108,16 @@ class Run:
     def error(self) -> np.ndarray:
         """Displayed error e = reference - output."""
         return self.reference - self.output
+
+    @property
+    def reference_forcing(self) -> np.ndarray:
+        """The reference less its mean, as the analyses' simulations of the loop take it.
+
+        A constant in the reference (a heading of 270 deg, a steady turn) is where the loop
+        operates, not forcing: a model loop simulated from rest would start with a step of
+        that size, which the record, flown at that point all along, does not hold.
+        """
+        return self.reference - np.mean(self.reference)
 
     def __len__(self) -> int:
         return len(self.time)
@@ -201,7 +211,7 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     # column read as no target at all would change the answer without a word.
     optional = tuple(role for role in OPTIONAL_COLUMNS if role not in mapping)
     table = read_table(path, names, optional=optional, what="a measured-run CSV", hint="columns")
-    data, comments = table.data, table.comments
+    data, comments, notes = table.data, table.comments, table.notes
     n = len(data["time"])
     if n < max(min_samples, 2):
         raise HesspipeError(f"{path}: {n} samples; expected at least {max(min_samples, 2)}")
@@ -214,20 +224,24 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
             raise HesspipeError(f"{path}: column '{table.columns[role]}': values up to {big:.3g} overflow a "
                                 f"power spectrum; expected magnitudes below {MAX_MAGNITUDE:g} "
                                 "(check the column's units)")
+    notes = notes + _unwrapped(data, table.columns)
     t = data["time"]
     tcol = table.columns["time"]
-    dt, uniform = sample_interval(path, t, tcol, rtol=rtol)
+    dt, uniform = sample_interval(path, t, tcol, rtol=rtol, resolution=table.resolution.get("time"))
     if not uniform:
         steps = np.diff(t - t[0])
         if not resample:
-            spread = float(np.max(np.abs(steps - dt)) / dt)
+            worst = int(np.argmax(np.abs(steps - dt)))
+            spread = float(abs(steps[worst] - dt) / dt)
             raise HesspipeError(f"{path}: column '{tcol}': expected uniform sampling (every interval "
                                 f"within {rtol:g} of {dt:.9g} s), found intervals from {steps.min():.9g} "
-                                f"to {steps.max():.9g} s (up to {spread:.2g} of the interval off); "
-                                "set resample to interpolate onto a uniform grid")
+                                f"to {steps.max():.9g} s (up to {spread:.2g} of the interval off, after "
+                                f"data row {worst + 1}); set resample to interpolate onto a uniform grid")
         t0, rel = t[0], t - t[0]
         grid = dt * np.arange(int(math.floor(rel[-1] / dt + 1e-9)) + 1)
         data = {k: (t0 + grid if k == "time" else np.interp(grid, rel, v)) for k, v in data.items()}
+        notes += (f"column '{tcol}': intervals from {steps.min():.9g} to {steps.max():.9g} s resampled "
+                  f"linearly onto a uniform {dt:.9g} s grid ({n} samples read, {grid.size} kept)",)
     else:
         data["time"] = t[0] + dt * np.arange(n, dtype=float) + _intercept(t, dt)
     _check_plausible(path, tcol, dt)
@@ -235,7 +249,24 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     return Run(time=data["time"], disturbance=data["disturbance"], output=data["output"],
                control=data["control"], reference=ref, id=path.stem,
                synthetic=any("synthetic" in c.lower() for c in comments),
-               comments=comments, source=str(path), interval=dt, notes=table.notes)
+               comments=comments, source=str(path), interval=dt, notes=notes)
+
+
+def _unwrapped(data: dict, columns: Mapping[str, str]) -> tuple[str, ...]:
+    """Unwrap, in place, an output or reference angle logged within one turn (a heading), and
+    keep the two within half a turn of each other so that the error stays the error."""
+    notes, turn = [], None
+    for role in ("output", "reference"):
+        if role in data:
+            data[role], period, jumps = unwrap_turns(data[role])
+            if period:
+                turn = period
+                notes.append(f"column '{columns[role]}' ({role}): {jumps} step(s) of one turn "
+                             f"({period:.6g}) unwrapped (an angle logged within one turn)")
+    if turn and "reference" in data:
+        gap = float(np.median(data["reference"] - data["output"]))
+        data["output"] = data["output"] + turn * round(gap / turn)
+    return tuple(notes)
 
 
 def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = WELCH_SEGMENT,
@@ -338,7 +369,7 @@ def _intercept(t: np.ndarray, dt: float) -> float:
 
 
 def sample_interval(path, t: np.ndarray, column: str = "time", *,
-                    rtol: float = UNIFORM_RTOL) -> tuple[float, bool]:
+                    rtol: float = UNIFORM_RTOL, resolution=None) -> tuple[float, bool]:
     """Sample interval of `t` and whether the sampling is uniform.
 
     Times are taken relative to the first (Unix-epoch stamps keep their
@@ -358,6 +389,11 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
         Name of the time column (for messages).
     rtol : float
         Relative tolerance of a uniform interval.
+    resolution : array, optional
+        Place value of the last digit each time was written with, s
+        (:attr:`hesspipe.core._csv.Table.resolution`); by default inferred from the floats,
+        which cannot see written trailing zeros (``30.01000`` reads as ``30.01``: a whole
+        interval of tolerance at 100 Hz, where a missing sample would pass).
 
     Returns
     -------
@@ -379,7 +415,9 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
                             f"not at data row {row + 1}")
     # What writing the times to text explains: half a last digit on each end, plus the
     # float64 spacing of the absolute times (epoch stamps) and of their difference.
-    res = _written_resolution(t)
+    res = _written_resolution(t) if resolution is None else np.asarray(resolution, dtype=float)
+    if res.shape != t.shape or not np.all(np.isfinite(res)):
+        res = _written_resolution(t)
     rounding = 0.5 * (res[1:] + res[:-1]) + 2.0 * np.spacing(np.abs(t[1:]) + np.abs(t[:-1]))
     # The interval over the whole record (rounded intervals are biased: with 6 digits most
     # 1/60 s steps read 0.0167, so their median is not the interval).

@@ -52,7 +52,7 @@ class ExpectedSpectrum:
         self.window_gain = _window_gain(len(run))
         # The remnant is evaluated in expectation, so the simulator's noise is never used;
         # its seed is derived all the same for reproducibility.
-        self.sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference,
+        self.sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference_forcing,
                              noise_seed=derive_seed(seed, "diagnose"))
         f = self.freq.copy()
         f[0] = f[1] * 1e-6

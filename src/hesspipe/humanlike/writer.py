@@ -31,7 +31,16 @@ Never drawn, given for a laboratory's own files (:data:`LAB`):
     the header of each column by SPEC name (missing: the SPEC name).
 ``encoding``
     ``"utf-8"``, ``"cp1252"`` or ``"utf-16"`` (its own byte-order mark).
-``time`` may also be a printf format of seconds from the start (``"%.5f"``).
+``time`` may also be a printf format of seconds from the start (``"%.5f"``), or
+``"clock"``: the time of day ``HH:MM:SS.fff`` from ``clock0`` (s after midnight; a
+record may run past midnight).
+``units_row``
+    units in a row of their own under the names (``s``, ``deg``; ``-`` for radians and
+    the stick) instead of in brackets.
+``preamble``
+    lines of metadata written above everything, not marked as comments.
+``repeat``
+    sample indices whose row the logger writes twice.
 """
 
 from __future__ import annotations
@@ -51,7 +60,8 @@ COLUMNS = ("time", "disturbance", "output", "control", "reference")
 LABEL = "synthetic data: independent human-like generator"
 PLAIN = {"time": "g17", "values": "%.6g", "newline": "\n", "bom": False,
          "columns": list(COLUMNS), "epoch0": 0.0, "sep": ",", "decimal": ".", "degrees": False,
-         "names": None, "encoding": "utf-8"}
+         "names": None, "encoding": "utf-8", "clock0": 0.0, "units_row": False, "preamble": (),
+         "repeat": ()}
 LAB = {"time": "%.5f", "values": "%.5f", "newline": "\r\n", "sep": ";", "decimal": ",", "degrees": True,
        "encoding": "cp1252", "columns": ["time", "reference", "disturbance", "output", "control"],
        "names": {"time": "Time [s]", "reference": "Target", "disturbance": "Disturbance", "output": "Yaw",
@@ -59,6 +69,14 @@ LAB = {"time": "%.5f", "values": "%.5f", "newline": "\r\n", "sep": ";", "decimal
 """A laboratory's logger (a style to give, never drawn): seconds and degrees with five
 decimals, semicolons and decimal commas, CRLF, Windows-1252, its own column names
 (``--columns reference=Target,disturbance=Disturbance,output=Yaw,control=Stick`` reads it)."""
+DAQ = {**LAB, "time": "clock", "clock0": 86400.0 - 45.0, "sep": "\t", "encoding": "utf-16",
+       "units_row": True, "repeat": (1234, 5678),
+       "names": {**LAB["names"], "time": "Time"},
+       "preamble": ("Data acquisition export", "Subject:\ts01", "Sample rate [Hz]:\t100")}
+"""Another laboratory's data-acquisition export (a style to give, never drawn): the :data:`LAB`
+columns, tab-separated with decimal commas in UTF-16, three lines of metadata above the
+header, the units in a row under it, the time of day (the record crosses midnight) and two
+frames written twice. The same ``--columns`` as :data:`LAB` read it."""
 ENCODINGS = ("utf-8", "cp1252", "utf-16")
 
 
@@ -88,7 +106,7 @@ def _style(style) -> dict:
         raise HesspipeError(f"style: expected 'plain', one of {', '.join(TIME_STYLES)} "
                             f"or a dict, got {style!r}")
     out = {**PLAIN, **dict(style)}
-    if out["time"] not in TIME_STYLES and not str(out["time"]).startswith("%"):
+    if out["time"] not in (*TIME_STYLES, "clock") and not str(out["time"]).startswith("%"):
         raise HesspipeError(f"style: field 'time': expected one of {', '.join(TIME_STYLES)} "
                             f"or a printf format, got {out['time']!r}")
     if sorted(out["columns"]) != sorted(COLUMNS):
@@ -106,6 +124,9 @@ def _times(t: np.ndarray, st: dict) -> list[str]:
     kind = st["time"]
     if kind.startswith("%"):
         return [kind % x for x in t]
+    if kind == "clock":
+        ms = np.round((st["clock0"] + t) * 1000.0).astype(np.int64) % 86_400_000
+        return [f"{m // 3_600_000:02d}:{m // 60_000 % 60:02d}:{m // 1000 % 60:02d}.{m % 1000:03d}" for m in ms]
     if kind == "g9":
         return [f"{x:.9g}" for x in t]
     if kind == "ms":
@@ -133,12 +154,19 @@ def csv_bytes(trial, style=None) -> bytes:
         cols[name] = [fmt % (scale * v) for v in getattr(trial, name)]
     if st["decimal"] != ".":
         cols = {c: [v.replace(".", st["decimal"]) for v in vals] for c, vals in cols.items()}
-    names = {c: (st["names"] or {}).get(c, c) + (" [deg]" if st["degrees"] and c != "time" else "")
+    units = {c: ("" if st["time"] == "clock" else "s") if c == "time" else ("deg" if st["degrees"] else "-")
+             for c in COLUMNS}
+    names = {c: (st["names"] or {}).get(c, c) + (" [deg]" if st["degrees"] and c != "time"
+                                                  and not st["units_row"] else "")
              for c in COLUMNS}
     nl, sep = st["newline"], st["sep"]
-    rows = [f"# {LABEL} ({trial.truth['generator']}); trial {trial.spec.name}",
+    rows = [*st["preamble"], f"# {LABEL} ({trial.truth['generator']}); trial {trial.spec.name}",
             sep.join(names[c] for c in st["columns"])]
-    rows += [sep.join(cols[c][i] for c in st["columns"]) for i in range(len(trial.time))]
+    if st["units_row"]:
+        rows.append(sep.join(units[c] for c in st["columns"]))
+    twice = set(int(i) for i in st["repeat"])
+    for i in range(len(trial.time)):
+        rows += [sep.join(cols[c][i] for c in st["columns"])] * (2 if i in twice else 1)
     text = nl.join(rows) + nl
     bom = b"\xef\xbb\xbf" if st["bom"] and st["encoding"] == "utf-8" else b""
     return bom + text.encode(st["encoding"])

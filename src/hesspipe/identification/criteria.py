@@ -197,7 +197,7 @@ class _Base:
         self.model = model
         self.base = dict(base)
         self.sim = sim if sim is not None else Simulator(plants, run.disturbance, run.dt,
-                                                         reference=run.reference)
+                                                         reference=run.reference_forcing)
         self.calls = 0
 
     def params(self, values: Mapping[str, float]) -> dict:
@@ -543,7 +543,7 @@ def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, see
     base, free, fixed, flds, gain = _resolve(model, free, fixed, k, fields, plants)
     if frf is None:
         frf = estimate_frf(run, plants, seed=seed)
-    sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference, noise_seed=seed)
+    sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference_forcing, noise_seed=seed)
     obj = OBJECTIVES[criterion](run, plants, model, base, frf, sim=sim)
     if free:
         start = smart_start(obj, base, frf)

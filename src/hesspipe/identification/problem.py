@@ -59,7 +59,7 @@ class SpectralObjective:
         self.band = (float(band[0]), float(band[1]))
         self.psd_method = psd_method
         self.fs = run.fs
-        self.sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference,
+        self.sim = Simulator(plants, run.disturbance, run.dt, reference=run.reference_forcing,
                              noise_seed=noise_seed)
         self.freq_hz, self.measured = psd(run.control, run.fs, method=psd_method)
         self.mask = band_mask(self.freq_hz, self.band)
