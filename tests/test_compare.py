@@ -149,6 +149,24 @@ def test_list_runs_errors(tmp_path):
         list_runs(tmp_path / "nope")
 
 
+def test_a_folder_of_text_exports_is_read_and_beside_csv_runs_they_are_not(tmp_path):
+    for name in ("s01_r1.txt", "s01_r2.dat", "README.md"):
+        (tmp_path / name).write_text("time,disturbance,output,control\n")
+    assert [p.name for p in list_runs(tmp_path)] == ["s01_r1.txt", "s01_r2.dat"]
+    (tmp_path / "s02_r1.csv").write_text("time,disturbance,output,control\n")
+    assert [p.name for p in list_runs(tmp_path)] == ["s02_r1.csv"]
+
+
+def test_a_record_copied_into_the_folder_is_refused(tmp_path):
+    # Two copies of one record are not two runs: their tests would count the same evidence
+    # twice (Fisher's rule over a pilot's runs).
+    folder = _write_runs(tmp_path / "runs", n=2)
+    assert len(compare_pilots(folder, paper_plants(), job=fake_job).pilots) == 2
+    shutil.copy(folder / "p1.csv", folder / "p1_copy.csv")
+    with pytest.raises(HesspipeError, match=r"p1_copy.csv: the same record as .*p1.csv"):
+        compare_pilots(folder, paper_plants(), job=fake_job)
+
+
 def test_cli_bad_file_exit_status_and_message(tmp_path, capsys, monkeypatch):
     folder = _write_runs(tmp_path / "runs", n=2)
     (folder / "bad.csv").write_text("time,disturbance,output,control\n0,1,2,x\n")

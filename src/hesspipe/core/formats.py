@@ -38,6 +38,8 @@ RUN_COLUMNS = ("time", "disturbance", "output", "control")
 #: File endings of measured runs when a folder is a set of pilots (tab-separated files
 #: are the same table; :func:`read_run` reads either).
 RUN_SUFFIXES = (".csv", ".tsv")
+#: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
+TEXT_SUFFIXES = (".txt", ".dat")
 OPTIONAL_COLUMNS = ("reference",)
 
 #: "Uniform" sampling (SPEC.md "Time"): every interval within this fraction of the

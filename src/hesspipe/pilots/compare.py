@@ -33,11 +33,12 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..core.errors import HesspipeError
-from ..core.formats import RUN_SUFFIXES, Plants, Run, _parse_columns, plants_coefficients, read_run
+from ..core.formats import RUN_SUFFIXES, TEXT_SUFFIXES, Plants, Run, _parse_columns, plants_coefficients, read_run
 from ..core.seeds import derive_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import benchmark as mcruer_benchmark
 from ..identification.fit import identify
+from ..identification.frf_average import check_repeats
 from ..identification.problem import SpectralObjective
 from ..pilot.crossover import gain_scale, loop_crossover, tracking_crossover
 from ..pilot.hess import PilotModel, model_from_name
@@ -303,9 +304,10 @@ def _guarded(job, run: Run):
 # -- many pilots ------------------------------------------------------------------------------
 
 def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
-    """The run files of a folder (``*.csv`` and ``*.tsv``, sorted) or of an explicit list.
+    """The run files of a folder (``*.csv`` and ``*.tsv``, sorted; in a folder without
+    them ``*.txt`` and ``*.dat``) or of an explicit list.
 
-    ``*.truth.json`` and other non-CSV files beside the runs are ignored.
+    ``*.truth.json`` and other files beside the runs are ignored.
 
     Parameters
     ----------
@@ -317,8 +319,11 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
         path = Path(paths_or_dir)
         if path.is_dir():
             files = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in RUN_SUFFIXES)
+            # Exporters also write .txt and .dat; beside CSV runs such a file is a README or a
+            # log, in a folder of them they are the runs.
+            files = files or sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in TEXT_SUFFIXES)
             if not files:
-                raise HesspipeError(f"{path}: no run files (*.csv, *.tsv) in this folder")
+                raise HesspipeError(f"{path}: no run files (*.csv, *.tsv; else *.txt, *.dat) in this folder")
             return files
         if not path.exists():
             raise HesspipeError(f"{path}: not found; expected a folder of run CSV files or a CSV file")
@@ -411,6 +416,7 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     paths = list_runs(paths_or_dir)
     groups = pilot_groups([p.stem for p in paths], pilot_id, {p.stem: str(p) for p in paths})  # before any work
     runs, failures = read_runs(paths, columns=columns, resample=resample)
+    check_repeats([], runs)   # a record copied into the folder would count its evidence twice
     if job is None:
         job = functools.partial(compare_run, plants=plants, settings=settings)
     results = run_batch(functools.partial(_guarded, job), runs, workers=workers, scheduler=scheduler,
