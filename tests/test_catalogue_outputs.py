@@ -20,6 +20,7 @@ is enough.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import os
@@ -43,7 +44,7 @@ import pytest
 import hesspipe.viz  # noqa: F401  - matplotlib configured before any fork (no cache warning in a child)
 from hesspipe.cli import COMMANDS, build_parser, main
 from hesspipe.core.errors import HesspipeError
-from hesspipe.core.formats import Run, write_plants, write_run
+from hesspipe.core.formats import Run, read_run, write_plants, write_run
 from hesspipe.core.io import MARKER, STAGING_PREFIX, TMP_PREFIX
 from pilot_data import plants as paper_plants
 from proc_helpers import drop_write_override, sigterm_when_ready
@@ -561,8 +562,10 @@ def test_scheduler_that_is_not_dask_times_out(monkeypatch):
 def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
     runs = tmp_path / "runs"
     runs.mkdir()
+    base = read_run(inputs / "runs" / "p0.csv")
     for i in range(4):  # real identifications: several seconds each, so the pool is busy
-        shutil.copy(inputs / "runs" / "p0.csv", runs / f"p{i}.csv")
+        # Four records, not four copies of one (a copied record is refused).
+        write_run(runs / f"p{i}.csv", dataclasses.replace(base, control=base.control * (1 + 0.01 * i)))
     err_file = tmp_path / "stderr.txt"
     code, orphans = sigterm_when_ready(
         [sys.executable, "-m", "hesspipe.cli", "pilots", str(runs), "--plants",

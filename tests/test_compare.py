@@ -104,7 +104,7 @@ def test_unreachable_scheduler_is_a_one_line_error():
 def test_bad_files_are_reported_and_the_good_ones_processed(tmp_path):
     folder = _write_runs(tmp_path / "runs", n=3)
     (folder / "broken.csv").write_text("time,disturbance,output\n0,1,2\n0.02,1,2\n")
-    shutil.copy(folder / "p0.csv", folder / "p_boom.csv")
+    shutil.copy(_write_runs(tmp_path / "more", n=4) / "p3.csv", folder / "p_boom.csv")
     (folder / "p0.truth.json").write_text("{}")  # beside the runs, ignored
     result = compare_pilots(folder, paper_plants(), workers=1, job=fake_job)
     assert [p.id for p in result.pilots] == ["p0", "p1", "p2"]
@@ -119,8 +119,8 @@ def test_bad_files_are_reported_and_the_good_ones_processed(tmp_path):
 
 def test_json_keys_improvement_and_synthetic_flags(tmp_path):
     folder = _write_runs(tmp_path / "runs", n=2)
-    _write_runs(tmp_path / "measured", n=1, synthetic=False)
-    shutil.copy(tmp_path / "measured" / "p0.csv", folder / "real.csv")
+    _write_runs(tmp_path / "measured", n=3, synthetic=False)
+    shutil.copy(tmp_path / "measured" / "p2.csv", folder / "real.csv")
     result = compare_pilots(folder, paper_plants(), workers=1, job=fake_job)
     d = json.loads(to_json(result.to_dict()))
     assert d["synthetic"] is True and d["synthetic_pilots"] == 2 and d["measured_pilots"] == 1
