@@ -10,9 +10,7 @@ the better, whichever a 1e-7 change in the record favoured.
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import json
-from pathlib import Path
 
 import numpy as np
 
@@ -21,14 +19,11 @@ from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import simulate_trial
 from hesspipe.humanlike.writer import plants_dict
 from hesspipe.identification.motion_test import motion_test
-
-BENCH = Path(__file__).resolve().parent.parent / "benchmarks" / "bench_lab_experiment.py"
+from test_benchmarks import _load
 
 
 def test_f_does_not_hang_on_a_tiny_change_in_the_record(tmp_path):
-    spec_ = importlib.util.spec_from_file_location("bench_lab_experiment", BENCH)
-    lab = importlib.util.module_from_spec(spec_)
-    spec_.loader.exec_module(lab)
+    lab = _load("bench_lab_experiment")
     spec = lab.draw_person("1/s", ("motion_feedback",), derive_seed(7, "SI", "motion", "1", "0"),
                            **dict(lab.TRIAL, name="s02_motion_r1"))
     path = tmp_path / "s02_motion_r1.csv"
