@@ -167,7 +167,23 @@ def test_a_separator_ending_every_data_line_shifts_nothing(tmp_path):
 def test_more_values_than_names_is_refused(tmp_path):
     path = tmp_path / "extra.csv"
     path.write_text(_text(PLAIN).replace("\n", ",7\n").replace("reference,7\n", "reference\n", 1))
-    with pytest.raises(HesspipeError, match="extra.csv: data rows hold more values than the header has names"):
+    with pytest.raises(HesspipeError, match="extra.csv: data row 1 holds 6 values where the header names 5; "
+                                            "expected one value per named column"):
+        read_run(path)
+
+
+@pytest.mark.parametrize("sep", [",", ";", "\t"])
+def test_one_row_run_together_is_named_by_its_data_row(tmp_path, sep):
+    # Two frames written on one line (a logger's lost newline): pandas' own words were
+    # "not a readable CSV (Error tokenizing data. C error: Expected 5 fields in line 4, saw 9)",
+    # counting lines of its own, comment lines not among them.
+    lines = _text(PLAIN).splitlines()
+    body = [i for i, ln in enumerate(lines) if ln and not ln.startswith("#")]
+    third = body[3]                                    # header, then data rows 1, 2, 3
+    lines[third] = lines[third] + "," + lines.pop(third + 1)
+    path = tmp_path / "joined.csv"
+    path.write_text("\n".join(ln.replace(",", sep) for ln in lines) + "\n")
+    with pytest.raises(HesspipeError, match="joined.csv: data row 3 holds 10 values where the header names 5;"):
         read_run(path)
 
 

@@ -13,6 +13,7 @@ converts the units it knows to SPEC.md's (:data:`UNIT_FACTORS`), saying what it 
 
 from __future__ import annotations
 
+import csv as _csvmod
 import io as _io
 import math
 import re
@@ -126,8 +127,9 @@ def decode(path: str | Path, what: str) -> tuple[str, str]:
 def _dialect(text: str) -> tuple[str, str]:
     """(delimiter, decimal) of a table: the separator among comma, tab and semicolon that
     splits the header into the most fields and the first data lines into as many (a
-    trailing separator allowed); whitespace when none splits it. A decimal comma is read
-    only with tabs or semicolons, when the data show one."""
+    trailing separator allowed; one line in ten may not, so that a row run together is
+    refused by its row rather than the file misread); whitespace when none splits it. A
+    decimal comma is read only with tabs or semicolons, when the data show one."""
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         return ",", "."
@@ -135,7 +137,8 @@ def _dialect(text: str) -> tuple[str, str]:
     best, width = None, 1
     for sep in (",", "\t", ";"):
         n = len(header.split(sep))
-        fits = all(len(ln.split(sep)) in (n, n + 1) for ln in body)
+        misfits = sum(len(ln.split(sep)) not in (n, n + 1) for ln in body)
+        fits = misfits <= max(1, len(body) // 10) and (misfits < len(body) or not body)
         if n > width and (fits or sep == ","):
             best, width = sep, n
     if best is None:
@@ -194,6 +197,25 @@ def _layout(lines: list[str]) -> tuple[int, bool]:
         units = bool(words) and not any(_number(c) for c in cells if c) and \
             any(w in _UNIT_WORDS for w in words)
     return header, units
+
+
+def _long_row(text: str, sep: str) -> tuple[int, int, int] | None:
+    """(data row, values, names) of the first data row holding more values than the header
+    names (counted as the reader counts them: quotes kept together, a separator ending a
+    line not a value), or None."""
+    rows = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(rows) < 2:
+        return None
+
+    def count(line: str) -> int:
+        cells = line.split() if sep == r"\s+" else next(_csvmod.reader([line], delimiter=sep))
+        while cells and not cells[-1].strip():
+            cells.pop()
+        return len(cells)
+
+    names = count(rows[0])
+    return next(((i, n, names) for i, n in ((i, count(ln)) for i, ln in enumerate(rows[1:], 1))
+                 if n > names), None)
 
 
 def _with_units(header: str, units_row: str, sep: str) -> str:
@@ -287,10 +309,15 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
             df = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep,
                              decimal=decimal, index_col=False,
                              engine="python" if sep == r"\s+" else "c")
-    except pd.errors.ParserWarning:
-        raise HesspipeError(f"{path}: data rows hold more values than the header has names; "
-                            "expected one value per named column") from None
-    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+    except (pd.errors.ParserWarning, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        long = _long_row(text, sep)
+        if long is not None:
+            row, values, names_ = long
+            raise HesspipeError(f"{path}: data row {row} holds {values} values where the header "
+                                f"names {names_}; expected one value per named column") from None
+        if isinstance(exc, pd.errors.ParserWarning):
+            raise HesspipeError(f"{path}: data rows hold more values than the header has names; "
+                                "expected one value per named column") from None
         raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip() for c in df.columns]
     headers = list(df.columns)
