@@ -24,7 +24,11 @@ counts): how many runs of each condition are named ``motion_feedback``, what els
 and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
-        [--style lab|daq]
+        [--style lab|daq] [--threshold 0.2]
+
+``--threshold S`` gives every person an indifference threshold on the perceived error, a dead
+zone of S times the error's RMS (the generator's ``threshold``; McRuer and Jex's nonlinear
+remnant source).
 """
 
 from __future__ import annotations
@@ -75,15 +79,16 @@ def draw_person(plant: str, effects, seed: int, **kw):
 
 
 def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, seed: int,
-                    style=LAB) -> dict:
-    """Write one condition's runs; return person -> the generator's pilot (its truth)."""
+                    style=LAB, **options) -> dict:
+    """Write one condition's runs; return person -> the generator's pilot (its truth).
+    `options` are further trial options (e.g. ``threshold``) for every run."""
     folder.mkdir(parents=True, exist_ok=True)
     effects = ("motion_feedback",) if cond == "motion" else ()
     truth, spec = {}, None
     for s in range(persons):
         person = None
         for r in range(runs):
-            kw = dict(TRIAL, name=f"s{s + 1:02d}_{cond}_r{r + 1}")
+            kw = dict(TRIAL, name=f"s{s + 1:02d}_{cond}_r{r + 1}", **options)
             seed_r = derive_seed(seed, tag, cond, str(s), str(r))
             if person is None:
                 spec = draw_person(PLANTS[tag], effects, seed_r, **kw)
@@ -160,6 +165,8 @@ def main(argv=None) -> int:
     ap.add_argument("--style", choices=("lab", "daq"), default="lab",
                     help="the files' style: lab (LAB: semicolons, decimal commas) or daq (DAQ: metadata above "
                          "the header, a units row, clock times across midnight, frames written twice, UTF-16)")
+    ap.add_argument("--threshold", type=float, default=0.0,
+                    help="each person's indifference threshold, share of the error's RMS (0: none)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, files as a lab writes them")
     with tempfile.TemporaryDirectory() as tmp:
@@ -169,7 +176,8 @@ def main(argv=None) -> int:
                 folder = root / f"{tag}_{cond}"
                 t0 = time.perf_counter()
                 truth = write_condition(folder, tag, cond, args.persons, args.runs, args.seed,
-                                        DAQ if args.style == "daq" else LAB)
+                                        DAQ if args.style == "daq" else LAB,
+                                        **({"threshold": args.threshold} if args.threshold else {}))
                 print(f"\n== {tag} ({PLANTS[tag]}), {cond}: {args.persons} persons x {args.runs} runs written "
                       f"in {time.perf_counter() - t0:.0f} s")
                 out_json = root / f"{tag}_{cond}.json"

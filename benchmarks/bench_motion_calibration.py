@@ -17,11 +17,13 @@ Usage::
 
     python benchmarks/bench_motion_calibration.py [--seeds 10] [--seed-start 0]
         [--cases paper:rate:disturbance,...] [--effects none,motion_feedback] [--tau-m 0.15] [--pilot precision]
-        [--gain-drift 0.15] [--layout sparse|sparse-70s]
+        [--gain-drift 0.15] [--layout sparse|sparse-70s] [--threshold 0.2]
 
 ``--gain-drift CV`` lets the pilot's visual gain wander within each run (the generator's
 ``gain_drift``, correlation time 10 s). ``--layout sparse`` draws the forcing on a sparser
 two-input layout (81.92 s at 100 Hz; :data:`LAYOUTS`) instead of the generator's default.
+``--threshold S`` gives the pilot an indifference threshold, a dead zone on the perceived
+error whose half-width is S times the error's RMS (the generator's ``threshold``).
 """
 
 from __future__ import annotations
@@ -56,7 +58,7 @@ line numbers at the default's length and rate (the spacing alone)."""
 
 
 def p_value(folder, plant, output, task, effect, seed, tau_m=0.0, pilot="hess", gain_drift=0.0,
-            layout="adjacent"):
+            layout="adjacent", threshold=0.0):
     """The motion test's p-value on one generated run, or None (not generated / no lines)."""
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
@@ -65,7 +67,7 @@ def p_value(folder, plant, output, task, effect, seed, tau_m=0.0, pilot="hess", 
     try:
         spec = draw_trial(plant, s, task=task, pilot=pilot, effects=effects, **LAYOUTS[layout],
                           output=output, name=name, tau_m=tau_m,
-                          gain_drift=gain_drift, **kw)
+                          gain_drift=gain_drift, threshold=threshold, **kw)
     except HesspipeError:
         return None
     try:
@@ -94,6 +96,8 @@ def main(argv=None) -> int:
     ap.add_argument("--layout", choices=tuple(LAYOUTS), default="adjacent",
                     help="forcing layout (sparse: 81.92 s at 100 Hz, lines 1-23 bins apart; "
                          "sparse-70s: the same line numbers at 70 s and 50 Hz)")
+    ap.add_argument("--threshold", type=float, default=0.0,
+                    help="pilot's indifference threshold, share of the error's RMS (0: none)")
     args = ap.parse_args(argv)
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike.")
     total = {}
@@ -103,7 +107,7 @@ def main(argv=None) -> int:
             plant, output, task = case.split(":")
             for effect in args.effects.split(","):
                 ps = [p for p in (p_value(tmp, plant, output, task, effect, seed, args.tau_m, args.pilot,
-                                                  args.gain_drift, args.layout)
+                                                  args.gain_drift, args.layout, args.threshold)
                                   for seed in range(args.seed_start, args.seed_start + args.seeds))
                       if p is not None]
                 total.setdefault(effect, []).extend(ps)

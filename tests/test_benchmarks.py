@@ -87,6 +87,20 @@ def test_lab_experiment_files_read_back_as_the_trial(tmp_path):
     assert np.allclose(m.variation(cmp), (cv, cv), rtol=1e-12, atol=0)
 
 
+def test_lab_experiment_gives_its_persons_the_threshold_asked_for(tmp_path):
+    from hesspipe.core.formats import read_run
+
+    m = _load("bench_lab_experiment")
+    runs = {}
+    for thr in (0.0, 0.3):
+        folder = tmp_path / f"t{thr}"
+        truth = m.write_condition(folder, "SI", "static", 1, 1, 5, **({"threshold": thr} if thr else {}))
+        runs[thr] = read_run(folder / "s01_static_r1.csv", columns=m.COLUMNS)
+    assert list(truth) == ["s01"]
+    np.testing.assert_array_equal(runs[0.0].reference, runs[0.3].reference)   # the same person and forcing
+    assert np.std(runs[0.3].control) < 0.95 * np.std(runs[0.0].control)      # the dead zone's lower gain
+
+
 def test_channels_benchmark_runs_against_the_truth(capsys, monkeypatch):
     # bench_channels reads the lab stand-in's files back and compares the channels with the
     # generator's own paths; one person, one run, the single integrator.

@@ -410,3 +410,39 @@ def test_pursuit_feedforward():
                       (dict(feedforward=0.5, task="disturbance"), "needs a precision pilot and a target")]:
         with pytest.raises(HesspipeError, match=what):
             draw_trial("1/s", 5, **{**kw, **bad})
+
+
+def test_indifference_threshold():
+    # A pilot without equalisation on 1/s and no remnant, as test_gain_drift: what the dead
+    # zone does is all there is off the lines.
+    pilot = {"structure": "precision", "tau": 0.2, "wn": 12.0, "zn": 0.3, "TL": 0.0,
+             "TI": 0.0, "Kp": 3.0}
+    kw = dict(task="disturbance", pilot_params=pilot, remnant_share=0.0, T_m=45.0, run_in=10.0)
+    steady = simulate_trial(draw_trial("1/s", 2, **kw))
+    assert "threshold" not in steady.truth and "threshold" not in draw_trial("1/s", 2, **kw).options
+    # A vanishing dead zone is the linear loop, through the step-by-step path.
+    tiny = simulate_trial(draw_trial("1/s", 2, threshold=1e-9, **kw))
+    np.testing.assert_allclose(tiny.control, steady.control, atol=1e-6 * np.std(steady.control))
+    spec = draw_trial("1/s", 2, threshold=0.3, **kw)
+    tr = simulate_trial(spec)
+    th = tr.truth["threshold"]
+    sigma = np.std(steady.reference - steady.output)
+    assert th["half_width"] == pytest.approx(0.3 * sigma, rel=1e-9)
+    assert th["gaussian_gain"] == pytest.approx(0.7642, abs=1e-4)
+    assert np.array_equal(tr.control, simulate_trial(spec).control)     # deterministic
+    k = spec.disturbance.k
+    E = np.fft.rfft(tr.reference - tr.output)
+    U = np.fft.rfft(tr.control)
+    U0, E0 = np.fft.rfft(steady.control), np.fft.rfft(steady.reference - steady.output)
+    # At the lines the pilot's gain falls about as the random-input describing function of
+    # a dead zone says (the multisine error is near-Gaussian); off them its distortion.
+    ratio = np.median(np.abs(U[k] / E[k]) / np.abs(U0[k] / E0[k]))
+    assert 0.65 < ratio < 0.9, ratio
+    off = np.ones(U.size, dtype=bool)
+    off[k] = off[0] = False
+    assert np.sum(np.abs(U[off]) ** 2) / np.sum(np.abs(U[1:]) ** 2) > 0.01
+    assert np.sum(np.abs(U0[off]) ** 2) / np.sum(np.abs(U0[1:]) ** 2) < 1e-4
+    assert retest(spec, 7).options["threshold"] == 0.3
+    for bad in (1.0, -0.1, True):
+        with pytest.raises(HesspipeError, match="^threshold: expected a share of the error's RMS"):
+            draw_trial("1/s", 2, threshold=bad, **kw)

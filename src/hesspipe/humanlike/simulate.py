@@ -52,6 +52,9 @@ class Wiring:
     gain_drift : bool
         The visual path's gain is multiplied by a per-step factor (``kv``, the pilot's
         within-run gain variation); off, the stepper is the time-invariant one.
+    threshold : float or None
+        Indifference threshold on the perceived error, output units: a dead zone of this
+        half-width before the visual path (errors inside it draw no response); None: none.
 
     A precision pilot on a pursuit display has block ``ffnm`` too: the feedforward path on
     the target, delayed like the error.
@@ -68,6 +71,7 @@ class Wiring:
     rate_limit: float | None = None
     disturbance: str = "input"
     gain_drift: bool = False
+    threshold: float | None = None
 
 
 def delay_steps(tau: float, h: float, holds: int) -> int:
@@ -146,6 +150,9 @@ def _source(wr: Wiring) -> str:
     if feedforward:
         body += ["rd = rbuf[bi]", "rbuf[bi] = rk"]
     body += ["bi += 1", f"if bi == {wr.delay_steps}: bi = 0"]
+    if wr.threshold is not None:
+        t = _lit(wr.threshold)
+        body += [f"if ed > {t}: ed = ed - {t}", f"elif ed < -{t}: ed = ed + {t}", "else: ed = 0.0"]
     if wr.gain_drift:
         body.append("ed = kv[k]*ed")
     updates = _update("rem", b["rem"], ["wk"])

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.signal import lfilter
+from scipy.special import erfc
 
 from ..core.errors import HesspipeError
 from ..core.seeds import derive_seed
@@ -36,7 +37,8 @@ EFFECT_REMNANT = (0.40, 0.60)
 OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=10,
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
                remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
-               pilot_params=None, gain_drift=0.0, drift_tc=10.0, line_bins=None, feedforward=0.0)
+               pilot_params=None, gain_drift=0.0, drift_tc=10.0, line_bins=None, feedforward=0.0,
+               threshold=0.0)
 
 
 @dataclass(frozen=True)
@@ -223,7 +225,12 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         takes the first set), ``feedforward`` (0: a compensatory display; else a pursuit
         display's feedforward gain on the target, a share of the controlled element's
         inverse, :func:`~.pilots.feedforward_nm_tf`; precision pilots with a target only;
-        the truth's describing function and crossover leave it out).
+        the truth's describing function and crossover leave it out), ``threshold`` (0: none;
+        else an indifference threshold on the perceived error, a dead zone whose half-width
+        is this share, in [0, 1), of the displayed error's RMS in the same loop without it:
+        McRuer and Jex's indifference threshold, one of the remnant's nonlinear sources; the
+        truth's describing function is the linear pilot's, and the truth gives the dead
+        zone's Gaussian-input gain beside it).
 
     Raises
     ------
@@ -356,6 +363,11 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
             raise HesspipeError("feedforward: a pursuit path needs a precision pilot and a target "
                                 "(task 'tracking' or 'both')")
         options["feedforward"] = float(kff)
+    thr = opts["threshold"]
+    if thr:   # only when asked, as the feedforward
+        if isinstance(thr, bool) or not isinstance(thr, (int, float)) or not 0.0 < thr < 1.0:
+            raise HesspipeError(f"threshold: expected a share of the error's RMS in [0, 1), got {thr!r}")
+        options["threshold"] = float(thr)
     options.update(w_corner=corner, d_rms=dist.rms() if dist is not None else d_rms,
                    pilot_sign=sign, plant_order=order, gain_drift=drift, drift_tc=drift_tc,
                    drift_seed=int(derive_seed(seed, "gain-drift")))
@@ -366,7 +378,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
                      remnant=remnant, actuator=actuator, motion_tf=motion_tf, style=style)
 
 
-def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
+def _wiring(spec: TrialSpec, h: float, rate_limit: float | None,
+            threshold: float | None = None) -> Wiring:
     p = spec.pilot
     rem = ss_from_tf([1.0], [spec.remnant["Tn"], 1.0])
     blocks = {"rem": zoh(rem, h), "plant": zoh(spec.plant.true, h)}
@@ -396,7 +409,7 @@ def _wiring(spec: TrialSpec, h: float, rate_limit: float | None) -> Wiring:
                   motion_delay_steps=int(round(p.get("tau_m", 0.0) / h)),
                   remnant_at=spec.remnant["at"], rate_limit=rate_limit,
                   disturbance=spec.plant.disturbance,
-                  gain_drift=spec.options.get("gain_drift", 0.0) > 0.0)
+                  gain_drift=spec.options.get("gain_drift", 0.0) > 0.0, threshold=threshold)
 
 
 def gain_factor(spec: TrialSpec, t: np.ndarray) -> np.ndarray:
@@ -507,12 +520,22 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
         y, u = y_f + g * y_n, u_f + g * u_n      # the loop is linear: superpose
     else:
         y, u = sim(fn, r, d, w, g)
+    threshold = None
+    if o.get("threshold"):
+        # The half-width is set by the error of the loop without the dead zone; the remnant's
+        # gain is kept, so the dead zone's own share of the control shows in the truth.
+        sigma_e = float(np.std((r - y)[idx]))
+        threshold = {"share_of_error_rms": o["threshold"], "half_width": o["threshold"] * sigma_e,
+                     "error_rms_without": sigma_e,
+                     "gaussian_gain": float(erfc(o["threshold"] / np.sqrt(2.0)))}
+        fn = compile_loop(_wiring(spec, h, rate, threshold["half_width"]))
+        y, u = sim(fn, r, d, w, g)
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(u))) \
             or np.max(np.abs(y[idx])) > 1e6 * (np.max(np.abs(y_f[idx])) + 1e-12) + 1e6:
         raise HesspipeError(f"trial {spec.name}: the simulated loop diverged")
     sim_info = {"fine_step_s": h, "gain_factor": factor[idx],
                 "remnant_gain": g, "rate_limit_per_s": rate,
-                "u_forcing": u_f[idx], "u": u[idx], "h": h, "ratio": ratio,
+                "u_forcing": u_f[idx], "u": u[idx], "h": h, "ratio": ratio, "threshold": threshold,
                 "rate_limited_fraction": (None if rate is None else float(
                     np.mean(np.abs(np.diff(sim.actuator[idx[0]:])) >= rate * h * (1 - 1e-6))))}
     truth = build_truth(spec, sim_info)

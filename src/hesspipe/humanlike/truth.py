@@ -196,6 +196,7 @@ def build_truth(spec, sim: dict) -> dict:
                        "realised_sd": float(np.std(sim["gain_factor"])),
                        "realised_range": [float(np.min(sim["gain_factor"])),
                                           float(np.max(sim["gain_factor"]))]},
+        **({"threshold": sim["threshold"]} if sim.get("threshold") else {}),
         "seeds": {"base": spec.seed, "remnant_noise": spec.remnant["noise_seed"],
                   "gain_drift": spec.options.get("drift_seed")},
         "style": spec.style,
