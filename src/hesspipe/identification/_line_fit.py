@@ -39,14 +39,15 @@ def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None
 
 
 def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w,
-         tie: Callable[[dict], None] | None = None):
+         tie: Callable[[dict], None] | None = None, keep: int | None = None):
     """Bounded least squares of the weighted complex residual; best of `starts`.
 
     With `groups` (the run of each line, repeated runs pooled), the second and later runs'
     predictions are each scaled by their own gain, solved in closed form at every step
     (variable projection): a human's gains move by 5-15 % between runs. `yc_inv` (the
     controlled element's inverse at the lines, or None) adds a pursuit display's feedforward.
-    `tie` sets parameters from the others at every step (a profile along Km/Ke). `w`: the
+    `tie` sets parameters from the others at every step (a profile along Km/Ke). `keep`:
+    screen the starts, only that many best go on to convergence (``best_least_squares``). `w`: the
     lines' weights, or a function of the model's response to -y that gives them
     (:func:`sml_weights`; a later run's own gain scales its response too).
     """
@@ -78,7 +79,7 @@ def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U
         return np.concatenate([r.real, r.imag])
 
     rss, sol = best_least_squares(resid, starts, lo, hi, "motion test: no fit of the describing "
-                                  "function converged")
+                                  "function converged", keep=keep)
     p = dict(base)
     p.update(zip(free, sol.x))
     if tie is not None:

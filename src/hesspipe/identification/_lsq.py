@@ -10,8 +10,12 @@ from scipy import optimize
 
 from ..core.errors import HesspipeError
 
+SCREEN_NFEV = 30
+"""Residual evaluations (least squares' max_nfev) each start gets before a screened search keeps
+only its best starts."""
 
-def best_least_squares(resid, starts, lo, hi, failure: str):
+
+def best_least_squares(resid, starts, lo, hi, failure: str, *, keep: int | None = None):
     """(rss, solution) of bounded least squares of `resid` from the best of `starts`.
 
     Parameters
@@ -24,25 +28,41 @@ def best_least_squares(resid, starts, lo, hi, failure: str):
         Bounds.
     failure : str
         The error's message when no start converges.
+    keep : int, optional
+        Screen the starts: each is run for :data:`SCREEN_NFEV` evaluations, and only the
+        `keep` best go on to convergence, from where they stopped. None: every start to
+        convergence.
 
     Raises
     ------
     HesspipeError
         With `failure` when no start converges.
     """
+    starts = [np.clip(np.asarray(x0, dtype=float), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+              for x0 in starts]
+    if keep is not None and len(starts) > keep:
+        screened = sorted((r for r in (_solve(resid, x0, lo, hi, SCREEN_NFEV) for x0 in starts)
+                           if r is not None), key=lambda r: r[0])
+        # A start that converged within the screen is final; the others go on from there.
+        starts = [np.clip(sol.x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+                  for _, sol in screened[:keep]]
     best = None
     for x0 in starts:
-        x0 = np.clip(np.asarray(x0, dtype=float), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-        try:
-            sol = optimize.least_squares(resid, x0, bounds=(lo, hi), x_scale="jac", max_nfev=400)
-        except (ValueError, FloatingPointError):
-            continue
-        rss = float(np.sum(sol.fun ** 2))
-        if np.isfinite(rss) and (best is None or rss < best[0]):
-            best = (rss, sol)
+        r = _solve(resid, x0, lo, hi, 400)
+        if r is not None and (best is None or r[0] < best[0]):
+            best = r
     if best is None:
         raise HesspipeError(failure)
     return best
+
+
+def _solve(resid, x0, lo, hi, max_nfev: int):
+    try:
+        sol = optimize.least_squares(resid, x0, bounds=(lo, hi), x_scale="jac", max_nfev=max_nfev)
+    except (ValueError, FloatingPointError):
+        return None
+    rss = float(np.sum(sol.fun ** 2))
+    return (rss, sol) if np.isfinite(rss) else None
 
 
 def held_covariance(sol, rss: float, dof: int) -> np.ndarray:

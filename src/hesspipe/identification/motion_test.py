@@ -116,6 +116,11 @@ the visual delay; SPEC.md "Describing functions"). At 0.4 s the delayed path abs
 error of JSBSim-flown baselines: motion named on 2 of 16 static pilots, both with the delay
 on its bound (0 of 16 at 0.25 s; benchmarks/bench_fly_pilot.py, two-input forcing)."""
 
+EXPANDED_KEEP = 3
+"""The vestibular alternatives' searches start from 8-16 points (two origins, four Km, with
+the delay two delays); each runs a few iterations and the best this many go on to
+convergence (``_lsq.best_least_squares``'s screen)."""
+
 FEEDFORWARD = {"Kff": (2.0, 0.0, 20.0), "T_ff": (0.15, 0.05, 0.5)}
 """A pursuit display's feedforward nuisance, name: (start, lower, upper): the path
 ``Kff Yc^-1 e^(-tau0 s) / (1 + T_ff s)^2`` from the target through the neuromuscular system
@@ -280,7 +285,9 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
         # p = 0.27 from there, 17.8 and p ~ 3e-11 with the given start).
         starts_e = [[c[n_] for n_ in core] + [km] + tm for c in (p_o, base)
                     for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"])) for tm in delays]
-        rss_e, p_e, _ = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, ld.w)
+        # Screened: 8-16 starts each to convergence were most of a diagnosis's time (a
+        # precision-pilot run: 48 of its 107 searches, 3.9 of 6.1 s).
+        rss_e, p_e, _ = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, ld.w, keep=EXPANDED_KEEP)
         # Exchange of optima: the original searched again from the expanded optimum's core
         # parameters, so that LR measures what Km adds, not a better local optimum the
         # expanded search happened to find for the shared parameters.

@@ -1,0 +1,52 @@
+"""The describing-function fits' shared multistart (`hesspipe.identification._lsq`)."""
+
+import numpy as np
+import pytest
+
+from hesspipe.core.errors import HesspipeError
+from hesspipe.identification._lsq import SCREEN_NFEV, best_least_squares
+
+
+def _counted(resid):
+    calls = []
+
+    def f(x):
+        calls.append(1)
+        return resid(x)
+    return f, calls
+
+
+def _wavy(x):
+    # Local minima about every 2 in each coordinate; the global one near (3, -1).
+    return np.array([np.sin(3 * x[0]) + 0.3 * (x[0] - 3.0), np.sin(3 * x[1]) + 0.3 * (x[1] + 1.0),
+                     0.1 * (x[0] - x[1] - 4.0)])
+
+
+def test_screened_search_finds_what_every_start_finds_with_fewer_evaluations():
+    lo, hi = np.array([-6.0, -6.0]), np.array([6.0, 6.0])
+    starts = [[a, b] for a in np.linspace(-5, 5, 5) for b in np.linspace(-5, 5, 5)]
+    full, n_full = _counted(_wavy)
+    rss_f, sol_f = best_least_squares(full, starts, lo, hi, "no fit")
+    screened, n_screened = _counted(_wavy)
+    rss_s, sol_s = best_least_squares(screened, starts, lo, hi, "no fit", keep=3)
+    assert rss_s == pytest.approx(rss_f, rel=1e-9, abs=1e-12)
+    np.testing.assert_allclose(sol_s.x, sol_f.x, atol=1e-6)
+    assert len(n_screened) < len(n_full)
+    # Every start had its screen, no more than its share, before the three went on.
+    assert len(n_screened) >= len(starts) * 3
+
+
+def test_screen_keeps_every_start_when_it_has_few():
+    starts = [[0.0, 0.0], [3.0, -1.0]]
+    lo, hi = np.array([-6.0, -6.0]), np.array([6.0, 6.0])
+    a = best_least_squares(_wavy, starts, lo, hi, "no fit", keep=3)
+    b = best_least_squares(_wavy, starts, lo, hi, "no fit")
+    assert a[0] == b[0] and np.array_equal(a[1].x, b[1].x)
+    assert SCREEN_NFEV > 0
+
+
+def test_no_start_converging_is_the_callers_error():
+    def bad(x):
+        raise FloatingPointError("overflow")
+    with pytest.raises(HesspipeError, match="^motion test: nothing$"):
+        best_least_squares(bad, [[0.0], [0.5]], np.array([-1.0]), np.array([1.0]), "motion test: nothing", keep=1)
