@@ -176,8 +176,7 @@ def main(argv=None) -> int:
                 folder = root / f"{tag}_{cond}"
                 t0 = time.perf_counter()
                 truth = write_condition(folder, tag, cond, args.persons, args.runs, args.seed,
-                                        DAQ if args.style == "daq" else LAB,
-                                        **({"threshold": args.threshold} if args.threshold else {}))
+                                        DAQ if args.style == "daq" else LAB, threshold=args.threshold)
                 print(f"\n== {tag} ({PLANTS[tag]}), {cond}: {args.persons} persons x {args.runs} runs written "
                       f"in {time.perf_counter() - t0:.0f} s")
                 out_json = root / f"{tag}_{cond}.json"

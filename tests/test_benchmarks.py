@@ -94,7 +94,7 @@ def test_lab_experiment_gives_its_persons_the_threshold_asked_for(tmp_path):
     runs = {}
     for thr in (0.0, 0.3):
         folder = tmp_path / f"t{thr}"
-        truth = m.write_condition(folder, "SI", "static", 1, 1, 5, **({"threshold": thr} if thr else {}))
+        truth = m.write_condition(folder, "SI", "static", 1, 1, 5, threshold=thr)
         runs[thr] = read_run(folder / "s01_static_r1.csv", columns=m.COLUMNS)
     assert list(truth) == ["s01"]
     np.testing.assert_array_equal(runs[0.0].reference, runs[0.3].reference)   # the same person and forcing

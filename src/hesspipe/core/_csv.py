@@ -124,13 +124,18 @@ def decode(path: str | Path, what: str) -> tuple[str, str]:
     raise HesspipeError(f"{path}: not a text file (UTF-8, UTF-16 or Windows-1252), expected {what}")
 
 
+def _is_content(line: str) -> bool:
+    """A line of the table: neither blank nor a ``#`` comment."""
+    return bool(line.strip()) and not line.lstrip().startswith("#")
+
+
 def _dialect(text: str) -> tuple[str, str]:
     """(delimiter, decimal) of a table: the separator among comma, tab and semicolon that
     splits the header into the most fields and the first data lines into as many (a
     trailing separator allowed; one line in ten may not, so that a row run together is
     refused by its row rather than the file misread); whitespace when none splits it. A
     decimal comma is read only with tabs or semicolons, when the data show one."""
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    lines = [ln for ln in text.splitlines() if _is_content(ln)]
     if not lines:
         return ",", "."
     header, body = lines[0], lines[1:50]
@@ -203,7 +208,7 @@ def _long_row(text: str, sep: str) -> tuple[int, int, int] | None:
     """(data row, values, names) of the first data row holding more values than the header
     names (counted as the reader counts them: quotes kept together, a separator ending a
     line not a value), or None."""
-    rows = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    rows = [ln for ln in text.splitlines() if _is_content(ln)]
     if len(rows) < 2:
         return None
 
@@ -441,7 +446,7 @@ def _prepare(text: str, notes: list) -> tuple[str, str, str]:
     comments, a units row merged into the header's names; what was done appended to
     `notes`."""
     lines = text.splitlines()
-    content = [i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")]
+    content = [i for i, ln in enumerate(lines) if _is_content(ln)]
     header, units = _layout([lines[i] for i in content])
     if header:
         above = content[:header]

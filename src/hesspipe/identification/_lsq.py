@@ -38,14 +38,16 @@ def best_least_squares(resid, starts, lo, hi, failure: str, *, keep: int | None 
     HesspipeError
         With `failure` when no start converges.
     """
-    starts = [np.clip(np.asarray(x0, dtype=float), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-              for x0 in starts]
+    def inside(x):
+        return np.clip(np.asarray(x, dtype=float), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+
+    starts = [inside(x0) for x0 in starts]
     if keep is not None and len(starts) > keep:
         screened = sorted((r for r in (_solve(resid, x0, lo, hi, SCREEN_NFEV) for x0 in starts)
                            if r is not None), key=lambda r: r[0])
-        # A start that converged within the screen is final; the others go on from there.
-        starts = [np.clip(sol.x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-                  for _, sol in screened[:keep]]
+        # The kept go on from where the screen left them (one that converged there stops
+        # again within a few evaluations).
+        starts = [inside(sol.x) for _, sol in screened[:keep]]
     best = None
     for x0 in starts:
         r = _solve(resid, x0, lo, hi, 400)

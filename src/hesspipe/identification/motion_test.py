@@ -118,8 +118,8 @@ on its bound (0 of 16 at 0.25 s; benchmarks/bench_fly_pilot.py, two-input forcin
 
 EXPANDED_KEEP = 3
 """The vestibular alternatives' searches start from 8-16 points (two origins, four Km, with
-the delay two delays); each runs a few iterations and the best this many go on to
-convergence (``_lsq.best_least_squares``'s screen)."""
+the delay two delays); each runs ``_lsq.SCREEN_NFEV`` residual evaluations and the best this
+many go on to convergence (``_lsq.best_least_squares``'s screen)."""
 
 FEEDFORWARD = {"Kff": (2.0, 0.0, 20.0), "T_ff": (0.15, 0.05, 0.5)}
 """A pursuit display's feedforward nuisance, name: (start, lower, upper): the path
