@@ -5,7 +5,8 @@
 once without any test noticing. ``bench_drift_sidebands`` reads the generator's realised gain
 wander. ``bench_cohort_rule`` draws cohorts through the verdict. ``bench_lab_experiment`` writes
 files as a lab does, which must read back as the trial; ``bench_channels`` reads them back
-against the generator's paths. One seed each, the cheapest case.
+against the generator's paths; ``bench_run_in`` writes a trial with its run-in logged and diagnoses
+it beside its window. One seed each, the cheapest case.
 """
 
 from __future__ import annotations
@@ -112,3 +113,17 @@ def test_channels_benchmark_runs_against_the_truth(capsys, monkeypatch):
     static = re.search(r"SI \(1/s\), static, 1 persons: .* truth 0\.00 ", out)
     assert motion and static, out
     assert float(motion.group(2)) > 0.1
+
+
+def test_run_in_benchmark_reads_a_whole_trial_as_its_window(capsys, monkeypatch):
+    # bench_run_in writes one person's trial with its run-in logged and without, lab style,
+    # and diagnoses both through the command line: the window is the measurement, to the sample.
+    monkeypatch.syspath_prepend(str(BENCH))   # it imports bench_lab_experiment, as a script does
+    assert _load("bench_run_in").main(["--persons", "1", "--plants", "SI"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("SYNTHETIC DATA")
+    for cond in ("motion", "static"):
+        line = re.search(rf"SI \(1/s\) {cond}: analysis window = the measurement window on (\d)/1; "
+                         rf"the same names (\d)/1; .* largest change of F ([\d.]+)%", out)
+        assert line, out
+        assert line.group(1) == "1" and line.group(2) == "1" and float(line.group(3)) < 1.0

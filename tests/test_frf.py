@@ -116,6 +116,27 @@ def test_record_not_a_whole_number_of_periods():
     assert f2.window == (300, 2 * N)
 
 
+@pytest.mark.parametrize("seed", [4, 5, 6])
+def test_a_record_logging_a_run_in_shorter_than_a_period(seed):
+    # A lab's logger writes the whole trial: a run-in of 0.6 period (its forcing faded in over
+    # the first quarter period) before one period, both forcing functions on interleaved
+    # lines, every value rounded to 3 decimals as a text file holds it. The window is that
+    # period, to the sample (the search once ended 1-9 samples off on such records).
+    d, r = _multisine(D_BINS, seed), 0.5 * _multisine(R_BINS, seed + 50)
+    one = _run(d, r, noise=0.01, seed=seed)
+    keep = int(0.6 * N)
+    fade = np.clip(np.arange(keep + N) / (0.25 * N), 0.0, 1.0)
+    sig = {k: np.round(np.concatenate((getattr(one, k)[-keep:], getattr(one, k))), 3)
+           for k in ("disturbance", "reference", "output", "control")}
+    rec = Run(time=np.arange(keep + N) / FS, disturbance=sig["disturbance"] * fade, output=sig["output"],
+              control=sig["control"], reference=sig["reference"] * fade, id="t", synthetic=True)
+    f = estimate_frf(rec)
+    assert f.window == (keep, N)
+    w = f.feedback.freq_rad_s
+    assert f.feedback.bins.size == D_BINS.size
+    assert np.max(np.abs(f.feedback.H - H_fb(1j * w)) / np.abs(H_fb(1j * w))) < 0.1
+
+
 def test_broadband_falls_back_to_welch():
     rng = np.random.default_rng(5)
     d = _apply(rng.standard_normal(4 * N), lambda s: 5 / (s + 5))

@@ -446,3 +446,24 @@ def test_indifference_threshold():
     for bad in (1.0, -0.1, True):
         with pytest.raises(HesspipeError, match="^threshold: expected a share of the error's RMS"):
             draw_trial("1/s", 2, threshold=bad, **kw)
+
+
+def test_logged_run_in_is_the_trial_before_its_window():
+    # A lab's logger writes the whole trial: the run-in's end, then the measurement window
+    # sample for sample as without it; only when asked (default draws stay as they were).
+    window = simulate_trial(draw_trial("1/s", 6, task="both", **SHORT))
+    spec = draw_trial("1/s", 6, task="both", logged_run_in=2.5, **SHORT)
+    whole = simulate_trial(spec)
+    keep = 150   # 2.5 s at 60 Hz
+    assert whole.time.size == window.time.size + keep and whole.time[0] == 0.0
+    assert np.allclose(np.diff(whole.time), 1 / 60.0)
+    for name in ("disturbance", "reference", "output", "control", "gain_factor"):
+        np.testing.assert_array_equal(getattr(whole, name)[keep:], getattr(window, name))
+    # The run-in is the loop before the window, not a copy of it (the forcing repeats, the
+    # remnant does not).
+    assert not np.allclose(whole.control[:keep], window.control[-keep:])
+    assert whole.truth["pilot"] == window.truth["pilot"]
+    assert "logged_run_in" not in draw_trial("1/s", 6, **SHORT).options
+    for bad in (-1.0, 10.5, 1 / 120):
+        with pytest.raises(HesspipeError, match="logged_run_in: expected a whole number of samples"):
+            draw_trial("1/s", 6, logged_run_in=bad, **SHORT)

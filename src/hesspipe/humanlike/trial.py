@@ -38,7 +38,7 @@ OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
                remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
                pilot_params=None, gain_drift=0.0, drift_tc=10.0, line_bins=None, feedforward=0.0,
-               threshold=0.0)
+               threshold=0.0, logged_run_in=0.0)
 
 
 @dataclass(frozen=True)
@@ -109,7 +109,8 @@ class TrialSpec:
 class Trial:
     """A simulated trial: logged signals over the measurement window and the truth.
 
-    Arrays (length fs*T_m): ``time`` (s from the window start), ``disturbance``
+    Arrays (length fs*T_m, and the logged run-in's samples before them when the trial was drawn
+    with ``logged_run_in``): ``time`` (s from the record's start), ``disturbance``
     (input of Yd: control units for a plant-input disturbance, ft/s for side
     wind), ``output`` (controlled variable), ``control`` (pilot's stick, remnant
     included), ``reference`` (target r; zeros without one).
@@ -354,6 +355,13 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     name = opts["name"] or f"trial-{seed}"
     options = {k: opts[k] for k in ("fs", "T_m", "run_in", "fade", "fine_ratio", "n_lines",
                                     "output", "tau_m")}
+    logged = opts["logged_run_in"]
+    if logged:   # only when asked, as the feedforward below
+        n_keep = float(logged) * opts["fs"]
+        if not 0.0 < float(logged) <= opts["run_in"] or abs(n_keep - round(n_keep)) > 1e-9:
+            raise HesspipeError(f"logged_run_in: expected a whole number of samples in (0, run_in = "
+                                f"{opts['run_in']:g}] s, got {logged!r}")
+        options["logged_run_in"] = float(logged)
     kff = opts["feedforward"]
     if kff:   # only when asked: the default draws stay byte-identical
         if isinstance(kff, bool) or not isinstance(kff, (int, float)) or not 0.0 < kff <= 1.5:
@@ -462,7 +470,7 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     -------
     Trial
         Logged signals over the measurement window (whole periods of every line,
-        after the discarded run-in) and the truth dict (see
+        after the run-in, of which only ``logged_run_in`` s are logged) and the truth dict (see
         :func:`hesspipe.humanlike.truth.build_truth`).
 
     Raises
@@ -539,5 +547,7 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
                 "rate_limited_fraction": (None if rate is None else float(
                     np.mean(np.abs(np.diff(sim.actuator[idx[0]:])) >= rate * h * (1 - 1e-6))))}
     truth = build_truth(spec, sim_info)
-    return Trial(spec=spec, time=np.arange(n_log) / fs, disturbance=d_log[idx], output=y[idx],
-                 control=u[idx], reference=r[idx], truth=truth, gain_factor=factor[idx])
+    n_keep = int(round(o.get("logged_run_in", 0.0) * fs))
+    log = idx[0] + (np.arange(n_keep + n_log) - n_keep) * ratio   # the run-in's end, then idx
+    return Trial(spec=spec, time=np.arange(n_keep + n_log) / fs, disturbance=d_log[log], output=y[log],
+                 control=u[log], reference=r[log], truth=truth, gain_factor=factor[log])
