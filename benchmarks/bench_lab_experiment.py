@@ -24,11 +24,15 @@ counts): how many runs of each condition are named ``motion_feedback``, what els
 and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
-        [--style lab|daq] [--threshold 0.2]
+        [--style lab|daq] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
 
 ``--threshold S`` gives every person an indifference threshold on the perceived error, a dead
 zone of S times the error's RMS (the generator's ``threshold``; McRuer and Jex's nonlinear
 remnant source).
+
+``--cab-washout W --cab-delay T`` make the cab's true path the plants file's times a
+first-order washout ``s / (s + W)`` (rad/s) and a platform delay of T s (first-order Padé)
+that the plants file does not state: a lab that writes its motion path as the ideal one.
 """
 
 from __future__ import annotations
@@ -51,6 +55,7 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import csv_bytes, draw_trial, simulate_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
+from hesspipe.humanlike.plants import ANGLE_MOTION
 from hesspipe.humanlike.writer import DAQ, LAB, plants_dict
 
 COLUMNS = ",".join(f"{role}={LAB['names'][role]}" for role in ("reference", "disturbance", "output", "control"))
@@ -78,11 +83,26 @@ def draw_person(plant: str, effects, seed: int, **kw):
     raise HesspipeError(f"no pilot drawn for {plant} after 20 attempts (seed {seed})")
 
 
+def cab_path(washout: float, delay: float) -> tuple[list, list]:
+    """The generator's angle-output cab path (:data:`~hesspipe.humanlike.plants.ANGLE_MOTION`)
+    times a washout ``s / (s + washout)`` (rad/s; 0: none) and a first-order Padé of `delay` (s)."""
+    num, den = ANGLE_MOTION
+    if washout:
+        num, den = np.convolve(num, [1.0, 0.0]), np.convolve(den, [1.0, washout])
+    if delay:
+        num, den = np.convolve(num, [-delay / 2, 1.0]), np.convolve(den, [delay / 2, 1.0])
+    return [float(x) for x in num], [float(x) for x in den]
+
+
 def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, seed: int,
-                    style=LAB, **options) -> dict:
+                    style=LAB, cab: tuple[float, float] | None = None, **options) -> dict:
     """Write one condition's runs; return person -> the generator's pilot (its truth).
-    `options` are further trial options (e.g. ``threshold``) for every run."""
+    `options` are further trial options (e.g. ``threshold``) for every run; `cab` (washout
+    rad/s, delay s): the cab's true path (:func:`cab_path`), where the plants file states the
+    ideal one."""
     folder.mkdir(parents=True, exist_ok=True)
+    if cab is not None:
+        options = dict(options, motion_path=cab_path(*cab))
     effects = ("motion_feedback",) if cond == "motion" else ()
     truth, spec = {}, None
     for s in range(persons):
@@ -97,7 +117,10 @@ def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, 
             else:   # the same person again: only forcing phases, remnant and wander are new
                 spec = draw_trial(PLANTS[tag], seed_r, effects=effects, pilot_params=person, **kw)
             lab_file(simulate_trial(spec), folder / f"{spec.name}.csv", style)
-    (folder.parent / f"plants_{tag}.json").write_text(json.dumps(plants_dict(spec), indent=1))
+    stated = plants_dict(spec)
+    if cab is not None:   # the lab states the ideal path
+        stated["motion_path"] = {"num": list(ANGLE_MOTION[0]), "den": list(ANGLE_MOTION[1])}
+    (folder.parent / f"plants_{tag}.json").write_text(json.dumps(stated, indent=1))
     return truth
 
 
@@ -167,7 +190,11 @@ def main(argv=None) -> int:
                          "the header, a units row, clock times across midnight, frames written twice, UTF-16)")
     ap.add_argument("--threshold", type=float, default=0.0,
                     help="each person's indifference threshold, share of the error's RMS (0: none)")
+    ap.add_argument("--cab-washout", type=float, default=0.0,
+                    help="the cab's unstated washout corner, rad/s (0: none)")
+    ap.add_argument("--cab-delay", type=float, default=0.0, help="the cab's unstated platform delay, s")
     args = ap.parse_args(argv)
+    cab = (args.cab_washout, args.cab_delay) if args.cab_washout or args.cab_delay else None
     print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, files as a lab writes them")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(args.out or tmp)
@@ -176,7 +203,7 @@ def main(argv=None) -> int:
                 folder = root / f"{tag}_{cond}"
                 t0 = time.perf_counter()
                 truth = write_condition(folder, tag, cond, args.persons, args.runs, args.seed,
-                                        DAQ if args.style == "daq" else LAB, threshold=args.threshold)
+                                        DAQ if args.style == "daq" else LAB, cab=cab, threshold=args.threshold)
                 print(f"\n== {tag} ({PLANTS[tag]}), {cond}: {args.persons} persons x {args.runs} runs written "
                       f"in {time.perf_counter() - t0:.0f} s")
                 out_json = root / f"{tag}_{cond}.json"

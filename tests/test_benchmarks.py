@@ -102,6 +102,31 @@ def test_lab_experiment_gives_its_persons_the_threshold_asked_for(tmp_path):
     assert np.std(runs[0.3].control) < 0.95 * np.std(runs[0.0].control)      # the dead zone's lower gain
 
 
+def test_lab_experiment_cab_path_is_not_the_one_its_plants_file_states(tmp_path):
+    # --cab-washout/--cab-delay: the motion persons' cab has a washout and a platform delay,
+    # the plants file states the ideal path (as a lab that writes its path naively).
+    import json
+
+    from hesspipe.core.formats import read_run
+
+    m = _load("bench_lab_experiment")
+    num, den = m.cab_path(1.0, 0.08)
+    s = 1j * np.array([0.5, 2.0, 8.0])
+    ideal = np.polyval([1.0, 0.0], s) / np.polyval([0.01, 1.0], s)
+    cab = np.polyval(num, s) / np.polyval(den, s)
+    assert np.allclose(np.abs(cab / ideal), np.abs(s) / np.abs(s + 1.0))   # the washout's gain
+    assert np.allclose(np.angle(cab / ideal), np.angle(s / (s + 1.0)) - 2 * np.arctan(0.04 * s.imag))
+    runs = {}
+    for label, cab_opt in (("ideal", None), ("cab", (1.0, 0.08))):
+        folder = tmp_path / label
+        m.write_condition(folder, "SI", "motion", 1, 1, 5, cab=cab_opt)
+        runs[label] = read_run(folder / "s01_motion_r1.csv", columns=m.COLUMNS)
+        stated = json.loads((tmp_path / "plants_SI.json").read_text())["motion_path"]
+        assert stated == {"num": [1.0, 0.0], "den": [0.01, 1.0]}
+    np.testing.assert_array_equal(runs["ideal"].reference, runs["cab"].reference)   # the same person
+    assert not np.allclose(runs["ideal"].control, runs["cab"].control)              # another cab
+
+
 def test_channels_benchmark_runs_against_the_truth(capsys, monkeypatch):
     # bench_channels reads the lab stand-in's files back and compares the channels with the
     # generator's own paths; one person, one run, the single integrator.

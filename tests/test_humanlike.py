@@ -467,3 +467,15 @@ def test_logged_run_in_is_the_trial_before_its_window():
     for bad in (-1.0, 10.5, 1 / 120):
         with pytest.raises(HesspipeError, match="logged_run_in: expected a whole number of samples"):
             draw_trial("1/s", 6, logged_run_in=bad, **SHORT)
+
+
+def test_polymul_is_numpys():
+    from hesspipe.humanlike.lti import polymul
+
+    rng = np.random.default_rng(0)
+    cases = [([0, 0, 1.0, 2], [3.0, 0]), ([0.0, 0], [1.0, 2]), ([1, 2], [0, 3]), ([], [1.0]),
+             ([5.0], [0.0, 0.0, 1.0])] + [(rng.normal(size=rng.integers(1, 6)), rng.normal(size=3))
+                                        for _ in range(20)]
+    for a, b in cases:
+        got, want = polymul(a, b), np.polymul(a, b)
+        assert got.dtype == want.dtype and np.array_equal(got, want), (a, b)

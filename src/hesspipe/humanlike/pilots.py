@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .lti import freqresp, series
+from .lti import freqresp, polymul, series
 
 SCC = ([80 * 5.73, 0.0, 0.0], [80 * 5.73, 80 + 5.73, 1.0])
 """Hess pilot's canals (SPEC): per unit angular velocity
@@ -79,7 +79,7 @@ def pf_tf(p: dict) -> tuple:
     num = [p["K1"] * p["K2"], 0.0]
     den = [1.0, p["inv_T1"]]
     if p["k"] == 2:
-        den = np.polymul(den, [1.0, p["inv_T2"]]).tolist()
+        den = polymul(den, [1.0, p["inv_T2"]]).tolist()
     return num, den
 
 
@@ -145,7 +145,7 @@ def feedforward_nm_tf(plant_yc, kff: float, p: dict) -> tuple:
         Descending powers of s, control per unit target.
     """
     num, den = (np.atleast_1d(np.asarray(c, float)) for c in plant_yc)
-    lag = np.polymul([FF_LAG_S, 1.0], [FF_LAG_S, 1.0])
+    lag = polymul([FF_LAG_S, 1.0], [FF_LAG_S, 1.0])
     return series((kff * den, num), nm_tf(p["wn"], p["zn"]), ([1.0], lag))
 
 
@@ -441,7 +441,7 @@ def draw_hess(rng, yc, sign: int, order: int, ranges: dict, extra_delay: float, 
             p.update(K1=k1, K2=float(np.exp(logk)) / k1)
             num, den = pf_tf(p)
             nmn, nmd = nm_tf(p["wn"], p["zn"])
-            inner = np.polyadd(np.polymul(nmd, den), np.polymul(nmn, num))
+            inner = np.polyadd(polymul(nmd, den), polymul(nmn, num))
             if not np.all(np.roots(inner).real < 0):
                 continue
             h = sum(parts(p, x, motion_tf))[0]
