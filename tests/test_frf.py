@@ -137,6 +137,29 @@ def test_a_record_logging_a_run_in_shorter_than_a_period(seed):
     assert np.max(np.abs(f.feedback.H - H_fb(1j * w)) / np.abs(H_fb(1j * w))) < 0.1
 
 
+@pytest.mark.parametrize("seed", [4, 5])
+def test_a_record_whose_forcing_fades_out_before_the_logger_stops(seed):
+    # The run-in as above, one period, then 0.1 period in which the forcing fades out while
+    # the logger runs on: the window is one period, ending where the forcing stops repeating
+    # (a few samples into the fade at most).
+    d, r = _multisine(D_BINS, seed), 0.5 * _multisine(R_BINS, seed + 50)
+    one = _run(d, r, noise=0.01, seed=seed)
+    keep, tail = int(0.6 * N), int(0.1 * N)
+    k = np.arange(keep + N + tail)
+    fade = np.clip(k / (0.25 * N), 0.0, 1.0) * np.clip((keep + N + tail - 1 - k) / tail, 0.0, 1.0)
+    sig = {name: np.round(np.concatenate((getattr(one, name)[-keep:], getattr(one, name),
+                                          getattr(one, name)[:tail])), 3)
+           for name in ("disturbance", "reference", "output", "control")}
+    rec = Run(time=k / FS, disturbance=sig["disturbance"] * fade, output=sig["output"],
+              control=sig["control"], reference=sig["reference"] * fade, id="t", synthetic=True)
+    f = estimate_frf(rec)
+    start, length = f.window
+    assert length == N and keep <= start <= keep + 0.01 * N
+    w = f.feedback.freq_rad_s
+    assert f.feedback.bins.size == D_BINS.size
+    assert np.max(np.abs(f.feedback.H - H_fb(1j * w)) / np.abs(H_fb(1j * w))) < 0.1
+
+
 def test_broadband_falls_back_to_welch():
     rng = np.random.default_rng(5)
     d = _apply(rng.standard_normal(4 * N), lambda s: 5 / (s + 5))

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .frf import NEIGHBOURS, _lines, _neighbour_bins, _neighbour_residual_power, _window
+from ._window import _lines, _window
+from .frf import NEIGHBOURS, _neighbour_bins, _neighbour_residual_power
 
 MIN_LINES = 4
 SMOOTH_ORDER = 2
@@ -32,7 +33,7 @@ measured one carries no weight in the fits."""
 
 def analysis_window(run) -> tuple[int, int]:
     """(start, length) in samples of the window that puts the forcing's lines on exact bins
-    (:func:`hesspipe.identification.frf._window`: the record, or a whole number of its periods).
+    (:func:`hesspipe.identification._window._window`: the record, or a whole number of its periods).
 
     Parameters
     ----------

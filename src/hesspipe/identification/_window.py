@@ -1,0 +1,232 @@
+"""The forcing's lines and the analysis window that puts them on exact bins (private to
+:mod:`.frf`, which re-exports what the rest of identification uses).
+
+A multisine's lines fall on exact DFT bins only over a whole number of its periods. Records
+are rarely cut so: loggers write both ends, log the run-in, or run on after the forcing
+fades out. :func:`_window` finds the window; :func:`_lines` the bins that stand out.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+LINE_RATIO = 100.0
+"""A bin is a line when its power exceeds LINE_RATIO times the median of its NEAR
+neighbours each side: a random broadband spectrum does so with probability ~e^-70."""
+NEAR = 6
+CLEAN = 0.99
+"""A window found by exact recurrence is taken when each forcing's purity there is at least
+this (the share of its power on its lines)."""
+
+
+def _lines(power: np.ndarray) -> np.ndarray:
+    """Bins (>= 1) whose power stands LINE_RATIO above their nearest neighbours.
+
+    The reference is the median of the NEAR bins each side: the lines of a sparse
+    multisine in a whole-period window sit on an empty floor, while a random
+    spectrum (gusts) fluctuates bin to bin like chi-square(2) variates and a
+    smooth one (a slow drift) cannot fall by LINE_RATIO within a few bins. A
+    multisine exciting every bin of a band has no such contrast and is taken as
+    broadband (the Welch estimate serves it).
+    """
+    p = power.copy()
+    p[0] = 0.0
+    top = p.max()
+    if not top > 0:
+        return np.zeros(0, dtype=int)
+    n = p.size
+    idx = np.arange(n)
+    offsets = np.concatenate((np.arange(-NEAR, 0), np.arange(1, NEAR + 1)))
+    nb = idx[:, None] + offsets[None, :]
+    # Near the ends, take the missing neighbours from further along the other side.
+    nb = np.where(nb < 1, nb + 2 * NEAR + 1, nb)
+    nb = np.clip(np.where(nb > n - 1, nb - 2 * NEAR - 1, nb), 1, n - 1)
+    ref = np.median(p[nb], axis=1)
+    ref = np.maximum(ref, 1e-13 * top)  # exact multisines have an empty floor
+    ok = p > LINE_RATIO * ref
+    ok[0] = False
+    cand = np.nonzero(ok)[0]
+    if cand.size and cand.max() < 3:
+        # Only the record's first one or two bins: a slow drift (the paper's turning side
+        # wind), whose steep spectrum clears its neighbours there; a forcing has lines higher up.
+        return np.zeros(0, dtype=int)
+    if cand.size < 2:
+        return cand
+    # Leakage (a window that is not a whole number of periods) puts sidebands beside
+    # each line that decay like 1/distance^2: a candidate weaker than a neighbour's
+    # 1/(10 distance^2) is one of those, not a line of its own.
+    keep = np.ones(cand.size, dtype=bool)
+    pc = p[cand]
+    order = np.argsort(-pc)
+    for i in order:
+        if not keep[i]:
+            continue
+        dist = np.abs(cand - cand[i]).astype(float)
+        weak = (pc * 10 * np.maximum(dist, 1) ** 2 < pc[i]) & (dist > 0)
+        keep &= ~weak
+    return cand[keep]
+
+
+def _purity(x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    X = np.fft.rfft(x - x.mean())
+    p = np.abs(X) ** 2
+    lines = _lines(p)
+    total = p[1:].sum()
+    return (float(p[lines].sum() / total) if total > 0 else 0.0), lines, X
+
+
+def _period_by_lag(x: np.ndarray) -> int | None:
+    """Smallest lag L <= n/2 with x[t+L] ~ x[t] (a periodic forcing), or None."""
+    n = x.size
+    x = x - x.mean()
+    nf = 1 << int(np.ceil(np.log2(2 * n)))
+    F = np.fft.rfft(x, nf)
+    r = np.fft.irfft(np.abs(F) ** 2, nf)[: n // 2 + 1]
+    c = np.concatenate(([0.0], np.cumsum(x * x)))
+    lags = np.arange(n // 2 + 1)
+    # sum_t (x[t+L] - x[t])^2 over the overlap, relative to the overlap's power.
+    s_head = c[n - lags]            # sum x[0:n-L]^2
+    s_tail = c[n] - c[lags]         # sum x[L:n]^2
+    err = (s_head + s_tail - 2 * r) / np.maximum(s_head + s_tail, 1e-300)
+    cand = np.nonzero(err[1:] < 1e-3)[0] + 1
+    if cand.size == 0:
+        return None
+    L = int(cand[0])
+    # the first lag under the threshold: walk to its local minimum
+    while L + 1 < err.size and err[L + 1] < err[L]:
+        L += 1
+    return L if L >= 4 else None
+
+
+def _topk_purity(x: np.ndarray, k: int) -> float:
+    p = np.abs(np.fft.rfft(x - x.mean()))[1:] ** 2
+    total = p.sum()
+    if not total > 0:
+        return 0.0
+    k = min(k, p.size)
+    return float(np.partition(p, p.size - k)[p.size - k:].sum() / total)
+
+
+def _window(d: np.ndarray, r: np.ndarray | None):
+    """Analysis window (start, length, purity) with the forcing's lines on exact bins.
+
+    The record as written (or less its last sample: loggers often write both
+    ends); else a whole number of periods found by lag (two or more periods) or
+    by the record's end recurring one period earlier (a logged run-in shorter
+    than the period); else the length between half the record and all of it
+    whose spectrum concentrates most power in as many bins as there are lines
+    (one period of a forcing whose period is not the record's length). The
+    window ends at the record's end, so a start-up transient falls outside it,
+    unless the forcing stops repeating before the end (faded out while the logger
+    ran on): then it ends where the forcing last repeats itself.
+    A window is judged by the purity of each forcing on its own (the smallest).
+    """
+    n = d.size
+    # Each forcing on its own: interleaved target lines sit one bin above the disturbance's,
+    # so in their sum the low lines are neighbours, stand no LINE_RATIO above each other, and
+    # the sum's purity is low however exact the window (the search below then picked half
+    # records and lost most lines) and peaked one sample past a lab record's period.
+    forcings = [x for x in (d, r) if x is not None and np.any(x)]
+    x = d if r is None else d + r
+
+    def purity(start: int, length: int) -> float:
+        part = slice(start, start + length)
+        return min(_purity(f[part])[0] for f in forcings) if forcings else _purity(x[part])[0]
+
+    best = max(((purity(n - m, m), n - m, m) for m in (n, n - 1)), key=lambda b: b[0])
+    if best[0] >= 0.999:
+        return best[1], best[2], best[0]
+    period = _period_by_lag(x)
+    if period is not None:
+        length = (n // period) * period
+        best = max(best, (purity(n - length, length), n - length, length), key=lambda b: b[0])
+        if best[0] >= 0.999:
+            return best[1], best[2], best[0]
+    # Exact recurrence: a run-in shorter than a period, or a forcing that stops repeating
+    # before the record ends. Taken only where the forcings are clean multisines on the
+    # window (a broadband record's constant stretch recurs too).
+    period = _period_by_end(x)
+    window = (n - period, period) if period else _periodic_stretch(x)
+    if window is not None:
+        pur = purity(*window)
+        if pur >= CLEAN and pur > best[0]:
+            best = (pur, *window)
+        if best[0] >= 0.999:
+            return best[1], best[2], best[0]
+    lines = _purity(x)[1]
+    if lines.size == 0:   # no lines stand out: broadband forcing, or an exact multisine unfound
+        return best[1], best[2], best[0]
+    k = int(min(lines.size, 400))
+    coarse = np.arange(n, n // 2, -4)
+    scores = np.array([_topk_purity(x[n - m:], k) for m in coarse])
+    m0 = int(coarse[int(np.argmax(scores))])
+    # The top-k share of the sum peaked up to 9 samples off a lab record's period (its k from
+    # the leaky whole record: 5 of 20 lines); the forcings' own purity is 1 there.
+    fine = np.arange(min(n, m0 + 16), max(n // 2, m0 - 16) - 1, -1)
+    m = int(fine[int(np.argmax([purity(n - int(m), int(m)) for m in fine]))])
+    best = max(best, (purity(n - m, m), n - m, m), key=lambda b: b[0])
+    return best[1], best[2], best[0]
+
+
+def _periodic_stretch(x: np.ndarray, tail: int = 64, steps: int = 16) -> tuple[int, int] | None:
+    """(start, length) of the most whole periods inside the stretch where `x` repeats itself,
+    found from a segment of `tail` samples stepped back from the record's end over its last
+    quarter (a forcing faded out, or stopped, while the logger ran on), or None.
+
+    The period is the shortest lag of at least ``2 tail`` samples at which the segment recurs
+    to rounding; the stretch runs on both sides of the segment while each sample recurs.
+    """
+    n = x.size
+    x = x - x.mean()
+    c = np.concatenate(([0.0], np.cumsum(x * x)))
+    for q in range(n - tail, max(n // 2, 3 * tail) - 1, -max(tail, n // (4 * steps))):
+        seg = x[q:q + tail]
+        energy = float(seg @ seg)
+        lags = np.arange(2 * tail, q + 1)
+        if not energy > 0 or lags.size == 0:
+            continue
+        starts = q - lags
+        err = (c[starts + tail] - c[starts]) - 2.0 * np.correlate(x[:q], seg, mode="valid")[starts] + energy
+        hit = np.flatnonzero(err < 1e-3 * energy)
+        if hit.size == 0:
+            continue
+        i = int(hit[0])   # to the bottom of that lag's dip
+        while i + 1 < err.size and err[i + 1] < err[i]:
+            i += 1
+        period = int(lags[i])
+        # Each sample's recurrence, against the segment's mean power (rounding passes, a fade
+        # does not past its first few per cent).
+        off = (x[period:] - x[:-period]) ** 2 > 1e-4 * energy / tail
+        after = np.flatnonzero(off[q - period:])
+        end = n if after.size == 0 else q + int(after[0])
+        before = np.flatnonzero(off[:q - period])
+        first = 0 if before.size == 0 else int(before[-1]) + 1   # x[first:end] repeats
+        length = ((end - first) // period) * period
+        return (end - length, length) if length else None
+    return None
+
+
+def _period_by_end(x: np.ndarray, tail: int = 64) -> int | None:
+    """The lag L between half the record and all of it at which the record's last `tail`
+    samples recur (a periodic forcing logged for less than two periods: a run-in before one
+    period), or None.
+
+    Only the end is compared: a run-in's start holds the forcing's fade-in.
+    """
+    n = x.size
+    lo, hi = n // 2 + 1, n - tail
+    if hi < lo:
+        return None
+    x = x - x.mean()
+    end = x[n - tail:]
+    energy = float(end @ end)
+    if not energy > 0:
+        return None
+    lags = np.arange(lo, hi + 1)
+    starts = n - tail - lags
+    # sum_j (x[i + j] - end[j])^2 for every start i, in O(n) memory.
+    c = np.concatenate(([0.0], np.cumsum(x * x)))
+    err = (c[starts + tail] - c[starts]) - 2.0 * np.correlate(x, end, mode="valid")[starts] + energy
+    i = int(np.argmin(err))
+    # A match to rounding only: anything else differs by about twice the end's energy.
+    return int(lags[i]) if err[i] < 1e-3 * energy else None
