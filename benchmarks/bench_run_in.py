@@ -1,10 +1,11 @@
-"""Benchmark: lab records that hold the whole trial, run-in included (SYNTHETIC DATA).
+"""Benchmark: lab records that hold the whole trial, run-in (and run-out) included (SYNTHETIC DATA).
 
 A laboratory's logger often writes the whole trial: the run-in (the forcing faded in, the
 pilot settling into the loop, e.g. 8.08 s) and then the measurement time (81.92 s, one
 period of every forcing line). hesspipe analyses the window that puts the lines on exact
 bins (`hesspipe.identification.lines.analysis_window`); everything else should say what it
-says on the measurement window alone.
+says on the measurement window alone. With ``--run-out S`` the logger also runs on for S s
+after the measurement while the forcing fades out (the loop answering).
 
 Each person of the lab stand-in (`bench_lab_experiment.py`: the independent generator's
 precision pilots, yaw angle, both forcing functions, files as the lab writes them) flies one
@@ -14,7 +15,7 @@ file goes through ``hesspipe diagnose`` as a user types it. Prints per condition
 the analysis window is exactly the measurement window, how often the names agree, motion
 named on either file, and the largest change of the motion test's F.
 
-    python benchmarks/bench_run_in.py [--persons 6] [--seed 7] [--run-in 8.08] [--plants SI,DI] [--out DIR]
+    python benchmarks/bench_run_in.py [--persons 6] [--seed 7] [--run-in 8.08] [--run-out 0] [--plants SI,DI] [--out DIR]
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 import bench_lab_experiment as B
 from hesspipe.cli import main as hesspipe
 from hesspipe.core.formats import read_run
@@ -38,15 +41,17 @@ from hesspipe.identification.lines import analysis_window
 COLUMNS = dict(item.split("=") for item in B.COLUMNS.split(","))
 
 
-def trial_pair(tag: str, cond: str, person: int, seed: int, run_in: float):
+def trial_pair(tag: str, cond: str, person: int, seed: int, run_in: float, run_out: float = 0.0):
     """(the whole trial, its measurement window alone) of one person: one draw, simulated with
-    and without its run-in logged."""
+    and without its run-in (and run-out) logged."""
     effects = ("motion_feedback",) if cond == "motion" else ()
     out = []
     for logged in (run_in, 0.0):
         kw = dict(B.TRIAL, name=f"s{person + 1:02d}_{cond}_{'whole' if logged else 'window'}", run_in=run_in)
         if logged:
             kw["logged_run_in"] = logged
+            if run_out:
+                kw["logged_run_out"] = run_out
         spec = B.draw_person(B.PLANTS[tag], effects, derive_seed(seed, tag, cond, str(person)), **kw)
         out.append((spec, simulate_trial(spec)))
     return out
@@ -68,11 +73,14 @@ def main(argv=None) -> int:
     ap.add_argument("--persons", type=int, default=6)
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--run-in", type=float, default=8.08, help="run-in, s, logged before the measurement")
+    ap.add_argument("--run-out", type=float, default=0.0,
+                    help="s logged after the measurement while the forcing fades out (0: none)")
     ap.add_argument("--plants", default="SI,DI", help="comma list of SI (1/s) and DI (K/s2)")
     ap.add_argument("--out", default=None, help="keep the files here (default: a temporary folder)")
     args = ap.parse_args(argv)
     print(f"SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, lab files; "
-          f"{args.run_in:g} s of run-in logged before {B.TRIAL['T_m']:g} s of measurement")
+          f"{args.run_in:g} s of run-in logged before {B.TRIAL['T_m']:g} s of measurement"
+          + (f", {args.run_out:g} s of fade-out after it" if args.run_out else ""))
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(args.out or tmp)
         for tag in args.plants.split(","):
@@ -80,10 +88,12 @@ def main(argv=None) -> int:
                 folder = root / f"{tag}_{cond}"
                 folder.mkdir(parents=True, exist_ok=True)
                 exact = same = 0
+                offsets = []
                 motion = [0, 0]
                 df = []
                 for person in range(args.persons):
-                    (spec, whole), (_, window) = trial_pair(tag, cond, person, args.seed, args.run_in)
+                    (spec, whole), (_, window) = trial_pair(tag, cond, person, args.seed, args.run_in,
+                                                            args.run_out)
                     plants = root / f"plants_{tag}.json"
                     plants.write_text(json.dumps(plants_dict(spec), indent=1))
                     reports = []
@@ -91,10 +101,12 @@ def main(argv=None) -> int:
                         path = folder / f"{trial.spec.name}.csv"
                         B.lab_file(trial, path)
                         reports.append(diagnose(path, plants))
-                    n_keep = whole.time.size - window.time.size
+                    n_keep = int(round(args.run_in * B.TRIAL["fs"]))
                     with contextlib.redirect_stderr(io.StringIO()):
                         run = read_run(folder / f"{whole.spec.name}.csv", columns=COLUMNS)
-                    exact += analysis_window(run) == (n_keep, window.time.size)
+                    start, length = analysis_window(run)
+                    exact += (start, length) == (n_keep, window.time.size)
+                    offsets.append(abs(start - n_keep) if length == window.time.size else np.inf)
                     names = [r["named_effects"] for r in reports]
                     same += names[0] == names[1]
                     for i, n in enumerate(names):
@@ -104,7 +116,9 @@ def main(argv=None) -> int:
                 n = args.persons
                 print(f"{tag} ({B.PLANTS[tag]}) {cond}: analysis window = the measurement window on {exact}/{n}; "
                       f"the same names {same}/{n}; motion named {motion[0]}/{n} whole trial, {motion[1]}/{n} "
-                      f"window alone; largest change of F {max(df):.1%}", flush=True)
+                      f"window alone; largest change of F {max(df):.1%}; one period, at most "
+                      f"{max(offsets):g} samples off the measurement: {int(np.sum(np.isfinite(offsets)))}/{n}",
+                      flush=True)
     return 0
 
 

@@ -467,6 +467,16 @@ def test_logged_run_in_is_the_trial_before_its_window():
     for bad in (-1.0, 10.5, 1 / 120):
         with pytest.raises(HesspipeError, match="logged_run_in: expected a whole number of samples"):
             draw_trial("1/s", 6, logged_run_in=bad, **SHORT)
+    # And the logger running on while the forcing fades out: the window is still the same.
+    both = simulate_trial(draw_trial("1/s", 6, task="both", logged_run_in=2.5, logged_run_out=2.0, **SHORT))
+    assert both.time.size == window.time.size + keep + 120
+    for name in ("disturbance", "reference", "output", "control"):
+        np.testing.assert_array_equal(getattr(both, name)[keep:keep + window.time.size], getattr(window, name))
+    rms = np.std(window.disturbance)
+    assert abs(both.disturbance[-1]) < 1e-3 * rms and np.std(both.disturbance[-120:-100]) > 0.3 * rms
+    for bad in (-1.0, 1 / 120):
+        with pytest.raises(HesspipeError, match="logged_run_out: expected a whole number of samples"):
+            draw_trial("1/s", 6, logged_run_out=bad, **SHORT)
 
 
 def test_polymul_is_numpys():

@@ -38,7 +38,7 @@ OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
                remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
                pilot_params=None, gain_drift=0.0, drift_tc=10.0, line_bins=None, feedforward=0.0,
-               threshold=0.0, logged_run_in=0.0)
+               threshold=0.0, logged_run_in=0.0, logged_run_out=0.0)
 
 
 @dataclass(frozen=True)
@@ -109,8 +109,9 @@ class TrialSpec:
 class Trial:
     """A simulated trial: logged signals over the measurement window and the truth.
 
-    Arrays (length fs*T_m, and the logged run-in's samples before them when the trial was drawn
-    with ``logged_run_in``): ``time`` (s from the record's start), ``disturbance``
+    Arrays (length fs*T_m, with the logged run-in's samples before them and the run-out's after
+    when the trial was drawn with ``logged_run_in`` or ``logged_run_out``): ``time`` (s from the
+    record's start), ``disturbance``
     (input of Yd: control units for a plant-input disturbance, ft/s for side
     wind), ``output`` (controlled variable), ``control`` (pilot's stick, remnant
     included), ``reference`` (target r; zeros without one).
@@ -231,7 +232,11 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         is this share, in [0, 1), of the displayed error's RMS in the same loop without it:
         McRuer and Jex's indifference threshold, one of the remnant's nonlinear sources; the
         truth's describing function is the linear pilot's, and the truth gives the dead
-        zone's Gaussian-input gain beside it).
+        zone's Gaussian-input gain beside it), ``logged_run_in`` (s, 0: the record is the
+        measurement window; else that much of the run-in's end is logged before it, as a lab's
+        logger writes the whole trial: e.g. 8.08 s before 81.92 s), ``logged_run_out`` (s, 0;
+        else the logger runs on that long after the window while the forcing fades out to zero
+        over it, raised cosine, and the loop answers).
 
     Raises
     ------
@@ -362,6 +367,12 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
             raise HesspipeError(f"logged_run_in: expected a whole number of samples in (0, run_in = "
                                 f"{opts['run_in']:g}] s, got {logged!r}")
         options["logged_run_in"] = float(logged)
+    run_out = opts["logged_run_out"]
+    if run_out:
+        n_out = float(run_out) * opts["fs"]
+        if not float(run_out) > 0.0 or abs(n_out - round(n_out)) > 1e-9:
+            raise HesspipeError(f"logged_run_out: expected a whole number of samples > 0 s, got {run_out!r}")
+        options["logged_run_out"] = float(run_out)
     kff = opts["feedforward"]
     if kff:   # only when asked: the default draws stay byte-identical
         if isinstance(kff, bool) or not isinstance(kff, (int, float)) or not 0.0 < kff <= 1.5:
@@ -484,13 +495,18 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
     h = 1.0 / (fs * ratio)
     n_run = int(round(o["run_in"] * fs))
     n_log = int(round(o["T_m"] * fs))
-    n = (n_run + n_log) * ratio
+    n_out = int(round(o.get("logged_run_out", 0.0) * fs))
+    n = (n_run + n_log + n_out) * ratio
     t = (np.arange(n) - n_run * ratio) * h
-    ramp = forcing.fade(t, -n_run / fs, o["fade"])
+
+    def envelope(tt):   # faded in over the run-in's start; out after the window when asked
+        env = forcing.fade(tt, -n_run / fs, o["fade"])
+        return env * (1.0 - forcing.fade(tt, n_log / fs, n_out / fs)) if n_out else env
+
+    ramp = envelope(t)
     d_log = spec.disturbance(t) * ramp if spec.disturbance is not None else np.zeros(n)
     # The plant holds its input over [t_k, t_k + h): the midpoint value carries no half-step lag.
-    d = spec.disturbance(t + h / 2) * forcing.fade(t + h / 2, -n_run / fs, o["fade"]) \
-        if spec.disturbance is not None else np.zeros(n)
+    d = spec.disturbance(t + h / 2) * envelope(t + h / 2) if spec.disturbance is not None else np.zeros(n)
     r = spec.target(t) * ramp if spec.target is not None else np.zeros(n)
     # Remnant noise is white at a fixed 10x the logging rate, held between its samples, so
     # the realisation does not depend on the fine step.
@@ -548,6 +564,6 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
                     np.mean(np.abs(np.diff(sim.actuator[idx[0]:])) >= rate * h * (1 - 1e-6))))}
     truth = build_truth(spec, sim_info)
     n_keep = int(round(o.get("logged_run_in", 0.0) * fs))
-    log = idx[0] + (np.arange(n_keep + n_log) - n_keep) * ratio   # the run-in's end, then idx
-    return Trial(spec=spec, time=np.arange(n_keep + n_log) / fs, disturbance=d_log[log], output=y[log],
+    log = idx[0] + (np.arange(n_keep + n_log + n_out) - n_keep) * ratio   # run-in's end, idx, run-out
+    return Trial(spec=spec, time=np.arange(n_keep + n_log + n_out) / fs, disturbance=d_log[log], output=y[log],
                  control=u[log], reference=r[log], truth=truth, gain_factor=factor[log])

@@ -174,7 +174,8 @@ def _periodic_stretch(x: np.ndarray, tail: int = 64, steps: int = 16) -> tuple[i
     quarter (a forcing faded out, or stopped, while the logger ran on), or None.
 
     The period is the shortest lag of at least ``2 tail`` samples at which the segment recurs
-    to rounding; the stretch runs on both sides of the segment while each sample recurs.
+    to rounding; the stretch runs on both sides of it while each sample recurs (to 10 times
+    the rounding seen there, or 1e-5 of the forcing's RMS).
     """
     n = x.size
     x = x - x.mean()
@@ -194,13 +195,19 @@ def _periodic_stretch(x: np.ndarray, tail: int = 64, steps: int = 16) -> tuple[i
         while i + 1 < err.size and err[i + 1] < err[i]:
             i += 1
         period = int(lags[i])
-        # Each sample's recurrence, against the segment's mean power (rounding passes, a fade
-        # does not past its first few per cent).
-        off = (x[period:] - x[:-period]) ** 2 > 1e-4 * energy / tail
-        after = np.flatnonzero(off[q - period:])
-        end = n if after.size == 0 else q + int(after[0])
-        before = np.flatnonzero(off[:q - period])
-        first = 0 if before.size == 0 else int(before[-1]) + 1   # x[first:end] repeats
+        # Each sample's recurrence, judged from a segment a step further back (the one found
+        # may lie in a fade's first per cent): off where the change over a period exceeds 100
+        # times its mean square there (rounding) and persists for 3 samples (a fade's slow start).
+        step = max(tail, n // (4 * steps))
+        ref = q - step if q - step - period >= 0 else q
+        d2 = (x[period:] - x[:-period]) ** 2
+        thr = max(100.0 * float(d2[ref - period:ref - period + tail].mean()), 1e-10 * energy / tail)
+        off = d2 > thr
+        persist = off[:-2] & off[1:-1] & off[2:]
+        after = np.flatnonzero(persist[ref - period:])
+        end = n if after.size == 0 else ref + int(after[0])
+        before = np.flatnonzero(persist[:max(ref - period - 2, 0)])
+        first = 0 if before.size == 0 else int(before[-1]) + 3   # x[first:end] repeats
         length = ((end - first) // period) * period
         return (end - length, length) if length else None
     return None
