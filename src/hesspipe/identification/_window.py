@@ -1,5 +1,5 @@
-"""The forcing's lines and the analysis window that puts them on exact bins (private to
-:mod:`.frf`, which re-exports what the rest of identification uses).
+"""The forcing's lines and the analysis window that puts them on exact bins (private; used by
+:mod:`.frf` and :mod:`.lines`).
 
 A multisine's lines fall on exact DFT bins only over a whole number of its periods. Records
 are rarely cut so: loggers write both ends, log the run-in, or run on after the forcing
