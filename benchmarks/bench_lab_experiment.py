@@ -25,6 +25,7 @@ and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
         [--style lab|daq] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
+        [--logged-run-in 8.08] [--logged-run-out 3]
 
 ``--threshold S`` gives every person an indifference threshold on the perceived error, a dead
 zone of S times the error's RMS (the generator's ``threshold``; McRuer and Jex's nonlinear
@@ -33,6 +34,10 @@ remnant source).
 ``--cab-washout W --cab-delay T`` make the cab's true path the plants file's times a
 first-order washout ``s / (s + W)`` (rad/s) and a platform delay of T s (first-order Padé)
 that the plants file does not state: a lab that writes its motion path as the ideal one.
+
+``--logged-run-in S`` makes every file hold the whole trial: a run-in of S s (the forcing faded
+in from the record's start) before the measurement; ``--logged-run-out S`` adds S s after it
+while the forcing fades out (the generator's ``logged_run_in`` and ``logged_run_out``).
 """
 
 from __future__ import annotations
@@ -193,7 +198,16 @@ def main(argv=None) -> int:
     ap.add_argument("--cab-washout", type=float, default=0.0,
                     help="the cab's unstated washout corner, rad/s (0: none)")
     ap.add_argument("--cab-delay", type=float, default=0.0, help="the cab's unstated platform delay, s")
+    ap.add_argument("--logged-run-in", type=float, default=0.0,
+                    help="s of run-in logged before the measurement, from the forcing's fade-in (0: none)")
+    ap.add_argument("--logged-run-out", type=float, default=0.0,
+                    help="s logged after the measurement while the forcing fades out (0: none)")
     args = ap.parse_args(argv)
+    whole = {}
+    if args.logged_run_in:
+        whole.update(run_in=args.logged_run_in, logged_run_in=args.logged_run_in)
+    if args.logged_run_out:
+        whole.update(logged_run_out=args.logged_run_out)
     cab = (args.cab_washout, args.cab_delay) if args.cab_washout or args.cab_delay else None
     print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, files as a lab writes them")
     with tempfile.TemporaryDirectory() as tmp:
@@ -203,7 +217,8 @@ def main(argv=None) -> int:
                 folder = root / f"{tag}_{cond}"
                 t0 = time.perf_counter()
                 truth = write_condition(folder, tag, cond, args.persons, args.runs, args.seed,
-                                        DAQ if args.style == "daq" else LAB, cab=cab, threshold=args.threshold)
+                                        DAQ if args.style == "daq" else LAB, cab=cab, threshold=args.threshold,
+                                        **whole)
                 print(f"\n== {tag} ({PLANTS[tag]}), {cond}: {args.persons} persons x {args.runs} runs written "
                       f"in {time.perf_counter() - t0:.0f} s")
                 out_json = root / f"{tag}_{cond}.json"

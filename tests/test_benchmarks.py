@@ -127,6 +127,21 @@ def test_lab_experiment_cab_path_is_not_the_one_its_plants_file_states(tmp_path)
     assert not np.allclose(runs["ideal"].control, runs["cab"].control)              # another cab
 
 
+def test_lab_experiment_files_can_hold_the_whole_trial(tmp_path):
+    # --logged-run-in/--logged-run-out: each file holds the run-in (from the forcing's fade-in)
+    # and a fade-out; the analysis window is still the measurement, to the sample.
+    from hesspipe.core.formats import read_run
+    from hesspipe.identification.lines import analysis_window
+
+    m = _load("bench_lab_experiment")
+    # (a run-in of 6 s: the generator fades the forcing in over 5 s)
+    m.write_condition(tmp_path / "w", "SI", "static", 1, 1, 5, run_in=6.0, logged_run_in=6.0, logged_run_out=1.0)
+    run = read_run(tmp_path / "w" / "s01_static_r1.csv", columns=m.COLUMNS)
+    assert len(run.time) == 600 + 8192 + 100
+    start, length = analysis_window(run)
+    assert length == 8192 and 600 <= start <= 604
+
+
 def test_channels_benchmark_runs_against_the_truth(capsys, monkeypatch):
     # bench_channels reads the lab stand-in's files back and compares the channels with the
     # generator's own paths; one person, one run, the single integrator.

@@ -195,12 +195,14 @@ def _periodic_stretch(x: np.ndarray, tail: int = 64, steps: int = 16) -> tuple[i
         while i + 1 < err.size and err[i + 1] < err[i]:
             i += 1
         period = int(lags[i])
-        # Each sample's recurrence, judged from a segment a step further back (the one found
-        # may lie in a fade's first per cent): off where the change over a period exceeds 100
-        # times its mean square there (rounding) and persists for 3 samples (a fade's slow start).
+        # Each sample's recurrence: off where the change over a period exceeds 100 times its
+        # mean square in the quieter of this segment and the one a step back (either may lie in
+        # a fade's first per cent; a short stretch's step back, in the run-in's fade-in) and
+        # persists for 3 samples (a fade's slow start).
         step = max(tail, n // (4 * steps))
-        ref = q - step if q - step - period >= 0 else q
         d2 = (x[period:] - x[:-period]) ** 2
+        ref = min((r for r in (q, q - step) if r - period >= 0),
+                  key=lambda r: float(d2[r - period:r - period + tail].mean()))
         thr = max(100.0 * float(d2[ref - period:ref - period + tail].mean()), 1e-10 * energy / tail)
         off = d2 > thr
         persist = off[:-2] & off[1:-1] & off[2:]
