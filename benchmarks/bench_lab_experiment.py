@@ -139,21 +139,28 @@ def run_pilots(folder: Path, plants: Path, out_json: Path) -> tuple[int, str, st
     return code, out.getvalue(), err.getvalue(), time.perf_counter() - t0
 
 
+def diagnose_file(path: Path, plants: Path, out_json: Path) -> tuple[dict, float]:
+    """``hesspipe diagnose PATH --plants PLANTS --columns ... --json OUT_JSON`` in this process, as
+    typed: (its JSON report, CPU s of the command)."""
+    t0 = time.process_time()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
+        code = hesspipe(["diagnose", str(path), "--plants", str(plants), "--columns", COLUMNS,
+                         "--json", str(out_json)])
+    cpu = time.process_time() - t0
+    if code != 0:
+        raise HesspipeError(f"hesspipe diagnose {path} exited {code}: {err.getvalue().strip()}")
+    return json.loads(out_json.read_text()), cpu
+
+
 def diagnose_runs(folder: Path, plants: Path) -> tuple[int, int, dict, float]:
     """``hesspipe diagnose`` on every run of `folder`, one at a time: (runs named
     motion_feedback, runs, other names -> count, median CPU s per diagnosis)."""
     named, others, cpu = 0, {}, []
     paths = sorted(folder.glob("*.csv"))
     for path in paths:
-        out_json = folder.parent / f"{folder.name}-{path.stem}.diagnosis.json"
-        t0 = time.process_time()
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            code = hesspipe(["diagnose", str(path), "--plants", str(plants), "--columns", COLUMNS,
-                             "--json", str(out_json)])
-        cpu.append(time.process_time() - t0)
-        if code != 0:
-            raise HesspipeError(f"hesspipe diagnose {path} exited {code}")
-        names = json.loads(out_json.read_text())["named_effects"]
+        report, seconds = diagnose_file(path, plants, folder.parent / f"{folder.name}-{path.stem}.diagnosis.json")
+        cpu.append(seconds)
+        names = report["named_effects"]
         named += "motion_feedback" in names
         for n in names:
             if n != "motion_feedback":
@@ -175,12 +182,13 @@ def variation(comparison: dict) -> tuple[float, float]:
     return statistics.median(c[0] for c in cv), statistics.median(c[1] for c in cv)
 
 
-def experiment_arguments(doc: str) -> argparse.ArgumentParser:
-    """The experiment's options (persons, runs, seed, plants), shared by the benchmarks that
-    draw it."""
+def experiment_arguments(doc: str, runs: bool = True) -> argparse.ArgumentParser:
+    """The experiment's options (persons, runs unless `runs` is False, seed, plants), shared by
+    the benchmarks that draw it."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--persons", type=int, default=6)
-    ap.add_argument("--runs", type=int, default=3)
+    if runs:
+        ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--plants", default="SI,DI", help="comma list of SI (1/s) and DI (K/s2)")
     return ap

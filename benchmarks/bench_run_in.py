@@ -20,7 +20,6 @@ named on either file, and the largest change of the motion test's F.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -31,7 +30,6 @@ from pathlib import Path
 import numpy as np
 
 import bench_lab_experiment as B
-from hesspipe.cli import main as hesspipe
 from hesspipe.core.formats import read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import simulate_trial
@@ -57,25 +55,11 @@ def trial_pair(tag: str, cond: str, person: int, seed: int, run_in: float, run_o
     return out
 
 
-def diagnose(path: Path, plants: Path) -> dict:
-    """``hesspipe diagnose`` on `path` as typed: its JSON report."""
-    out_json = path.with_suffix(".diagnosis.json")
-    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
-        code = hesspipe(["diagnose", str(path), "--plants", str(plants), "--columns", B.COLUMNS,
-                         "--json", str(out_json)])
-    if code != 0:
-        raise SystemExit(f"hesspipe diagnose {path} exited {code}: {err.getvalue().strip()}")
-    return json.loads(out_json.read_text())
-
-
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--persons", type=int, default=6)
-    ap.add_argument("--seed", type=int, default=7)
+    ap = B.experiment_arguments(__doc__, runs=False)
     ap.add_argument("--run-in", type=float, default=8.08, help="run-in, s, logged before the measurement")
     ap.add_argument("--run-out", type=float, default=0.0,
                     help="s logged after the measurement while the forcing fades out (0: none)")
-    ap.add_argument("--plants", default="SI,DI", help="comma list of SI (1/s) and DI (K/s2)")
     ap.add_argument("--out", default=None, help="keep the files here (default: a temporary folder)")
     args = ap.parse_args(argv)
     print(f"SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, lab files; "
@@ -100,7 +84,7 @@ def main(argv=None) -> int:
                     for trial in (whole, window):
                         path = folder / f"{trial.spec.name}.csv"
                         B.lab_file(trial, path)
-                        reports.append(diagnose(path, plants))
+                        reports.append(B.diagnose_file(path, plants, path.with_suffix(".diagnosis.json"))[0])
                     n_keep = int(round(args.run_in * B.TRIAL["fs"]))
                     with contextlib.redirect_stderr(io.StringIO()):
                         run = read_run(folder / f"{whole.spec.name}.csv", columns=COLUMNS)

@@ -360,19 +360,9 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     name = opts["name"] or f"trial-{seed}"
     options = {k: opts[k] for k in ("fs", "T_m", "run_in", "fade", "fine_ratio", "n_lines",
                                     "output", "tau_m")}
-    logged = opts["logged_run_in"]
-    if logged:   # only when asked, as the feedforward below
-        n_keep = float(logged) * opts["fs"]
-        if not 0.0 < float(logged) <= opts["run_in"] or abs(n_keep - round(n_keep)) > 1e-9:
-            raise HesspipeError(f"logged_run_in: expected a whole number of samples in (0, run_in = "
-                                f"{opts['run_in']:g}] s, got {logged!r}")
-        options["logged_run_in"] = float(logged)
-    run_out = opts["logged_run_out"]
-    if run_out:
-        n_out = float(run_out) * opts["fs"]
-        if not float(run_out) > 0.0 or abs(n_out - round(n_out)) > 1e-9:
-            raise HesspipeError(f"logged_run_out: expected a whole number of samples > 0 s, got {run_out!r}")
-        options["logged_run_out"] = float(run_out)
+    for key, most in (("logged_run_in", ("run_in", opts["run_in"])), ("logged_run_out", None)):
+        if opts[key]:   # only when asked, as the feedforward below
+            options[key] = _whole_samples(key, opts[key], opts["fs"], most)
     kff = opts["feedforward"]
     if kff:   # only when asked: the default draws stay byte-identical
         if isinstance(kff, bool) or not isinstance(kff, (int, float)) or not 0.0 < kff <= 1.5:
@@ -395,6 +385,16 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     return TrialSpec(name=name, seed=int(seed), plant=plant, task=task, pilot=p,
                      effects=effects, options=options, disturbance=dist, target=targ,
                      remnant=remnant, actuator=actuator, motion_tf=motion_tf, style=style)
+
+
+def _whole_samples(key: str, seconds, fs: float, most: tuple[str, float] | None) -> float:
+    """`seconds` (s) of a logged option: > 0, at most `most` (its name and value, s) when given,
+    and a whole number of samples at `fs` (Hz)."""
+    n = float(seconds) * fs
+    if not 0.0 < float(seconds) <= (np.inf if most is None else most[1]) or abs(n - round(n)) > 1e-9:
+        within = "> 0 s" if most is None else f"in (0, {most[0]} = {most[1]:g}] s"
+        raise HesspipeError(f"{key}: expected a whole number of samples {within}, got {seconds!r}")
+    return float(seconds)
 
 
 def _wiring(spec: TrialSpec, h: float, rate_limit: float | None,

@@ -181,13 +181,12 @@ def _periodic_stretch(x: np.ndarray, tail: int = 64, steps: int = 16) -> tuple[i
     x = x - x.mean()
     c = np.concatenate(([0.0], np.cumsum(x * x)))
     for q in range(n - tail, max(n // 2, 3 * tail) - 1, -max(tail, n // (4 * steps))):
-        seg = x[q:q + tail]
-        energy = float(seg @ seg)
         lags = np.arange(2 * tail, q + 1)
-        if not energy > 0 or lags.size == 0:
+        if lags.size == 0:
             continue
-        starts = q - lags
-        err = (c[starts + tail] - c[starts]) - 2.0 * np.correlate(x[:q], seg, mode="valid")[starts] + energy
+        err, energy = _recurrence(x, c, q, tail, lags)
+        if not energy > 0:
+            continue
         hit = np.flatnonzero(err < 1e-3 * energy)
         if hit.size == 0:
             continue
@@ -227,15 +226,22 @@ def _period_by_end(x: np.ndarray, tail: int = 64) -> int | None:
     if hi < lo:
         return None
     x = x - x.mean()
-    end = x[n - tail:]
-    energy = float(end @ end)
+    c = np.concatenate(([0.0], np.cumsum(x * x)))
+    lags = np.arange(lo, hi + 1)
+    err, energy = _recurrence(x, c, n - tail, tail, lags)
     if not energy > 0:
         return None
-    lags = np.arange(lo, hi + 1)
-    starts = n - tail - lags
-    # sum_j (x[i + j] - end[j])^2 for every start i, in O(n) memory.
-    c = np.concatenate(([0.0], np.cumsum(x * x)))
-    err = (c[starts + tail] - c[starts]) - 2.0 * np.correlate(x, end, mode="valid")[starts] + energy
     i = int(np.argmin(err))
     # A match to rounding only: anything else differs by about twice the end's energy.
     return int(lags[i]) if err[i] < 1e-3 * energy else None
+
+
+def _recurrence(x: np.ndarray, c: np.ndarray, q: int, tail: int, lags: np.ndarray) -> tuple[np.ndarray, float]:
+    """(err, energy): for the segment ``x[q:q + tail]``, ``sum_j (x[q - L + j] - x[q + j])^2``
+    at each lag L of `lags` (``tail <= L <= q``), in O(n) memory (`c`: the cumulative sum of
+    ``x**2``, a leading 0), and the segment's own energy."""
+    seg = x[q:q + tail]
+    energy = float(seg @ seg)
+    starts = q - lags
+    err = (c[starts + tail] - c[starts]) - 2.0 * np.correlate(x[:q], seg, mode="valid")[starts] + energy
+    return err, energy
