@@ -160,6 +160,36 @@ def test_a_record_whose_forcing_fades_out_before_the_logger_stops(seed):
     assert np.max(np.abs(f.feedback.H - H_fb(1j * w)) / np.abs(H_fb(1j * w))) < 0.1
 
 
+@pytest.mark.parametrize("case", ["one period of faded run-in", "two periods less a sample",
+                                  "one period and a sample at each end"])
+def test_a_window_one_sample_off_the_period_is_not_taken(case):
+    # A lab's layout (100 Hz, 81.92 s, ten lines per forcing, the disturbance's falling off as
+    # 1/i): its slow signal recurs to 1e-3 one sample off the period, and a window one sample
+    # too long kept 0.999 of the power at the lines. Records whose every sample outside the
+    # fade-in is periodic; the window must be whole periods ending at the record's end (the
+    # previous search took 8193, 16383 and 8193 samples on these three).
+    n_p = 8192
+    kd = np.array([5, 11, 23, 37, 51, 71, 101, 137, 171, 226])
+    kt = np.array([6, 13, 27, 41, 53, 73, 103, 139, 194, 229])
+
+    def sines(bins, amp, seed, k):
+        ph = np.random.default_rng(seed).uniform(0, 2 * np.pi, bins.size)
+        return np.sum(amp[:, None] * np.sin(2 * np.pi * np.outer(bins, k) / n_p + ph[:, None]), axis=0)
+
+    keep, fade, extra = {"one period of faded run-in": (n_p, 500, 0),
+                         "two periods less a sample": (n_p - 1, 0, 0),
+                         "one period and a sample at each end": (1, 0, 1)}[case]
+    k = np.arange(-keep, n_p + extra)
+    gain = np.clip((k + keep) / fade, 0.0, 1.0) if fade else 1.0
+    d = sines(kd, 1.0 / np.arange(1, 11), 2, k) * gain
+    r = 0.5 * sines(kt, np.ones(10), 3, k) * gain
+    e = d + r
+    rec = Run(time=np.arange(k.size) / 100.0, disturbance=np.round(d, 3), output=np.round(r - e, 3),
+              control=np.round(0.5 * e, 3), reference=np.round(r, 3), id="t", synthetic=True)
+    start, length = estimate_frf(rec).window
+    assert length % n_p == 0 and start >= fade and k.size - (start + length) <= extra
+
+
 def test_broadband_falls_back_to_welch():
     rng = np.random.default_rng(5)
     d = _apply(rng.standard_normal(4 * N), lambda s: 5 / (s + 5))
