@@ -24,7 +24,7 @@ counts): how many runs of each condition are named ``motion_feedback``, what els
 and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
-        [--style lab|daq] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
+        [--style lab|daq|matlab|mat] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
         [--logged-run-in 8.08] [--logged-run-out 3]
 
 ``--threshold S`` gives every person an indifference threshold on the perceived error, a dead
@@ -61,9 +61,31 @@ from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import csv_bytes, draw_trial, simulate_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
 from hesspipe.humanlike.plants import ANGLE_MOTION
-from hesspipe.humanlike.writer import DAQ, LAB, plants_dict
+from hesspipe.humanlike.writer import DAQ, LAB, MAT_NAMES, MATLAB, mat_bytes, plants_dict
 
 COLUMNS = ",".join(f"{role}={LAB['names'][role]}" for role in ("reference", "disturbance", "output", "control"))
+MAT = {"format": "mat"}
+"""A MATLAB workspace saved as ``.mat`` (:func:`~hesspipe.humanlike.writer.mat_bytes`: variables
+t, ft, fd, x, u in seconds and degrees)."""
+STYLES = {"lab": LAB, "daq": DAQ, "matlab": MATLAB, "mat": MAT}
+
+
+def columns(style) -> str:
+    """The ``--columns`` mapping that reads files of `style`: the lab's names, positions (1 =
+    first) for a file without a header row (:data:`~hesspipe.humanlike.writer.MATLAB`), or a
+    MAT file's variable names."""
+    if style.get("format") == "mat":
+        return ",".join(f"{role}={var}" for role, var in MAT_NAMES.items())
+    if style.get("header", True):
+        return COLUMNS
+    return ",".join(f"{role}={k}" for k, role in enumerate(style["columns"], 1))
+
+
+def suffix(style) -> str:
+    """The file name's suffix a lab gives files of `style` (MATLAB's ``save -ascii``: .txt)."""
+    if style.get("format") == "mat":
+        return ".mat"
+    return ".csv" if style.get("header", True) else ".txt"
 PLANTS = {"SI": "1/s", "DI": "K/s2"}
 TRIAL = dict(task="both", pilot="precision", output="angle", tau_m=0.15, gain_drift=0.15,
              line_bins=SPARSE_LAYOUT["line_bins"], fs=SPARSE_LAYOUT["fs"], T_m=SPARSE_LAYOUT["T_m"])
@@ -73,8 +95,8 @@ TRIAL = dict(task="both", pilot="precision", output="angle", tau_m=0.15, gain_dr
 def lab_file(trial, path: Path, style=LAB) -> None:
     """`trial` as a lab's logger writes it (the generator's :data:`~hesspipe.humanlike.writer.LAB`
     style, module doc, or another, e.g. :data:`~hesspipe.humanlike.writer.DAQ`), labelled
-    synthetic in its comment line."""
-    path.write_bytes(csv_bytes(trial, style))
+    synthetic in its comment line (a MAT file's ``note``)."""
+    path.write_bytes(mat_bytes(trial) if style.get("format") == "mat" else csv_bytes(trial, style))
 
 
 def draw_person(plant: str, effects, seed: int, **kw):
@@ -121,7 +143,7 @@ def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, 
                 truth[f"s{s + 1:02d}"] = {k: v for k, v in person.items() if isinstance(v, (int, float, str))}
             else:   # the same person again: only forcing phases, remnant and wander are new
                 spec = draw_trial(PLANTS[tag], seed_r, effects=effects, pilot_params=person, **kw)
-            lab_file(simulate_trial(spec), folder / f"{spec.name}.csv", style)
+            lab_file(simulate_trial(spec), folder / f"{spec.name}{suffix(style)}", style)
     stated = plants_dict(spec)
     if cab is not None:   # the lab states the ideal path
         stated["motion_path"] = {"num": list(ANGLE_MOTION[0]), "den": list(ANGLE_MOTION[1])}
@@ -129,22 +151,23 @@ def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, 
     return truth
 
 
-def run_pilots(folder: Path, plants: Path, out_json: Path) -> tuple[int, str, str, float]:
-    """``hesspipe pilots`` on `folder` in this process: (exit status, stdout, stderr, wall s)."""
+def run_pilots(folder: Path, plants: Path, out_json: Path, cols: str = COLUMNS) -> tuple[int, str, str, float]:
+    """``hesspipe pilots`` on `folder` in this process, its files read with the mapping `cols`:
+    (exit status, stdout, stderr, wall s)."""
     out, err = io.StringIO(), io.StringIO()
     t0 = time.perf_counter()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = hesspipe(["pilots", str(folder), "--plants", str(plants), "--pilot-id", "^(s[0-9]+)_",
-                         "--columns", COLUMNS, "--json", str(out_json)])
+                         "--columns", cols, "--json", str(out_json)])
     return code, out.getvalue(), err.getvalue(), time.perf_counter() - t0
 
 
-def diagnose_file(path: Path, plants: Path, out_json: Path) -> tuple[dict, float]:
+def diagnose_file(path: Path, plants: Path, out_json: Path, cols: str = COLUMNS) -> tuple[dict, float]:
     """``hesspipe diagnose PATH --plants PLANTS --columns ... --json OUT_JSON`` in this process, as
     typed: (its JSON report, CPU s of the command)."""
     t0 = time.process_time()
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
-        code = hesspipe(["diagnose", str(path), "--plants", str(plants), "--columns", COLUMNS,
+        code = hesspipe(["diagnose", str(path), "--plants", str(plants), "--columns", cols,
                          "--json", str(out_json)])
     cpu = time.process_time() - t0
     if code != 0:
@@ -152,13 +175,15 @@ def diagnose_file(path: Path, plants: Path, out_json: Path) -> tuple[dict, float
     return json.loads(out_json.read_text()), cpu
 
 
-def diagnose_runs(folder: Path, plants: Path) -> tuple[int, int, dict, float]:
-    """``hesspipe diagnose`` on every run of `folder`, one at a time: (runs named
-    motion_feedback, runs, other names -> count, median CPU s per diagnosis)."""
+def diagnose_runs(folder: Path, plants: Path, cols: str = COLUMNS) -> tuple[int, int, dict, float]:
+    """``hesspipe diagnose`` on every run of `folder` (.csv, .txt, .mat), one at a time, read with the
+    mapping `cols`: (runs named motion_feedback, runs, other names -> count, median CPU s per
+    diagnosis)."""
     named, others, cpu = 0, {}, []
-    paths = sorted(folder.glob("*.csv"))
+    paths = sorted(p for p in folder.iterdir() if p.suffix in (".csv", ".txt", ".mat"))
     for path in paths:
-        report, seconds = diagnose_file(path, plants, folder.parent / f"{folder.name}-{path.stem}.diagnosis.json")
+        report, seconds = diagnose_file(path, plants, folder.parent / f"{folder.name}-{path.stem}.diagnosis.json",
+                                        cols)
         cpu.append(seconds)
         names = report["named_effects"]
         named += "motion_feedback" in names
@@ -198,9 +223,11 @@ def main(argv=None) -> int:
     ap = experiment_arguments(__doc__)
     ap.add_argument("--out", default=None, help="keep the experiment's files here (default: a temporary folder)")
     ap.add_argument("--diagnose", action="store_true", help="also diagnose every run on its own")
-    ap.add_argument("--style", choices=("lab", "daq"), default="lab",
-                    help="the files' style: lab (LAB: semicolons, decimal commas) or daq (DAQ: metadata above "
-                         "the header, a units row, clock times across midnight, frames written twice, UTF-16)")
+    ap.add_argument("--style", choices=tuple(STYLES), default="lab",
+                    help="the files' style: lab (LAB: semicolons, decimal commas), daq (DAQ: metadata above "
+                         "the header, a units row, clock times across midnight, frames written twice, UTF-16) "
+                         "matlab (MATLAB: save -ascii, no header row, read by position) or mat (a .mat "
+                         "file of variables t, ft, fd, x, u)")
     ap.add_argument("--threshold", type=float, default=0.0,
                     help="each person's indifference threshold, share of the error's RMS (0: none)")
     ap.add_argument("--cab-washout", type=float, default=0.0,
@@ -217,6 +244,7 @@ def main(argv=None) -> int:
     if args.logged_run_out:
         whole.update(logged_run_out=args.logged_run_out)
     cab = (args.cab_washout, args.cab_delay) if args.cab_washout or args.cab_delay else None
+    style = STYLES[args.style]
     print("SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, files as a lab writes them")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(args.out or tmp)
@@ -225,12 +253,12 @@ def main(argv=None) -> int:
                 folder = root / f"{tag}_{cond}"
                 t0 = time.perf_counter()
                 truth = write_condition(folder, tag, cond, args.persons, args.runs, args.seed,
-                                        DAQ if args.style == "daq" else LAB, cab=cab, threshold=args.threshold,
+                                        style, cab=cab, threshold=args.threshold,
                                         **whole)
                 print(f"\n== {tag} ({PLANTS[tag]}), {cond}: {args.persons} persons x {args.runs} runs written "
                       f"in {time.perf_counter() - t0:.0f} s")
                 out_json = root / f"{tag}_{cond}.json"
-                code, out, err, wall = run_pilots(folder, root / f"plants_{tag}.json", out_json)
+                code, out, err, wall = run_pilots(folder, root / f"plants_{tag}.json", out_json, columns(style))
                 if code != 0:
                     print(f"hesspipe pilots exited {code}: {err.strip()}")
                     return 1
@@ -239,7 +267,7 @@ def main(argv=None) -> int:
                 notes = [ln for ln in err.splitlines() if ln.startswith("hesspipe: note:")]
                 print(f"hesspipe pilots: {wall:.0f} s wall; {len(notes)} note line(s) on stderr")
                 if args.diagnose:
-                    named, n, others, cpu = diagnose_runs(folder, root / f"plants_{tag}.json")
+                    named, n, others, cpu = diagnose_runs(folder, root / f"plants_{tag}.json", columns(style))
                     print(f"hesspipe diagnose, run by run: motion_feedback named on {named}/{n} runs; other "
                           f"names: {', '.join(f'{k} {v}/{n}' for k, v in sorted(others.items())) or 'none'}; "
                           f"median CPU {cpu:.2f} s per diagnosis")

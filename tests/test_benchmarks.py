@@ -16,6 +16,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
 
@@ -86,6 +87,34 @@ def test_lab_experiment_files_read_back_as_the_trial(tmp_path):
                       for i, r, k in (("a1", 0.1, 1.0), ("a2", 0.3, 3.0))]}
     cv = np.std([0.1, 0.3], ddof=1) / 0.2
     assert np.allclose(m.variation(cmp), (cv, cv), rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("style", ["matlab", "mat"])
+def test_lab_experiment_files_from_matlab_read_as_the_trial(tmp_path, style):
+    # MATLAB's save -ascii (numbers only) and a .mat workspace, both in degrees with no unit
+    # written: the benchmark's mapping (by position; by variable) reads the trial, every
+    # signal in the degrees written, and the describing function is the LAB file's.
+    from hesspipe.core.formats import read_run
+    from hesspipe.humanlike import draw_trial, simulate_trial
+    from hesspipe.identification.frf import estimate_frf
+
+    m = _load("bench_lab_experiment")
+    st = m.STYLES[style]
+    trial = simulate_trial(draw_trial("1/s", 3, task="both", pilot="precision", output="angle", name="s01_motion_r1"))
+    assert (m.suffix(st), m.columns(st)) == {
+        "matlab": (".txt", "time=1,reference=2,disturbance=3,output=4,control=5"),
+        "mat": (".mat", "time=t,reference=ft,disturbance=fd,output=x,control=u")}[style]
+    path = tmp_path / f"a{m.suffix(st)}"
+    m.lab_file(trial, path, st)
+    m.lab_file(trial, tmp_path / "b.csv")
+    run = read_run(path, columns=m.columns(st))
+    assert run.synthetic
+    assert any(("no header row" if style == "matlab" else "MATLAB file") in n for n in run.notes)
+    for name in ("reference", "disturbance", "output", "control"):
+        want = np.degrees(getattr(trial, name))
+        assert np.allclose(getattr(run, name), want, rtol=1e-7, atol=1e-9 * np.abs(want).max()), name
+    lab = estimate_frf(read_run(tmp_path / "b.csv", columns=m.COLUMNS)).feedback.H
+    assert np.allclose(estimate_frf(run).feedback.H, lab, rtol=1e-4, atol=0)
 
 
 def test_lab_experiment_gives_its_persons_the_threshold_asked_for(tmp_path):

@@ -323,3 +323,41 @@ def test_an_angle_that_does_not_wrap_is_left_as_read(tmp_path):
     run = read_run(path)
     np.testing.assert_allclose(run.output, np.radians(170 * np.sin(0.2 * t)), rtol=1e-7, atol=1e-9)
     assert not any("turn" in n for n in run.notes)
+
+
+POSITIONS = "time=1,disturbance=2,output=3,control=4,reference=5"
+
+
+@pytest.mark.parametrize("name, data, note", [
+    # MATLAB's save -ascii / dlmwrite: numbers only, no names.
+    ("matlab.txt", "".join(_text(PLAIN, "   ").split("\n", 1)[1]).encode(), "whitespace-separated"),
+    ("bare.csv", _text(PLAIN).split("\n", 1)[1].encode(), None),
+    # A decimal comma splits a semicolon file's numbers in two: the comma must not be taken
+    # for the separator when no header says otherwise.
+    ("european-bare.csv", _text(PLAIN, ";", ",").split("\n", 1)[1].replace("\n", "\r\n").encode(),
+     "decimal commas"),
+])
+def test_a_file_without_a_header_row_is_read_by_position(tmp_path, name, data, note):
+    path = tmp_path / name
+    path.write_bytes(data)
+    run = read_run(path, columns=POSITIONS)
+    for got, want in zip((run.time, run.disturbance, run.output, run.control, run.reference), _signals()):
+        np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-9)
+    assert any("no header row: columns named by position, 1 to 5" in n for n in run.notes), run.notes
+    if note:
+        assert any(note in n for n in run.notes), run.notes
+    # Unmapped, the message says why no name matches and how to map the positions.
+    with pytest.raises(HesspipeError, match=rf"{name}: column 'time' missing; the file has no header "
+                                            r"row, its columns are named by position 1-5"):
+        read_run(path)
+
+
+def test_a_comment_naming_the_columns_above_the_data_is_the_header(tmp_path):
+    # gnuplot's habit: "# time disturbance ..." right above numbers.
+    path = tmp_path / "gnuplot.dat"
+    body = _text(PLAIN, " ").split("\n", 1)[1]
+    path.write_text("# subject s03, motion on\n# " + " ".join(PLAIN) + "\n" + body)
+    run = read_run(path)
+    np.testing.assert_allclose(run.output, _signals()[2], rtol=1e-6, atol=1e-9)
+    assert any("comment line above the data as the header" in n for n in run.notes)
+    assert run.comments[0] == "subject s03, motion on"

@@ -48,7 +48,9 @@ def add_run_options(parser: argparse.ArgumentParser) -> None:
     Pass them on with ``read_run(path, **run_options(args))``.
     """
     parser.add_argument("--columns", metavar="ROLE=NAME,...",
-                        help="map other column names, e.g. control=stick,output=p")
+                        help="map other column names, e.g. control=stick,output=p (a file without a "
+                             "header row: by position, time=1,control=4; a .mat file: by variable, "
+                             "time=t,control=u)")
     parser.add_argument("--resample", action="store_true",
                         help="interpolate a non-uniform time column onto a uniform grid "
                              "(default: refuse it)")

@@ -5,7 +5,8 @@ recorders and spreadsheets are that format written in other hands: UTF-16 from E
 "Unicode text", Windows-1252 from older tools, tab or semicolon separators (the latter
 with decimal commas in European locales), capitalised headers, and a unit beside a name
 (``Time [s]``, ``roll rate (deg/s)``), or in a row of their own under the names; lines of
-metadata above the header (``Subject: s02``); quoted cells; a frame the logger wrote twice.
+metadata above the header (``Subject: s02``); quoted cells; a frame the logger wrote twice;
+no header at all (MATLAB's ``save -ascii``: the columns are then named by position, 1 to k).
 They are valid input; this module reads them into the roles the caller asks for and
 converts the units it knows to SPEC.md's (:data:`UNIT_FACTORS`), saying what it did
 (:attr:`Table.notes`).
@@ -25,6 +26,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
+from ._mat import mat_frame
 from .errors import HesspipeError
 from .io import read_bytes
 
@@ -140,7 +142,12 @@ def _dialect(text: str) -> tuple[str, str]:
         return ",", "."
     header, body = lines[0], lines[1:50]
     best, width = None, 1
+    # A file without a header row: only a separator that splits its first line into numbers
+    # (a decimal comma splits "0,01;2,5" into more fields than the semicolon does).
+    numeric = not re.search(r"[A-DF-Za-df-z]", header)
     for sep in (",", "\t", ";"):
+        if numeric and not all(_number(c) for c in header.split(sep) if c.strip()):
+            continue
         n = len(header.split(sep))
         misfits = sum(len(ln.split(sep)) not in (n, n + 1) for ln in body)
         fits = misfits <= max(1, len(body) // 10) and (misfits < len(body) or not body)
@@ -187,6 +194,9 @@ def _layout(lines: list[str]) -> tuple[int, bool]:
             n = counts[len(counts) // 2]
             if n < 2 or any(c not in (n - 1, n) for c in counts):
                 continue
+            cells = [c for c in mid[0].split(sep) if c.strip()]
+            if 2 * sum(_number(c) for c in cells) < len(cells):
+                continue   # a decimal comma's split of semicolon data ("0,02;0,5" at ",")
             i = next((i for i, ln in enumerate(lines[:len(lines) // 2])
                       if len(ln.split(sep)) in (n - 1, n)
                       and not all(_number(c) for c in ln.split(sep) if c.strip())), None)
@@ -300,6 +310,9 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
         Naming the file, the column and the problem.
     """
     path = Path(path)
+    if path.suffix.lower() == ".mat":
+        df, comments, notes, others = mat_frame(path)
+        return _by_role(path, df, names, optional, hint, notes, comments, ".", None, others)
     text, encoding = decode(path, what)
     notes = [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"]
     text, sep, decimal = _prepare(text, notes)
@@ -325,6 +338,19 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
                                 "expected one value per named column") from None
         raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip() for c in df.columns]
+
+    def written(col: str) -> np.ndarray:
+        return pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
+                           usecols=[col], dtype=str, engine="python" if sep == r"\s+" else "c")[col].to_numpy()
+
+    return _by_role(path, df, names, optional, hint, notes, comments, decimal, written, None)
+
+
+def _by_role(path: Path, df: pd.DataFrame, names, optional, hint, notes: list, comments, decimal: str,
+             written, others) -> Table:
+    """:func:`read_table`'s columns found by role in `df`, checked and converted. `written`: the
+    time column's cells as text (for their resolution), None for a binary file; `others`: a
+    MAT file's variables of another length (named in a missing column's message)."""
     headers = list(df.columns)
     data, used = {}, {}
     flipped = set()
@@ -344,8 +370,17 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
         if col is None:
             if role in optional:
                 continue
-            tail = f"; map other names with {hint} {role}=NAME" if hint else ""
             label = f" (role {role})" if role != name else ""
+            if others is not None:
+                tail = f"; map other names with {hint} {role}=NAME" if hint else ""
+                left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
+                raise HesspipeError(f"{path}: variable '{name}' missing{label}; found variables: "
+                                    f"{', '.join(headers)}{left}{tail}")
+            if any(n.startswith("no header row") for n in notes):
+                tail = f"; map them with {hint} {role}=POSITION" if hint else ""
+                raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "
+                                    f"row, its columns are named by position 1-{len(headers)}{tail}")
+            tail = f"; map other names with {hint} {role}=NAME" if hint else ""
             raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
                                 f"{', '.join(headers)}{tail}")
         data[role], used[role] = _numeric(df[col], decimal), col
@@ -379,11 +414,8 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
                          f"(first data row {int(keep[1:][again][0]) + 1}: a frame written twice)")
             keep = keep[np.concatenate(([True], ~again))]
     resolution = {}
-    if "time" in used:
-        raw = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
-                          usecols=[used["time"]], dtype=str,
-                          engine="python" if sep == r"\s+" else "c")[used["time"]]
-        resolution["time"] = _resolution(raw.to_numpy()[keep])
+    if "time" in used and written is not None:
+        resolution["time"] = _resolution(written(used["time"])[keep])
     for role, col in used.items():
         values = data[role][keep]
         if role in flipped:
@@ -468,6 +500,23 @@ def _prepare(text: str, notes: list) -> tuple[str, str, str]:
     if sep != ",":
         notes.append({"\t": "tab-separated", ";": "semicolon-separated"}.get(sep, "whitespace-separated")
                      + (" with decimal commas" if decimal == "," else ""))
+    first = next((i for i, ln in enumerate(lines) if _is_content(ln)), None)
+    cells = None if first is None else [c for c in (lines[first].split() if sep == r"\s+"
+                                                    else _cells(lines[first], sep)) if c]
+    if cells and all(_number(c) for c in cells):
+        # No header row. A comment right above the data naming as many columns is one
+        # (``# time disturbance output control``, gnuplot's habit); else (MATLAB's save
+        # -ascii, dlmwrite) the columns are named by their position, 1 to k.
+        above = lines[first - 1].strip().lstrip("#%").strip() if first and lines[first - 1].lstrip()[:1] == "#" else ""
+        names = [c for c in (above.split() if sep == r"\s+" else _cells(above, sep)) if c]
+        # Names, not prose: no number, no word ending a clause ("# subject: s02, motion").
+        if len(names) == len(cells) and not any(_number(c) or c[-1] in ":,;" for c in names):
+            notes.append("read the comment line above the data as the header")
+        else:
+            names = [str(k) for k in range(1, len(cells) + 1)]
+            notes.append(f"no header row: columns named by position, 1 to {len(cells)}")
+        lines.insert(first, (" " if sep == r"\s+" else sep).join(names))
+        text = "\n".join(lines)
     return text, sep, decimal
 
 

@@ -36,8 +36,8 @@ from .paper import WELCH_SEGMENT
 
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
 #: File endings of measured runs when a folder is a set of pilots (tab-separated files
-#: are the same table; :func:`read_run` reads either).
-RUN_SUFFIXES = (".csv", ".tsv")
+#: are the same table, MATLAB files its columns as variables; :func:`read_run` reads each).
+RUN_SUFFIXES = (".csv", ".tsv", ".mat")
 #: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
 TEXT_SUFFIXES = (".txt", ".dat")
 OPTIONAL_COLUMNS = ("reference",)
@@ -186,8 +186,12 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
         without a byte-order mark), UTF-16 or Windows-1252; LF, CRLF or CR line ends;
         comma-, tab- or semicolon-separated (decimal commas with semicolons); headers
         matched ignoring case and a unit in brackets, whose units are converted to
-        SPEC.md's (``time [ms]``, ``output [deg/s]``; :data:`hesspipe.core._csv.UNIT_FACTORS`).
-        What was converted is in :attr:`Run.notes`.
+        SPEC.md's (``time [ms]``, ``output [deg/s]``; :data:`hesspipe.core._csv.UNIT_FACTORS`);
+        without a header row its columns are named by position, ``1`` to ``k``. Or a
+        MATLAB file (``.mat``, versions 4-7): each numeric vector a column named after its
+        variable, a matrix's columns ``NAME:1`` to ``NAME:k``, a struct's fields
+        ``STRUCT.FIELD``, values as written (:mod:`hesspipe.core._mat`). What reading did
+        is in :attr:`Run.notes`.
     columns : str or mapping, optional
         Role → column-name mapping for files with other names, e.g.
         ``"control=stick,output=p"``; ``"control=-stick"`` flips the sign of a column

@@ -23,8 +23,8 @@ or given:
 Never drawn, given for a laboratory's own files (:data:`LAB`):
 
 ``sep``, ``decimal``
-    field separator (``","``, ``";"``, ``"\t"``) and decimal mark (``"."`` or ``","``,
-    not the separator).
+    field separator (``","``, ``";"``, ``"\t"``, or ``"   "`` aligned as MATLAB's) and
+    decimal mark (``"."`` or ``","``, not the separator).
 ``degrees``
     every signal in degrees (times 180/pi), its header ``NAME [deg]``.
 ``names``
@@ -41,14 +41,19 @@ record may run past midnight).
     lines of metadata written above everything, not marked as comments.
 ``repeat``
     sample indices whose row the logger writes twice.
+``header``
+    False: no header row (MATLAB's ``save -ascii``; :data:`MATLAB`), numbers only under
+    the label's comment.
 """
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 
 import numpy as np
+from scipy.io import savemat
 
 from ..core.errors import HesspipeError
 from ..core.io import atomic_path, to_json, write_json
@@ -61,7 +66,7 @@ LABEL = "synthetic data: independent human-like generator"
 PLAIN = {"time": "g17", "values": "%.6g", "newline": "\n", "bom": False,
          "columns": list(COLUMNS), "epoch0": 0.0, "sep": ",", "decimal": ".", "degrees": False,
          "names": None, "encoding": "utf-8", "clock0": 0.0, "units_row": False, "preamble": (),
-         "repeat": ()}
+         "repeat": (), "header": True}
 LAB = {"time": "%.5f", "values": "%.5f", "newline": "\r\n", "sep": ";", "decimal": ",", "degrees": True,
        "encoding": "cp1252", "columns": ["time", "reference", "disturbance", "output", "control"],
        "names": {"time": "Time [s]", "reference": "Target", "disturbance": "Disturbance", "output": "Yaw",
@@ -77,6 +82,12 @@ DAQ = {**LAB, "time": "clock", "clock0": 86400.0 - 45.0, "sep": "\t", "encoding"
 columns, tab-separated with decimal commas in UTF-16, three lines of metadata above the
 header, the units in a row under it, the time of day (the record crosses midnight) and two
 frames written twice. The same ``--columns`` as :data:`LAB` read it."""
+MATLAB = {**LAB, "time": "%.7e", "values": "%.7e", "sep": "   ", "decimal": ".", "newline": "\n",
+          "encoding": "utf-8", "header": False}
+"""A third laboratory's export (a style to give, never drawn): MATLAB's ``save -ascii``, the
+:data:`LAB` columns in degrees and seconds with eight significant digits, aligned by spaces,
+no header row and no units (only the label's ``#`` line above the numbers). Read by position:
+``--columns time=1,reference=2,disturbance=3,output=4,control=5``."""
 ENCODINGS = ("utf-8", "cp1252", "utf-16")
 
 
@@ -111,8 +122,8 @@ def _style(style) -> dict:
                             f"or a printf format, got {out['time']!r}")
     if sorted(out["columns"]) != sorted(COLUMNS):
         raise HesspipeError(f"style: field 'columns': expected an order of {', '.join(COLUMNS)}")
-    if out["sep"] not in (",", ";", "\t") or out["decimal"] not in (".", ",") or out["sep"] == out["decimal"]:
-        raise HesspipeError(f"style: fields 'sep' and 'decimal': expected a separator of ',', ';' or tab "
+    if out["sep"] not in (",", ";", "\t", "   ") or out["decimal"] not in (".", ",") or out["sep"] == out["decimal"]:
+        raise HesspipeError(f"style: fields 'sep' and 'decimal': expected a separator of ',', ';', tab or three spaces "
                             f"and another decimal mark '.' or ',', got {out['sep']!r} and {out['decimal']!r}")
     if out["encoding"] not in ENCODINGS:
         raise HesspipeError(f"style: field 'encoding': expected one of {', '.join(ENCODINGS)}, "
@@ -160,9 +171,10 @@ def csv_bytes(trial, style=None) -> bytes:
                                                   and not st["units_row"] else "")
              for c in COLUMNS}
     nl, sep = st["newline"], st["sep"]
-    rows = [*st["preamble"], f"# {LABEL} ({trial.truth['generator']}); trial {trial.spec.name}",
-            sep.join(names[c] for c in st["columns"])]
-    if st["units_row"]:
+    rows = [*st["preamble"], f"# {LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"]
+    if st["header"]:
+        rows.append(sep.join(names[c] for c in st["columns"]))
+    if st["units_row"] and st["header"]:
         rows.append(sep.join(units[c] for c in st["columns"]))
     twice = set(int(i) for i in st["repeat"])
     for i in range(len(trial.time)):
@@ -170,6 +182,33 @@ def csv_bytes(trial, style=None) -> bytes:
     text = nl.join(rows) + nl
     bom = b"\xef\xbb\xbf" if st["bom"] and st["encoding"] == "utf-8" else b""
     return bom + text.encode(st["encoding"])
+
+
+MAT_NAMES = {"time": "t", "reference": "ft", "disturbance": "fd", "output": "x", "control": "u"}
+"""The variables a MATLAB-run laboratory saves a trial as (:func:`mat_bytes`): time, target
+forcing, disturbance forcing, the controlled element's output, the stick."""
+
+
+def mat_bytes(trial, names: dict | None = None, degrees: bool = True) -> bytes:
+    """The MATLAB file (version 5, ``.mat``) of `trial`: each signal a column vector named as in
+    `names` (default :data:`MAT_NAMES`), angles in degrees when `degrees`, time in seconds, and
+    the label in a text variable ``note``.
+
+    Parameters
+    ----------
+    trial : Trial
+    names : dict, optional
+        SPEC column name → variable name.
+    degrees : bool
+        Every signal but time times 180/pi (no unit is written: a MAT file holds none).
+    """
+    names = {**MAT_NAMES, **(names or {})}
+    scale = 180.0 / np.pi if degrees else 1.0
+    data = {names[c]: (trial.time if c == "time" else scale * getattr(trial, c)).reshape(-1, 1) for c in COLUMNS}
+    data["note"] = f"{LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"
+    buf = io.BytesIO()
+    savemat(buf, data, format="5", oned_as="column")
+    return buf.getvalue()
 
 
 def plants_dict(spec) -> dict:

@@ -1,0 +1,105 @@
+"""Reading MATLAB files (``.mat``, versions 4 to 7): a trial saved as variables.
+
+Laboratories that run their experiments from MATLAB or Simulink keep a trial as the
+workspace's variables (``save trial.mat t ft fd e u x``), as one matrix of columns, or as
+a struct of signals. Each numeric vector becomes a column named after its variable, each
+matrix its columns ``NAME:1`` to ``NAME:k`` (samples along its longer side), a struct's
+fields ``STRUCT.FIELD``; text variables are the file's comments. A MAT file holds no units:
+values are read as written. Version 7.3 files are HDF5, which scipy does not read; they are
+refused with the remedy.
+"""
+
+from __future__ import annotations
+
+import io as _io
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import io as _sio
+
+from .errors import HesspipeError
+from .io import read_bytes
+
+
+def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str], list[str]]:
+    """The columns of a MAT file.
+
+    Parameters
+    ----------
+    path : path
+        The ``.mat`` file.
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+        The columns that share the record's length (the length most columns have; the
+        longest on a tie), in the file's order, values as written.
+    comments : tuple of str
+        Text variables, ``NAME: text`` (MATLAB's own header line first).
+    notes : list of str
+        What reading did, one sentence each.
+    others : list of str
+        Numeric variables left out: another length (``fs (1 value)``).
+
+    Raises
+    ------
+    HesspipeError
+        Naming the file: missing, not a MAT file, a version 7.3 file, no numeric vector in it.
+    """
+    path = Path(path)
+    raw = read_bytes(path, "a MATLAB file")
+    try:
+        content = _sio.loadmat(_io.BytesIO(raw), squeeze_me=True, simplify_cells=True)
+    except NotImplementedError:
+        raise HesspipeError(f"{path}: a MATLAB version 7.3 (HDF5) file, which hesspipe does not read; "
+                            "expected versions 4 to 7: save it with -v7, or as text") from None
+    except (_sio.matlab.MatReadError, ValueError, TypeError, OSError, EOFError) as exc:
+        raise HesspipeError(f"{path}: not a readable MATLAB file ({str(exc).splitlines()[0][:80]}); "
+                            "expected a MAT file of versions 4 to 7") from None
+    columns: dict[str, np.ndarray] = {}
+    header = content.get("__header__", b"")
+    header = header.decode("latin-1") if isinstance(header, bytes) else str(header)
+    comments = [header.strip()] if header.strip() else []
+    for name, value in content.items():
+        if not name.startswith("__"):
+            _collect(name, value, columns, comments)
+    if not columns:
+        raise HesspipeError(f"{path}: no numeric vector or matrix in the MATLAB file; expected a "
+                            "variable per signal, or a matrix of columns")
+    lengths = Counter(v.size for v in columns.values())
+    n = max(lengths, key=lambda k: (lengths[k], k))
+    frame = pd.DataFrame({k: v for k, v in columns.items() if v.size == n})
+    others = [f"{k} ({v.size} value{'s' if v.size != 1 else ''})" for k, v in columns.items() if v.size != n]
+    notes = [f"MATLAB file: {frame.shape[1]} variable column(s) of {n} samples read, values as written "
+             "(a MAT file holds no units)"]
+    if others:
+        notes.append(f"MATLAB file: left out {len(others)} variable(s) of another length: {', '.join(others[:6])}"
+                     + (", ..." if len(others) > 6 else ""))
+    return frame, tuple(comments), notes, others
+
+
+def _collect(name: str, value, columns: dict, comments: list) -> None:
+    """Add `value`'s columns (or its text, as a comment) under `name`."""
+    if isinstance(value, dict):
+        for key, sub in value.items():
+            _collect(f"{name}.{key}", sub, columns, comments)
+        return
+    if isinstance(value, str):
+        if value.strip():
+            comments.append(f"{name}: {value.strip()}")
+        return
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        columns[name] = np.array([float(value)])
+        return
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "iuf":
+        return   # cells, logicals, complex, objects: not a signal
+    a = np.squeeze(value).astype(float)
+    if a.ndim <= 1:
+        columns[name] = np.atleast_1d(a)
+    elif a.ndim == 2:
+        if a.shape[0] < a.shape[1]:
+            a = a.T   # samples along the longer side: a row per signal is MATLAB's other habit
+        for j in range(a.shape[1]):
+            columns[f"{name}:{j + 1}"] = a[:, j]

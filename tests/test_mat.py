@@ -1,0 +1,99 @@
+"""Measured runs saved from MATLAB (:mod:`hesspipe.core._mat`): variables, a matrix of
+columns, a struct; what is left out and why; files that are not readable say so. The runs are
+built here from known signals (SYNTHETIC)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.io import savemat
+
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_run
+from hesspipe.pilots.compare import list_runs
+
+N, DT = 400, 0.01
+
+
+def _signals():
+    t = DT * np.arange(N)
+    return {"time": t, "disturbance": np.sin(0.7 * t), "output": 0.1 * np.cos(1.3 * t),
+            "control": np.sin(2.1 * t), "reference": 0.05 * np.sin(0.4 * t)}
+
+
+def _check(run):
+    for role, want in _signals().items():
+        np.testing.assert_allclose(getattr(run, role), want, rtol=1e-9, atol=1e-12)
+
+
+def test_variables_are_columns_and_the_rest_is_said(tmp_path):
+    # A workspace: one vector per signal, a sample rate, the forcing's frequencies (another
+    # length) and a note saying the data are synthetic.
+    s = _signals()
+    path = tmp_path / "s01_motion_r1.mat"
+    savemat(path, {"t": s["time"], "fd": s["disturbance"], "x": s["output"], "u": s["control"],
+                   "ft": s["reference"], "fs": 100.0, "w_d": np.arange(10.0), "note": "synthetic trial"})
+    run = read_run(path, columns="time=t,disturbance=fd,output=x,control=u,reference=ft")
+    _check(run)
+    assert run.dt == pytest.approx(DT, rel=1e-12)
+    assert run.synthetic and run.id == "s01_motion_r1"
+    assert any("5 variable column(s) of 400 samples" in n and "values as written" in n for n in run.notes)
+    assert any("left out 2 variable(s) of another length: fs (1 value), w_d (10 values)" in n for n in run.notes)
+    # A role not mapped: the message lists the variables, and those of another length.
+    with pytest.raises(HesspipeError, match=r"s01_motion_r1.mat: variable 'control' missing; found variables: "
+                                            r"t, fd, x, u, ft \(left out, another length: fs \(1 value\), "
+                                            r"w_d \(10 values\)\); map other names with columns control=NAME"):
+        read_run(path, columns="time=t,disturbance=fd,output=x")
+
+
+@pytest.mark.parametrize("rows", [False, True])
+def test_a_matrix_is_read_by_its_columns(tmp_path, rows):
+    # One matrix, a signal per column (or per row: samples along the longer side).
+    s = _signals()
+    m = np.column_stack([s[k] for k in ("time", "disturbance", "output", "control", "reference")])
+    path = tmp_path / "m.mat"
+    savemat(path, {"data": m.T if rows else m})
+    _check(read_run(path, columns="time=data:1,disturbance=data:2,output=data:3,control=data:4,"
+                                  "reference=data:5"))
+
+
+def test_a_structs_fields_and_the_plain_names(tmp_path):
+    s = _signals()
+    path = tmp_path / "st.mat"
+    savemat(path, {"trial": {"time": s["time"], "dist": s["disturbance"], "y": s["output"], "stick": s["control"],
+                             "target": s["reference"], "subject": "s02"}})
+    run = read_run(path, columns="time=trial.time,disturbance=trial.dist,output=trial.y,control=trial.stick,"
+                                 "reference=trial.target")
+    _check(run)
+    assert "trial.subject: s02" in run.comments
+    # Variables named as SPEC's columns need no mapping, a sign flip as in a CSV.
+    plain = tmp_path / "plain.mat"
+    savemat(plain, {**{k: v for k, v in s.items()}, "control": -s["control"]})
+    assert np.allclose(read_run(plain, columns="control=-control").control, s["control"])
+
+
+def test_files_it_cannot_read_say_why(tmp_path):
+    v73 = tmp_path / "v73.mat"   # MATLAB's -v7.3 header: an HDF5 file
+    v73.write_bytes(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, HDF5 schema 1.00 .".ljust(116, b" ")
+                    + b"\x00" * 8 + b"\x00\x02IM" + b"\x00" * 512)
+    with pytest.raises(HesspipeError, match=r"v73.mat: a MATLAB version 7.3 \(HDF5\) file, which hesspipe does "
+                                            r"not read; expected versions 4 to 7: save it with -v7, or as text"):
+        read_run(v73)
+    bad = tmp_path / "bad.mat"
+    bad.write_text("time,output\n0,1\n")
+    with pytest.raises(HesspipeError, match=r"bad.mat: not a readable MATLAB file"):
+        read_run(bad)
+    empty = tmp_path / "text.mat"
+    savemat(empty, {"note": "nothing numeric"})
+    with pytest.raises(HesspipeError, match=r"text.mat: no numeric vector or matrix in the MATLAB file"):
+        read_run(empty)
+    with pytest.raises(HesspipeError, match=r"missing.mat: file not found; expected a MATLAB file"):
+        read_run(tmp_path / "missing.mat")
+
+
+def test_a_folder_of_mat_files_is_a_set_of_pilots(tmp_path):
+    s = _signals()
+    for pid in ("p1", "p2"):
+        savemat(tmp_path / f"{pid}.mat", s)
+    (tmp_path / "notes.txt").write_text("not a run\n")
+    assert [p.name for p in list_runs(tmp_path)] == ["p1.mat", "p2.mat"]
