@@ -72,6 +72,21 @@ def test_a_structs_fields_and_the_plain_names(tmp_path):
     assert np.allclose(read_run(plain, columns="control=-control").control, s["control"])
 
 
+def test_runs_saved_together_are_read_one_at_a_time(tmp_path):
+    # A struct array of runs (data.run(i).u): each element's fields are columns NAME(i).FIELD.
+    s = _signals()
+    runs = np.zeros((2,), dtype=[("t", object), ("u", object), ("y", object), ("d", object)])
+    runs[0] = (s["time"], -s["control"], s["output"], s["disturbance"])
+    runs[1] = (s["time"], s["control"], s["output"], s["disturbance"])
+    path = tmp_path / "s03_all.mat"
+    savemat(path, {"run": runs})
+    run = read_run(path, columns="time=run(2).t,control=run(2).u,output=run(2).y,disturbance=run(2).d")
+    np.testing.assert_allclose(run.control, s["control"], rtol=1e-12)
+    with pytest.raises(HesspipeError, match=r"found variables: run\(1\).t, run\(1\).u, run\(1\).y, run\(1\).d, "
+                                            r"run\(2\).t"):
+        read_run(path)
+
+
 def test_files_it_cannot_read_say_why(tmp_path):
     v73 = tmp_path / "v73.mat"   # MATLAB's -v7.3 header: an HDF5 file
     v73.write_bytes(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, HDF5 schema 1.00 .".ljust(116, b" ")

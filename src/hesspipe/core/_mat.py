@@ -4,7 +4,9 @@ Laboratories that run their experiments from MATLAB or Simulink keep a trial as 
 workspace's variables (``save trial.mat t ft fd e u x``), as one matrix of columns, or as
 a struct of signals. Each numeric vector becomes a column named after its variable, each
 matrix its columns ``NAME:1`` to ``NAME:k`` (samples along its longer side), a struct's
-fields ``STRUCT.FIELD``; text variables are the file's comments. A MAT file holds no units:
+fields ``STRUCT.FIELD``, the elements of a struct or cell array ``NAME(i).FIELD`` and
+``NAME(i)`` (several runs saved together: one is read at a time); text variables are the
+file's comments. A MAT file holds no units:
 values are read as written. Version 7.3 files are HDF5, which scipy does not read; they are
 refused with the remedy.
 """
@@ -85,6 +87,10 @@ def _collect(name: str, value, columns: dict, comments: list) -> None:
     if isinstance(value, dict):
         for key, sub in value.items():
             _collect(f"{name}.{key}", sub, columns, comments)
+        return
+    if isinstance(value, list):   # a struct array or a cell array: NAME(1), NAME(2), ...
+        for i, sub in enumerate(value, 1):
+            _collect(f"{name}({i})", sub, columns, comments)
         return
     if isinstance(value, str):
         if value.strip():
