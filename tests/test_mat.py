@@ -38,6 +38,7 @@ def test_variables_are_columns_and_the_rest_is_said(tmp_path):
     assert run.dt == pytest.approx(DT, rel=1e-12)
     assert run.synthetic and run.id == "s01_motion_r1"
     assert any("5 variable column(s) of 400 samples" in n and "values as written" in n for n in run.notes)
+    assert not any("labelled" in n for n in run.notes)
     assert any("left out 2 variable(s) of another length: fs (1 value), w_d (10 values)" in n for n in run.notes)
     # A role not mapped: the message lists the variables, and those of another length.
     with pytest.raises(HesspipeError, match=r"s01_motion_r1.mat: variable 'control' missing; found variables: "
@@ -85,6 +86,32 @@ def test_runs_saved_together_are_read_one_at_a_time(tmp_path):
     with pytest.raises(HesspipeError, match=r"found variables: run\(1\).t, run\(1\).u, run\(1\).y, run\(1\).d, "
                                             r"run\(2\).t"):
         read_run(path)
+
+
+def test_labelled_signals_are_named_by_their_labels_with_their_units(tmp_path):
+    # dSPACE's export (X and Y(i) with Name, Data, Unit; names are block paths) and Simulink's
+    # structure with time (signals(i).label and .values, the unit in the label).
+    s = _signals()
+    deg = np.degrees
+    ys = np.zeros((4,), dtype=[("Name", object), ("Data", object), ("Unit", object)])
+    for i, (label, role) in enumerate([('"Model Root"/"Pilot"/"stick"', "control"), ('"Model Root"/"yaw"', "output"),
+                                       ('"Model Root"/"fd"', "disturbance"), ('"Model Root"/"ft"', "reference")]):
+        ys[i] = (label, deg(s[role]), "deg")
+    dspace = tmp_path / "dspace.mat"
+    savemat(dspace, {"trial": {"X": {"Name": "Time", "Data": s["time"], "Unit": "s"}, "Y": ys}})
+    run = read_run(dspace, columns="time=Time,control=stick,output=yaw,disturbance=fd,reference=ft")
+    _check(run)   # degrees converted, as a unit in a CSV header is
+    assert any("5 labelled signal(s) also named by their labels" in n for n in run.notes)
+    assert any("'yaw [deg]' (output): deg converted" in n for n in run.notes)
+    sig = np.zeros((2,), dtype=[("label", object), ("values", object)])
+    sig[0] = ("YAW ANGLE (deg)", deg(s["output"]))
+    sig[1] = ("STICK (deg)", np.column_stack([deg(s["control"]), deg(s["reference"])]))
+    simulink = tmp_path / "simulink.mat"
+    savemat(simulink, {"simout": {"time": s["time"], "signals": sig}, "fd": s["disturbance"]})
+    run = read_run(simulink, columns="time=simout.time,output=YAW ANGLE,control=STICK:1,reference=STICK:2,"
+                                     "disturbance=fd")
+    np.testing.assert_allclose(run.output, s["output"], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(run.reference, s["reference"], rtol=1e-9, atol=1e-12)
 
 
 def test_files_it_cannot_read_say_why(tmp_path):

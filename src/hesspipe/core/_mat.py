@@ -5,15 +5,17 @@ workspace's variables (``save trial.mat t ft fd e u x``), as one matrix of colum
 a struct of signals. Each numeric vector becomes a column named after its variable, each
 matrix its columns ``NAME:1`` to ``NAME:k`` (samples along its longer side), a struct's
 fields ``STRUCT.FIELD``, the elements of a struct or cell array ``NAME(i).FIELD`` and
-``NAME(i)`` (several runs saved together: one is read at a time); text variables are the
-file's comments. A MAT file holds no units:
-values are read as written. Version 7.3 files are HDF5, which scipy does not read; they are
+``NAME(i)`` (several runs saved together: one is read at a time), and a labelled signal
+(dSPACE's ``Y(i).Name``/``.Data``/``.Unit``, Simulink's ``signals(i).label``/``.values``) also
+under its label, with its unit; text variables are the file's comments. A MAT file holds no
+units of its own: values are read as written, unless a label states one. Version 7.3 files are HDF5, which scipy does not read; they are
 refused with the remedy.
 """
 
 from __future__ import annotations
 
 import io as _io
+import re
 from collections import Counter
 from pathlib import Path
 
@@ -64,9 +66,18 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
     header = content.get("__header__", b"")
     header = header.decode("latin-1") if isinstance(header, bytes) else str(header)
     comments = [header.strip()] if header.strip() else []
+    labels: dict = {}
     for name, value in content.items():
         if not name.startswith("__"):
-            _collect(name, value, columns, comments)
+            _collect(name, value, columns, comments, labels)
+    named = 0
+    for (label, unit), source in labels.items():
+        # A matrix's columns keep their number before the unit: 'STICK:2 [deg]'.
+        cols = [c for c in columns if c == source or c.startswith(f"{source}:")] if source else []
+        names = [label + c[len(source):] + unit for c in cols]
+        if cols and not any(n_ in columns for n_ in names):
+            named += 1
+            columns.update({n_: columns[c] for n_, c in zip(names, cols)})
     if not columns:
         raise HesspipeError(f"{path}: no numeric vector or matrix in the MATLAB file; expected a "
                             "variable per signal, or a matrix of columns")
@@ -75,22 +86,42 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
     frame = pd.DataFrame({k: v for k, v in columns.items() if v.size == n})
     others = [f"{k} ({v.size} value{'s' if v.size != 1 else ''})" for k, v in columns.items() if v.size != n]
     notes = [f"MATLAB file: {frame.shape[1]} variable column(s) of {n} samples read, values as written "
-             "(a MAT file holds no units)"]
+             "unless a signal's label states its unit (a MAT file holds none of its own)"]
+    if named:
+        notes.append(f"MATLAB file: {named} labelled signal(s) also named by their labels")
     if others:
         notes.append(f"MATLAB file: left out {len(others)} variable(s) of another length: {', '.join(others[:6])}"
                      + (", ..." if len(others) > 6 else ""))
     return frame, tuple(comments), notes, others
 
 
-def _collect(name: str, value, columns: dict, comments: list) -> None:
-    """Add `value`'s columns (or its text, as a comment) under `name`."""
+_LABELS = ("Name", "name", "label", "title", "Label", "Title")
+_DATA = ("Data", "data", "values", "Values")
+_UNITS = ("Unit", "unit", "Units", "units")
+
+
+def _collect(name: str, value, columns: dict, comments: list, labels: dict) -> None:
+    """Add `value`'s columns (or its text, as a comment) under `name`; a labelled signal's
+    label and unit to `labels` ((label, " [unit]") -> the columns' name, or None where two share
+    them)."""
     if isinstance(value, dict):
         for key, sub in value.items():
-            _collect(f"{name}.{key}", sub, columns, comments)
+            _collect(f"{name}.{key}", sub, columns, comments, labels)
+        # A labelled signal (dSPACE's Y(i).Name/.Data/.Unit, Simulink's signals(i).label/.values,
+        # 'YAW ANGLE (deg)'): its label names its columns too, the last part of a block path.
+        label = next((value[k] for k in _LABELS if isinstance(value.get(k), str) and value[k].strip()), None)
+        data = next((k for k in _DATA if k in value), None)
+        if label is not None and data is not None:
+            alias = label.strip().split("/")[-1].strip().strip('"').strip()
+            m = re.match(r"^(.*?)\s*[\[(]([^\])]*)[\])]\s*$", alias)   # a unit ending the label
+            unit = m.group(2).strip() if m else next(
+                (value[k].strip() for k in _UNITS if isinstance(value.get(k), str) and value[k].strip()), "")
+            alias = (m.group(1) if m else alias, f" [{unit}]" if unit else "")
+            labels[alias] = None if alias in labels else f"{name}.{data}"
         return
     if isinstance(value, list):   # a struct array or a cell array: NAME(1), NAME(2), ...
         for i, sub in enumerate(value, 1):
-            _collect(f"{name}({i})", sub, columns, comments)
+            _collect(f"{name}({i})", sub, columns, comments, labels)
         return
     if isinstance(value, str):
         if value.strip():
