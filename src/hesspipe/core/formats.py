@@ -190,8 +190,9 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
         without a header row its columns are named by position, ``1`` to ``k``. Or a
         MATLAB file (``.mat``, versions 4-7): each numeric vector a column named after its
         variable, a matrix's columns ``NAME:1`` to ``NAME:k``, a struct's fields
-        ``STRUCT.FIELD``, values as written (:mod:`hesspipe.core._mat`). What reading did
-        is in :attr:`Run.notes`.
+        ``STRUCT.FIELD``, a labelled signal under its label too, values as written unless
+        a label states a unit (:mod:`hesspipe.core._mat`). What reading did is in
+        :attr:`Run.notes`.
     columns : str or mapping, optional
         Role → column-name mapping for files with other names, e.g.
         ``"control=stick,output=p"``; ``"control=-stick"`` flips the sign of a column

@@ -116,10 +116,9 @@ def _window(d: np.ndarray, r: np.ndarray | None):
     period earlier (a logged run-in shorter than the period); else the length
     between half the record and all of it whose spectrum concentrates most power in
     as many bins as there are lines (one period of a forcing whose period is not the
-    record's length). The
-    window ends at the record's end, so a start-up transient falls outside it,
-    unless the forcing stops repeating before the end (faded out while the logger
-    ran on): then it ends where the forcing last repeats itself.
+    record's length). The window ends at the record's end, so a start-up transient
+    falls outside it, unless the forcing stops repeating before the end (faded out
+    while the logger ran on): then it ends where the forcing last repeats itself.
     A window is judged by the purity of each forcing on its own (the smallest).
     """
     n = d.size
@@ -237,7 +236,7 @@ def _period_by_end(x: np.ndarray, tail: int = 64) -> int | None:
     if not energy > 0:
         return None
     i = int(np.argmin(err))
-    if lags[i] < lo or (i == 0 and lags[0] > tail):
+    if lags[i] < lo:
         return None
     # A match to rounding only: anything else differs by about twice the end's energy.
     return int(lags[i]) if err[i] < 1e-3 * energy else None
