@@ -24,7 +24,7 @@ counts): how many runs of each condition are named ``motion_feedback``, what els
 and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
-        [--style lab|daq|matlab|mat] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
+        [--style lab|daq|matlab|mat|xlsx] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
         [--logged-run-in 8.08] [--logged-run-out 3]
 
 ``--threshold S`` gives every person an indifference threshold on the perceived error, a dead
@@ -61,13 +61,16 @@ from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import csv_bytes, draw_trial, simulate_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
 from hesspipe.humanlike.plants import ANGLE_MOTION
-from hesspipe.humanlike.writer import DAQ, LAB, MAT_NAMES, MATLAB, mat_bytes, plants_dict
+from hesspipe.humanlike.writer import DAQ, LAB, MAT_NAMES, MATLAB, mat_bytes, plants_dict, xlsx_bytes
 
 COLUMNS = ",".join(f"{role}={LAB['names'][role]}" for role in ("reference", "disturbance", "output", "control"))
 MAT = {"format": "mat"}
 """A MATLAB workspace saved as ``.mat`` (:func:`~hesspipe.humanlike.writer.mat_bytes`: variables
 t, ft, fd, x, u in seconds and degrees)."""
-STYLES = {"lab": LAB, "daq": DAQ, "matlab": MATLAB, "mat": MAT}
+XLSX = {"format": "xlsx"}
+"""An Excel workbook (:func:`~hesspipe.humanlike.writer.xlsx_bytes`: the LAB columns and names, metadata
+above the header)."""
+STYLES = {"lab": LAB, "daq": DAQ, "matlab": MATLAB, "mat": MAT, "xlsx": XLSX}
 
 
 def columns(style) -> str:
@@ -83,8 +86,8 @@ def columns(style) -> str:
 
 def suffix(style) -> str:
     """The file name's suffix a lab gives files of `style` (MATLAB's ``save -ascii``: .txt)."""
-    if style.get("format") == "mat":
-        return ".mat"
+    if style.get("format") in ("mat", "xlsx"):
+        return "." + style["format"]
     return ".csv" if style.get("header", True) else ".txt"
 PLANTS = {"SI": "1/s", "DI": "K/s2"}
 TRIAL = dict(task="both", pilot="precision", output="angle", tau_m=0.15, gain_drift=0.15,
@@ -96,7 +99,8 @@ def lab_file(trial, path: Path, style=LAB) -> None:
     """`trial` as a lab's logger writes it (the generator's :data:`~hesspipe.humanlike.writer.LAB`
     style, module doc, or another, e.g. :data:`~hesspipe.humanlike.writer.DAQ`), labelled
     synthetic in its comment line (a MAT file's ``note``)."""
-    path.write_bytes(mat_bytes(trial) if style.get("format") == "mat" else csv_bytes(trial, style))
+    fmt = style.get("format")
+    path.write_bytes(mat_bytes(trial) if fmt == "mat" else xlsx_bytes(trial) if fmt == "xlsx" else csv_bytes(trial, style))
 
 
 def draw_person(plant: str, effects, seed: int, **kw):
@@ -176,11 +180,11 @@ def diagnose_file(path: Path, plants: Path, out_json: Path, cols: str = COLUMNS)
 
 
 def diagnose_runs(folder: Path, plants: Path, cols: str = COLUMNS) -> tuple[int, int, dict, float]:
-    """``hesspipe diagnose`` on every run of `folder` (.csv, .txt, .mat), one at a time, read with the
+    """``hesspipe diagnose`` on every run of `folder` (.csv, .txt, .mat, .xlsx), one at a time, read with the
     mapping `cols`: (runs named motion_feedback, runs, other names -> count, median CPU s per
     diagnosis)."""
     named, others, cpu = 0, {}, []
-    paths = sorted(p for p in folder.iterdir() if p.suffix in (".csv", ".txt", ".mat"))
+    paths = sorted(p for p in folder.iterdir() if p.suffix in (".csv", ".txt", ".mat", ".xlsx"))
     for path in paths:
         report, seconds = diagnose_file(path, plants, folder.parent / f"{folder.name}-{path.stem}.diagnosis.json",
                                         cols)
@@ -226,8 +230,8 @@ def main(argv=None) -> int:
     ap.add_argument("--style", choices=tuple(STYLES), default="lab",
                     help="the files' style: lab (LAB: semicolons, decimal commas), daq (DAQ: metadata above "
                          "the header, a units row, clock times across midnight, frames written twice, UTF-16) "
-                         "matlab (MATLAB: save -ascii, no header row, read by position) or mat (a .mat "
-                         "file of variables t, ft, fd, x, u)")
+                         "matlab (MATLAB: save -ascii, no header row, read by position), mat (a .mat "
+                         "file of variables t, ft, fd, x, u) or xlsx (an Excel workbook, the lab's names)")
     ap.add_argument("--threshold", type=float, default=0.0,
                     help="each person's indifference threshold, share of the error's RMS (0: none)")
     ap.add_argument("--cab-washout", type=float, default=0.0,

@@ -89,11 +89,13 @@ def test_lab_experiment_files_read_back_as_the_trial(tmp_path):
     assert np.allclose(m.variation(cmp), (cv, cv), rtol=1e-12, atol=0)
 
 
-@pytest.mark.parametrize("style", ["matlab", "mat"])
-def test_lab_experiment_files_from_matlab_read_as_the_trial(tmp_path, style):
+@pytest.mark.parametrize("style", ["matlab", "mat", "xlsx"])
+def test_lab_experiment_files_from_matlab_and_excel_read_as_the_trial(tmp_path, style):
     # MATLAB's save -ascii (numbers only) and a .mat workspace, both in degrees with no unit
-    # written: the benchmark's mapping (by position; by variable) reads the trial, every
-    # signal in the degrees written, and the describing function is the LAB file's.
+    # written, and an Excel workbook (the lab's names and units, metadata above them): the
+    # benchmark's mapping (by position; by variable; by name) reads the trial, every signal in
+    # the degrees written (the workbook's converted to radians, as its header says), and the
+    # describing function is the LAB file's.
     from hesspipe.core.formats import read_run
     from hesspipe.humanlike import draw_trial, simulate_trial
     from hesspipe.identification.frf import estimate_frf
@@ -103,15 +105,17 @@ def test_lab_experiment_files_from_matlab_read_as_the_trial(tmp_path, style):
     trial = simulate_trial(draw_trial("1/s", 3, task="both", pilot="precision", output="angle", name="s01_motion_r1"))
     assert (m.suffix(st), m.columns(st)) == {
         "matlab": (".txt", "time=1,reference=2,disturbance=3,output=4,control=5"),
-        "mat": (".mat", "time=t,reference=ft,disturbance=fd,output=x,control=u")}[style]
+        "mat": (".mat", "time=t,reference=ft,disturbance=fd,output=x,control=u"),
+        "xlsx": (".xlsx", m.COLUMNS)}[style]
     path = tmp_path / f"a{m.suffix(st)}"
     m.lab_file(trial, path, st)
     m.lab_file(trial, tmp_path / "b.csv")
     run = read_run(path, columns=m.columns(st))
     assert run.synthetic
-    assert any(("no header row" if style == "matlab" else "MATLAB file") in n for n in run.notes)
+    assert any({"matlab": "no header row", "mat": "MATLAB file", "xlsx": "Excel workbook"}[style] in n
+               for n in run.notes)
     for name in ("reference", "disturbance", "output", "control"):
-        want = np.degrees(getattr(trial, name))
+        want = getattr(trial, name) if style == "xlsx" else np.degrees(getattr(trial, name))
         assert np.allclose(getattr(run, name), want, rtol=1e-7, atol=1e-9 * np.abs(want).max()), name
     lab = estimate_frf(read_run(tmp_path / "b.csv", columns=m.COLUMNS)).feedback.H
     assert np.allclose(estimate_frf(run).feedback.H, lab, rtol=1e-4, atol=0)

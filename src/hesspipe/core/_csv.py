@@ -7,6 +7,8 @@ with decimal commas in European locales), capitalised headers, and a unit beside
 (``Time [s]``, ``roll rate (deg/s)``), or in a row of their own under the names; lines of
 metadata above the header (``Subject: s02``); quoted cells; a frame the logger wrote twice;
 no header at all (MATLAB's ``save -ascii``: the columns are then named by position, 1 to k).
+MATLAB files (:mod:`._mat`) are read apart; an Excel workbook's sheet (:mod:`._excel`) is read
+as the text it would be saved as.
 They are valid input; this module reads them into the roles the caller asks for and
 converts the units it knows to SPEC.md's (:data:`UNIT_FACTORS`), saying what it did
 (:attr:`Table.notes`).
@@ -26,6 +28,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
+from ._excel import EXCEL_SUFFIXES, excel_text
 from ._mat import mat_frame
 from .errors import HesspipeError
 from .io import read_bytes
@@ -313,9 +316,15 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
     if path.suffix.lower() == ".mat":
         df, comments, notes, others = mat_frame(path)
         return _by_role(path, df, names, optional, hint, notes, comments, ".", None, others)
-    text, encoding = decode(path, what)
-    notes = [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"]
+    excel = path.suffix.lower() in EXCEL_SUFFIXES
+    if excel:
+        text, notes = excel_text(path)   # the sheet as the text it would be saved as
+    else:
+        text, encoding = decode(path, what)
+        notes = [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"]
     text, sep, decimal = _prepare(text, notes)
+    if excel:   # the tabs are ours
+        notes = [n_ for n_ in notes if n_ != "tab-separated"]
     comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
                      if line.lstrip().startswith("#"))
     try:

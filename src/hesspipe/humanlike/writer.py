@@ -53,6 +53,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from scipy.io import savemat
 
 from ..core.errors import HesspipeError
@@ -208,6 +209,31 @@ def mat_bytes(trial, names: dict | None = None, degrees: bool = True) -> bytes:
     data["note"] = f"{LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"
     buf = io.BytesIO()
     savemat(buf, data, format="5", oned_as="column")
+    return buf.getvalue()
+
+
+def xlsx_bytes(trial, style=LAB) -> bytes:
+    """The Excel workbook (``.xlsx``) of `trial`: one sheet, the label and two lines of
+    metadata above the header, the columns of `style` (default :data:`LAB`: its names, with
+    ``[deg]`` units and degrees when it says so), numbers stored as numbers.
+
+    Parameters
+    ----------
+    trial : Trial
+    style : dict
+        The columns' order, names and units (``columns``, ``names``, ``degrees``).
+    """
+    st = _style(style)
+    scale = 180.0 / np.pi if st["degrees"] else 1.0
+    unit = " [deg]" if st["degrees"] else ""
+    head = {c: (st["names"] or {}).get(c, c) + ("" if c == "time" else unit) for c in st["columns"]}
+    frame = pd.DataFrame({head[c]: (trial.time if c == "time" else scale * getattr(trial, c)) for c in st["columns"]})
+    meta = pd.DataFrame([[f"{LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"],
+                         [f"Trial: {trial.spec.name}"], ["Sample rate [Hz]: " + f"{1.0 / (trial.time[1] - trial.time[0]):g}"]])
+    buf = io.BytesIO()
+    with pd.ExcelWriter(buf, engine="openpyxl") as book:
+        meta.to_excel(book, sheet_name="trial", header=False, index=False)
+        frame.to_excel(book, sheet_name="trial", startrow=len(meta) + 1, index=False)
     return buf.getvalue()
 
 

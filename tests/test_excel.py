@@ -1,0 +1,104 @@
+"""Measured runs kept in Excel workbooks (:mod:`hesspipe.core._excel`): a sheet is read as
+the same table saved as text would be; what it cannot read says so. The runs are built
+here from known signals (SYNTHETIC)."""
+
+from __future__ import annotations
+
+import datetime
+
+import numpy as np
+import openpyxl
+import pandas as pd
+import pytest
+
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_run
+from hesspipe.pilots.compare import list_runs
+
+N, DT = 400, 0.01
+
+
+def _signals():
+    t = DT * np.arange(N)
+    return {"time": t, "disturbance": np.sin(0.7 * t), "output": 0.1 * np.cos(1.3 * t),
+            "control": np.sin(2.1 * t), "reference": 0.05 * np.sin(0.4 * t)}
+
+
+def _check(run):
+    for role, want in _signals().items():
+        np.testing.assert_allclose(getattr(run, role), want, rtol=1e-9, atol=1e-12)
+
+
+def _frame(names, degrees=False):
+    s = _signals()
+    return pd.DataFrame({name: (np.degrees(s[role]) if degrees and role != "time" else s[role])
+                         for role, name in names.items()})
+
+
+def test_a_lab_workbook_reads_as_its_text_would(tmp_path):
+    # Metadata above the header, units in the names, another sheet beside it.
+    path = tmp_path / "s01_motion_r1.xlsx"
+    df = _frame({"time": "Time [s]", "reference": "Target [deg]", "disturbance": "Disturbance [deg]",
+                 "output": "Yaw [deg]", "control": "Stick [deg]"}, degrees=True)
+    with pd.ExcelWriter(path) as w:
+        pd.DataFrame([["Subject: s01"], ["Condition: motion"]]).to_excel(w, sheet_name="run", header=False,
+                                                                          index=False)
+        df.to_excel(w, sheet_name="run", startrow=3, index=False)
+        pd.DataFrame({"remark": ["calibrated 2026-11-02"]}).to_excel(w, sheet_name="notes", index=False)
+    run = read_run(path, columns="reference=Target,disturbance=Disturbance,output=Yaw,control=Stick")
+    _check(run)
+    assert run.dt == pytest.approx(DT, rel=1e-12)
+    assert run.comments == ("Subject: s01", "Condition: motion")
+    assert any("read sheet 'run' (left out: 'notes')" in n for n in run.notes)
+    assert any("'Yaw [deg]' (output): deg converted" in n for n in run.notes)
+    assert not any("tab-separated" in n for n in run.notes)   # the tabs are the reader's own
+
+
+def test_a_units_row_clock_times_and_no_header(tmp_path):
+    s = _signals()
+    # Units in a row under the names, the time of day in time cells.
+    clock = [(datetime.datetime(2026, 11, 2, 14, 3, 5) + datetime.timedelta(seconds=float(x))).time()
+             for x in s["time"]]
+    path = tmp_path / "units.xlsx"
+    book = openpyxl.Workbook()
+    sheet = book.active
+    sheet.append(["Time", "disturbance", "output", "control", "reference"])
+    sheet.append([None, "-", "-", "-", "-"])
+    for i, c in enumerate(clock):   # real time cells, as Excel keeps a time column
+        sheet.append([c, *(float(s[k][i]) for k in ("disturbance", "output", "control", "reference"))])
+    book.save(path)
+    run = read_run(path)
+    for role in ("disturbance", "output", "control", "reference"):
+        np.testing.assert_allclose(getattr(run, role), s[role], rtol=1e-9, atol=1e-12)
+    assert run.dt == pytest.approx(DT, rel=1e-6)
+    assert any("clock times" in n for n in run.notes) and any("units" in n for n in run.notes)
+    # Numbers only: by position, as a text file without a header row.
+    bare = tmp_path / "bare.xlsx"
+    _frame({k: k for k in s}).to_excel(bare, header=False, index=False)
+    _check(read_run(bare, columns="time=1,disturbance=2,output=3,control=4,reference=5"))
+    with pytest.raises(HesspipeError, match=r"bare.xlsx: column 'time' missing; the file has no header row"):
+        read_run(bare)
+
+
+def test_files_it_cannot_read_say_why(tmp_path):
+    xls = tmp_path / "old.xlsx"   # Excel 97-2003's compound document, renamed
+    xls.write_bytes(bytes.fromhex("d0cf11e0a1b11ae1") + b"\x00" * 504)
+    with pytest.raises(HesspipeError, match=r"old.xlsx: an Excel 97-2003 workbook \(.xls\), which hesspipe does "
+                                            r"not read; expected .xlsx"):
+        read_run(xls)
+    text = tmp_path / "text.xlsx"
+    text.write_text("time,output\n0,1\n")
+    with pytest.raises(HesspipeError, match=r"text.xlsx: not an Excel workbook; expected an .xlsx file"):
+        read_run(text)
+    words = tmp_path / "words.xlsx"
+    pd.DataFrame({"a": ["x", "y"], "b": ["z", "w"]}).to_excel(words, index=False)
+    with pytest.raises(HesspipeError, match=r"words.xlsx: no sheet of the workbook holds a table of numbers"):
+        read_run(words)
+
+
+def test_a_folder_of_workbooks_is_a_set_of_pilots(tmp_path):
+    for pid in ("p1", "p2"):
+        _frame({k: k for k in _signals()}).to_excel(tmp_path / f"{pid}.xlsx", index=False)
+    (tmp_path / "readme.txt").write_text("not a run\n")
+    assert [p.name for p in list_runs(tmp_path)] == ["p1.xlsx", "p2.xlsx"]
+    _check(read_run(tmp_path / "p1.xlsx"))
