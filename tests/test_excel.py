@@ -14,19 +14,9 @@ import pytest
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_run
 from hesspipe.pilots.compare import list_runs
-
-N, DT = 400, 0.01
-
-
-def _signals():
-    t = DT * np.arange(N)
-    return {"time": t, "disturbance": np.sin(0.7 * t), "output": 0.1 * np.cos(1.3 * t),
-            "control": np.sin(2.1 * t), "reference": 0.05 * np.sin(0.4 * t)}
-
-
-def _check(run):
-    for role, want in _signals().items():
-        np.testing.assert_allclose(getattr(run, role), want, rtol=1e-9, atol=1e-12)
+from known_signals import DT, refused
+from known_signals import check as _check
+from known_signals import signals as _signals
 
 
 def _frame(names, degrees=False):
@@ -81,19 +71,12 @@ def test_a_units_row_clock_times_and_no_header(tmp_path):
 
 
 def test_files_it_cannot_read_say_why(tmp_path):
-    xls = tmp_path / "old.xlsx"   # Excel 97-2003's compound document, renamed
-    xls.write_bytes(bytes.fromhex("d0cf11e0a1b11ae1") + b"\x00" * 504)
-    with pytest.raises(HesspipeError, match=r"old.xlsx: an Excel 97-2003 workbook \(.xls\), which hesspipe does "
-                                            r"not read; expected .xlsx"):
-        read_run(xls)
-    text = tmp_path / "text.xlsx"
-    text.write_text("time,output\n0,1\n")
-    with pytest.raises(HesspipeError, match=r"text.xlsx: not an Excel workbook; expected an .xlsx file"):
-        read_run(text)
-    words = tmp_path / "words.xlsx"
-    pd.DataFrame({"a": ["x", "y"], "b": ["z", "w"]}).to_excel(words, index=False)
-    with pytest.raises(HesspipeError, match=r"words.xlsx: no sheet of the workbook holds a table of numbers"):
-        read_run(words)
+    # Excel 97-2003's compound document, renamed; a text file; a workbook of words only.
+    refused(tmp_path / "old.xlsx", bytes.fromhex("d0cf11e0a1b11ae1") + b"\x00" * 504,
+            r"old.xlsx: an Excel 97-2003 workbook \(.xls\), which hesspipe does not read; expected .xlsx")
+    refused(tmp_path / "text.xlsx", b"time,output\n0,1\n", r"text.xlsx: not an Excel workbook; expected an .xlsx file")
+    pd.DataFrame({"a": ["x", "y"], "b": ["z", "w"]}).to_excel(tmp_path / "words.xlsx", index=False)
+    refused(tmp_path / "words.xlsx", None, r"words.xlsx: no sheet of the workbook holds a table of numbers")
 
 
 def test_a_folder_of_workbooks_is_a_set_of_pilots(tmp_path):

@@ -11,19 +11,9 @@ from scipy.io import savemat
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_run
 from hesspipe.pilots.compare import list_runs
-
-N, DT = 400, 0.01
-
-
-def _signals():
-    t = DT * np.arange(N)
-    return {"time": t, "disturbance": np.sin(0.7 * t), "output": 0.1 * np.cos(1.3 * t),
-            "control": np.sin(2.1 * t), "reference": 0.05 * np.sin(0.4 * t)}
-
-
-def _check(run):
-    for role, want in _signals().items():
-        np.testing.assert_allclose(getattr(run, role), want, rtol=1e-9, atol=1e-12)
+from known_signals import DT, refused
+from known_signals import check as _check
+from known_signals import signals as _signals
 
 
 def test_variables_are_columns_and_the_rest_is_said(tmp_path):
@@ -115,22 +105,15 @@ def test_labelled_signals_are_named_by_their_labels_with_their_units(tmp_path):
 
 
 def test_files_it_cannot_read_say_why(tmp_path):
-    v73 = tmp_path / "v73.mat"   # MATLAB's -v7.3 header: an HDF5 file
-    v73.write_bytes(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, HDF5 schema 1.00 .".ljust(116, b" ")
-                    + b"\x00" * 8 + b"\x00\x02IM" + b"\x00" * 512)
-    with pytest.raises(HesspipeError, match=r"v73.mat: a MATLAB version 7.3 \(HDF5\) file, which hesspipe does "
-                                            r"not read; expected versions 4 to 7: save it with -v7, or as text"):
-        read_run(v73)
-    bad = tmp_path / "bad.mat"
-    bad.write_text("time,output\n0,1\n")
-    with pytest.raises(HesspipeError, match=r"bad.mat: not a readable MATLAB file"):
-        read_run(bad)
-    empty = tmp_path / "text.mat"
-    savemat(empty, {"note": "nothing numeric"})
-    with pytest.raises(HesspipeError, match=r"text.mat: no numeric vector or matrix in the MATLAB file"):
-        read_run(empty)
-    with pytest.raises(HesspipeError, match=r"missing.mat: file not found; expected a MATLAB file"):
-        read_run(tmp_path / "missing.mat")
+    # MATLAB's -v7.3 header (an HDF5 file); a text file; a workspace of text only; no file.
+    refused(tmp_path / "v73.mat", b"MATLAB 7.3 MAT-file, Platform: GLNXA64, HDF5 schema 1.00 .".ljust(116, b" ")
+            + b"\x00" * 8 + b"\x00\x02IM" + b"\x00" * 512,
+            r"v73.mat: a MATLAB version 7.3 \(HDF5\) file, which hesspipe does not read; expected versions 4 "
+            r"to 7: save it with -v7, or as text")
+    refused(tmp_path / "bad.mat", b"time,output\n0,1\n", r"bad.mat: not a readable MATLAB file")
+    savemat(tmp_path / "text.mat", {"note": "nothing numeric"})
+    refused(tmp_path / "text.mat", None, r"text.mat: no numeric vector or matrix in the MATLAB file")
+    refused(tmp_path / "missing.mat", None, r"missing.mat: file not found; expected a MATLAB file")
 
 
 def test_a_folder_of_mat_files_is_a_set_of_pilots(tmp_path):
