@@ -312,7 +312,7 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
     Parameters
     ----------
     paths_or_dir : path or iterable of paths
-        A folder, one CSV file, or a list of files (taken as given); an empty folder or
+        A folder, one run file, or a list of files (taken as given); an empty folder or
         list, or a missing path, raises HesspipeError.
     """
     if isinstance(paths_or_dir, (str, Path)):
@@ -326,11 +326,11 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
                 raise HesspipeError(f"{path}: no run files (*.csv, *.tsv, *.mat, *.xlsx; else *.txt, *.dat) in this folder")
             return files
         if not path.exists():
-            raise HesspipeError(f"{path}: not found; expected a folder of run CSV files or a CSV file")
+            raise HesspipeError(f"{path}: not found; expected a folder of run files or a run file (CSV, MAT, XLSX)")
         return [path]
     files = [Path(p) for p in paths_or_dir]
     if not files:
-        raise HesspipeError("paths_or_dir: no run files given; expected a folder or a list of run CSV files")
+        raise HesspipeError("paths_or_dir: no run files given; expected a folder or a list of run files")
     return files
 
 
