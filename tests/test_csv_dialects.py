@@ -45,6 +45,19 @@ def _units_row(sep, decimal, brackets=False):
 PLAIN = ("time", "disturbance", "output", "control", "reference")
 
 
+def _labview():
+    """A LabVIEW measurement file: two header blocks (key, tab, values; lines that split like
+    the data), a line of one tab, then the channels' names with a last 'Comment' over no
+    values, tab-separated, CRLF."""
+    head = ["LabVIEW Measurement\t", "Writer_Version\t2", "Separator\tTab", "Time\t14:03:05.1234",
+            "***End_of_Header***", "\t", "Channels\t4\t\t\t\t", "Samples\t300\t300\t300\t300\t",
+            "Y_Unit_Label\tdeg\tdeg\tdeg\tdeg\t", "Delta_X\t0.020000\t0.020000\t0.020000\t0.020000\t",
+            "***End_of_Header***\t\t\t\t\t"]
+    table = _text(PLAIN, "\t").split("\n")
+    table[0] += "\tComment"
+    return "\r\n".join(head + table).encode()
+
+
 @pytest.mark.parametrize("name, data, note", [
     ("plain.csv", _text(PLAIN).encode(), None),
     ("capitals.csv", _text([h.capitalize() for h in PLAIN]).encode(), None),
@@ -75,6 +88,7 @@ PLAIN = ("time", "disturbance", "output", "control", "reference")
     ("clock.csv", _clock_text(lambda k: "{:02d}:{:02d}:{:06.3f}".format(
         *(lambda s: (int(s // 3600) % 24, int(s % 3600 // 60), s % 60))(86395.0 + k * DT))), "clock times"),
     ("iso.csv", _clock_text(lambda k: f"2026-11-28T09:00:{k * DT:06.3f}+01:00"), "clock times"),
+    ("trial.lvm", _labview(), "no data row has a value under it"),
 ])
 def test_same_run_whatever_the_writer(tmp_path, name, data, note):
     path = tmp_path / name

@@ -152,7 +152,9 @@ def _dialect(text: str) -> tuple[str, str]:
         if numeric and not all(_number(c) for c in header.split(sep) if c.strip()):
             continue
         n = len(header.split(sep))
-        misfits = sum(len(ln.split(sep)) not in (n, n + 1) for ln in body)
+        # n + 1: a separator ending each data line; n - 1: a last name over no values
+        # (LabVIEW's "Comment" column).
+        misfits = sum(len(ln.split(sep)) not in (n - 1, n, n + 1) for ln in body)
         fits = misfits <= max(1, len(body) // 10) and (misfits < len(body) or not body)
         if n > width and (fits or sep == ","):
             best, width = sep, n
@@ -185,9 +187,10 @@ def _layout(lines: list[str]) -> tuple[int, bool]:
     units rather than values (``s;deg;deg``).
 
     The header is the first line that splits like the middle of the file (a separator
-    ending the data lines allowed) and is not all numbers, under the separator that finds
-    it earliest (a decimal comma splits data lines into cells that are not numbers); a
-    file whose first line is one is left to the plain reading."""
+    ending the data lines allowed, or a last name over no values: LabVIEW's ``Comment``),
+    is not all numbers, and has the data under it (or a units row, then the data), under
+    the separator that finds it earliest (a decimal comma splits data lines into cells
+    that are not numbers); a file whose first line is one is left to the plain reading."""
     header = 0
     if len(lines) > 2:
         mid = lines[len(lines) // 2: len(lines) // 2 + 50]
@@ -197,24 +200,37 @@ def _layout(lines: list[str]) -> tuple[int, bool]:
             n = counts[len(counts) // 2]
             if n < 2 or any(c not in (n - 1, n) for c in counts):
                 continue
-            cells = [c for c in mid[0].split(sep) if c.strip()]
-            if 2 * sum(_number(c) for c in cells) < len(cells):
+            if not _values(mid[0], sep):
                 continue   # a decimal comma's split of semicolon data ("0,02;0,5" at ",")
+            # The data under it: a LabVIEW file's header block has lines that split like the
+            # data ("Samples\t400\t400\t400\t400") and passed for the header.
             i = next((i for i, ln in enumerate(lines[:len(lines) // 2])
-                      if len(ln.split(sep)) in (n - 1, n)
-                      and not all(_number(c) for c in ln.split(sep) if c.strip())), None)
+                      if len(ln.split(sep)) in (n - 1, n, n + 1)
+                      and not all(_number(c) for c in ln.split(sep) if c.strip())
+                      and (_values(lines[i + 1], sep) or (_unit_row(lines[i + 1], sep) and i + 2 < len(lines)
+                                                          and _values(lines[i + 2], sep)))), None)
             if i is not None:
                 found.append(i)
         header = min(found, default=0)
     units = False
     if header + 1 < len(lines):
-        row = lines[header + 1]
         sep = next((c for c in (",", "\t", ";") if c in lines[header]), None)
-        cells = _cells(row, sep) if sep else row.split()
-        words = [c.strip("[]()").lower().replace(" ", "") for c in cells if c]
-        units = bool(words) and not any(_number(c) for c in cells if c) and \
-            any(w in _UNIT_WORDS for w in words)
+        units = _unit_row(lines[header + 1], sep)
     return header, units
+
+
+def _values(line: str, sep: str | None) -> bool:
+    """Every cell of `line` is a number or a time stamp (``14:03:05.120``, ``2026-11-01T…``):
+    a data line, not a logger's ``Samples\t400\t400``."""
+    cells = [c for c in (_cells(line, sep) if sep else line.split()) if c]
+    return bool(cells) and all(_number(c) or _TIME_OF_DAY.match(c) or _ISO_DATE.match(c) for c in cells)
+
+
+def _unit_row(line: str, sep: str | None) -> bool:
+    """`line` holds units (``s;deg;deg;-``), no numbers."""
+    cells = _cells(line, sep) if sep else line.split()
+    words = [c.strip("[]()").lower().replace(" ", "") for c in cells if c]
+    return bool(words) and not any(_number(c) for c in cells if c) and any(w in _UNIT_WORDS for w in words)
 
 
 def _long_row(text: str, sep: str) -> tuple[int, int, int] | None:
@@ -445,6 +461,7 @@ def _by_role(path: Path, df: pd.DataFrame, names, optional, hint, notes: list, c
 
 
 _TIME_OF_DAY = re.compile(r"^(\d{1,2}):(\d{2}):(\d{2}(?:[.,]\d+)?)$")
+_ISO_DATE = re.compile(r"^\d{4}-\d{2}-\d{2}[T ]\d")
 
 
 def _clock(column: pd.Series) -> np.ndarray | None:
@@ -486,7 +503,8 @@ def _prepare(text: str, notes: list) -> tuple[str, str, str]:
     """(text, delimiter, decimal) for pandas: metadata lines above the header turned into
     comments, a units row merged into the header's names; what was done appended to
     `notes`."""
-    lines = text.splitlines()
+    # A line of whitespace (LabVIEW writes a tab) is blank to pandas only when empty.
+    lines = [ln if ln.strip() else "" for ln in text.splitlines()]
     content = [i for i, ln in enumerate(lines) if _is_content(ln)]
     header, units = _layout([lines[i] for i in content])
     if header:
@@ -509,6 +527,16 @@ def _prepare(text: str, notes: list) -> tuple[str, str, str]:
     if sep != ",":
         notes.append({"\t": "tab-separated", ";": "semicolon-separated"}.get(sep, "whitespace-separated")
                      + (" with decimal commas" if decimal == "," else ""))
+    rows = [i for i, ln in enumerate(lines) if _is_content(ln)]
+    if sep != r"\s+" and len(rows) > 1:
+        # A last name over no values (LabVIEW's "Comment"): pandas took the data for a row
+        # short of a value, and the file for one with more values than names.
+        head = lines[rows[0]].split(sep)
+        widths = sorted(len(lines[i].rstrip(sep).split(sep)) for i in rows[1:51])
+        if head[-1].strip() and len(head) == widths[len(widths) // 2] + 1 == widths[-1] + 1:
+            lines[rows[0]] = sep.join(head[:-1])
+            text = "\n".join(lines)
+            notes.append(f"left out the header's last name {head[-1].strip()!r}: no data row has a value under it")
     first = next((i for i, ln in enumerate(lines) if _is_content(ln)), None)
     cells = None if first is None else [c for c in (lines[first].split() if sep == r"\s+"
                                                     else _cells(lines[first], sep)) if c]

@@ -35,10 +35,10 @@ from .io import write_json, write_text
 from .paper import WELCH_SEGMENT
 
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
-#: File endings of measured runs when a folder is a set of pilots (tab-separated files
-#: are the same table, MATLAB files its columns as variables, a workbook's first sheet of
-#: numbers; :func:`read_run` reads each).
-RUN_SUFFIXES = (".csv", ".tsv", ".mat", ".xlsx", ".xlsm")
+#: File endings of measured runs when a folder is a set of pilots (tab-separated files and
+#: LabVIEW's measurement files are the same table, MATLAB files its columns as variables, a
+#: workbook's first sheet of numbers; :func:`read_run` reads each).
+RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".xlsx", ".xlsm")
 #: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
 TEXT_SUFFIXES = (".txt", ".dat")
 OPTIONAL_COLUMNS = ("reference",)

@@ -304,8 +304,8 @@ def _guarded(job, run: Run):
 # -- many pilots ------------------------------------------------------------------------------
 
 def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
-    """The run files of a folder (``*.csv``, ``*.tsv``, ``*.mat``, ``*.xlsx`` and ``*.xlsm``,
-    sorted; in a folder without them ``*.txt`` and ``*.dat``) or of an explicit list.
+    """The run files of a folder (``*.csv``, ``*.tsv``, ``*.lvm``, ``*.mat``, ``*.xlsx`` and
+    ``*.xlsm``, sorted; in a folder without them ``*.txt`` and ``*.dat``) or of an explicit list.
 
     ``*.truth.json`` and other files beside the runs are ignored.
 
@@ -323,7 +323,7 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
             # log, in a folder of them they are the runs.
             files = files or sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in TEXT_SUFFIXES)
             if not files:
-                raise HesspipeError(f"{path}: no run files (*.csv, *.tsv, *.mat, *.xlsx; else *.txt, *.dat) in this folder")
+                raise HesspipeError(f"{path}: no run files (*.csv, *.tsv, *.lvm, *.mat, *.xlsx; else *.txt, *.dat) in this folder")
             return files
         if not path.exists():
             raise HesspipeError(f"{path}: not found; expected a folder of run files or a run file (CSV, MAT, XLSX)")
