@@ -331,16 +331,15 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
     path = Path(path)
     if path.suffix.lower() == ".mat":
         df, comments, notes, others = mat_frame(path)
-        return _by_role(path, df, names, optional, hint, notes, comments, ".", None, others)
+        return _by_role(path, df, names, optional, hint, notes, comments, ".", None, others=others)
     excel = path.suffix.lower() in EXCEL_SUFFIXES
     if excel:
         text, notes = excel_text(path)   # the sheet as the text it would be saved as
     else:
         text, encoding = decode(path, what)
         notes = [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"]
-    text, sep, decimal = _prepare(text, notes)
-    if excel:   # the tabs are ours
-        notes = [n_ for n_ in notes if n_ != "tab-separated"]
+    # A workbook's tabs are ours: not said.
+    text, sep, decimal, positional = _prepare(text, notes, separator_said=not excel)
     comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
                      if line.lstrip().startswith("#"))
     try:
@@ -368,14 +367,15 @@ def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what:
         return pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
                            usecols=[col], dtype=str, engine="python" if sep == r"\s+" else "c")[col].to_numpy()
 
-    return _by_role(path, df, names, optional, hint, notes, comments, decimal, written, None)
+    return _by_role(path, df, names, optional, hint, notes, comments, decimal, written, positional=positional)
 
 
 def _by_role(path: Path, df: pd.DataFrame, names, optional, hint, notes: list, comments, decimal: str,
-             written, others) -> Table:
+             written, *, others: list | None = None, positional: bool = False) -> Table:
     """:func:`read_table`'s columns found by role in `df`, checked and converted. `written`: the
     time column's cells as text (for their resolution), None for a binary file; `others`: a
-    MAT file's variables of another length (named in a missing column's message)."""
+    MAT file's variables of another length (named in a missing column's message);
+    `positional`: the columns are named by position (a file without a header row)."""
     headers = list(df.columns)
     data, used = {}, {}
     flipped = set()
@@ -401,7 +401,7 @@ def _by_role(path: Path, df: pd.DataFrame, names, optional, hint, notes: list, c
                 left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
                 raise HesspipeError(f"{path}: variable '{name}' missing{label}; found variables: "
                                     f"{', '.join(headers)}{left}{tail}")
-            if any(n.startswith("no header row") for n in notes):
+            if positional:
                 tail = f"; map them with {hint} {role}=POSITION" if hint else ""
                 raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "
                                     f"row, its columns are named by position 1-{len(headers)}{tail}")
@@ -499,10 +499,11 @@ def _numeric(column: pd.Series, decimal: str) -> np.ndarray:
     return pd.to_numeric(column, errors="coerce").to_numpy(dtype=float)
 
 
-def _prepare(text: str, notes: list) -> tuple[str, str, str]:
-    """(text, delimiter, decimal) for pandas: metadata lines above the header turned into
-    comments, a units row merged into the header's names; what was done appended to
-    `notes`."""
+def _prepare(text: str, notes: list, *, separator_said: bool = True) -> tuple[str, str, str, bool]:
+    """(text, delimiter, decimal, positional) for pandas: metadata lines above the header
+    turned into comments, a units row merged into the header's names, a header of positions
+    (``1`` to ``k``; `positional` True) given to a file without one; what was done appended
+    to `notes` (the separator too when `separator_said`)."""
     # A line of whitespace (LabVIEW writes a tab) is blank to pandas only when empty.
     lines = [ln if ln.strip() else "" for ln in text.splitlines()]
     content = [i for i, ln in enumerate(lines) if _is_content(ln)]
@@ -524,7 +525,7 @@ def _prepare(text: str, notes: list) -> tuple[str, str, str]:
         lines[h] = _with_units(lines[h], units_row, sep)
         text = "\n".join(lines)
         notes.append(f"read the row under the header as the columns' units ({units_row.strip()[:40]!r})")
-    if sep != ",":
+    if sep != "," and separator_said:
         notes.append({"\t": "tab-separated", ";": "semicolon-separated"}.get(sep, "whitespace-separated")
                      + (" with decimal commas" if decimal == "," else ""))
     rows = [i for i, ln in enumerate(lines) if _is_content(ln)]
@@ -537,7 +538,8 @@ def _prepare(text: str, notes: list) -> tuple[str, str, str]:
             lines[rows[0]] = sep.join(head[:-1])
             text = "\n".join(lines)
             notes.append(f"left out the header's last name {head[-1].strip()!r}: no data row has a value under it")
-    first = next((i for i, ln in enumerate(lines) if _is_content(ln)), None)
+    positional = False
+    first = rows[0] if rows else None
     cells = None if first is None else [c for c in (lines[first].split() if sep == r"\s+"
                                                     else _cells(lines[first], sep)) if c]
     if cells and all(_number(c) for c in cells):
@@ -551,10 +553,11 @@ def _prepare(text: str, notes: list) -> tuple[str, str, str]:
             notes.append("read the comment line above the data as the header")
         else:
             names = [str(k) for k in range(1, len(cells) + 1)]
+            positional = True
             notes.append(f"no header row: columns named by position, 1 to {len(cells)}")
         lines.insert(first, (" " if sep == r"\s+" else sep).join(names))
         text = "\n".join(lines)
-    return text, sep, decimal
+    return text, sep, decimal, positional
 
 
 def unwrap_turns(values: np.ndarray) -> tuple[np.ndarray, float | None, int]:

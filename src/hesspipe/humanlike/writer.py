@@ -168,11 +168,9 @@ def csv_bytes(trial, style=None) -> bytes:
         cols = {c: [v.replace(".", st["decimal"]) for v in vals] for c, vals in cols.items()}
     units = {c: ("" if st["time"] == "clock" else "s") if c == "time" else ("deg" if st["degrees"] else "-")
              for c in COLUMNS}
-    names = {c: (st["names"] or {}).get(c, c) + (" [deg]" if st["degrees"] and c != "time"
-                                                  and not st["units_row"] else "")
-             for c in COLUMNS}
+    names = _header_names(st)
     nl, sep = st["newline"], st["sep"]
-    rows = [*st["preamble"], f"# {LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"]
+    rows = [*st["preamble"], f"# {_label(trial)}"]
     if st["header"]:
         rows.append(sep.join(names[c] for c in st["columns"]))
     if st["units_row"] and st["header"]:
@@ -183,6 +181,18 @@ def csv_bytes(trial, style=None) -> bytes:
     text = nl.join(rows) + nl
     bom = b"\xef\xbb\xbf" if st["bom"] and st["encoding"] == "utf-8" else b""
     return bom + text.encode(st["encoding"])
+
+
+def _label(trial) -> str:
+    """The line that marks a file of `trial` synthetic, naming the generator and the trial."""
+    return f"{LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"
+
+
+def _header_names(st: dict) -> dict:
+    """SPEC column name → the header `st` writes: its own name, `` [deg]`` after each signal in
+    degrees unless a units row holds the units."""
+    unit = " [deg]" if st["degrees"] and not st["units_row"] else ""
+    return {c: (st["names"] or {}).get(c, c) + ("" if c == "time" else unit) for c in COLUMNS}
 
 
 MAT_NAMES = {"time": "t", "reference": "ft", "disturbance": "fd", "output": "x", "control": "u"}
@@ -206,7 +216,7 @@ def mat_bytes(trial, names: dict | None = None, degrees: bool = True) -> bytes:
     names = {**MAT_NAMES, **(names or {})}
     scale = 180.0 / np.pi if degrees else 1.0
     data = {names[c]: (trial.time if c == "time" else scale * getattr(trial, c)).reshape(-1, 1) for c in COLUMNS}
-    data["note"] = f"{LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"
+    data["note"] = _label(trial)
     buf = io.BytesIO()
     savemat(buf, data, format="5", oned_as="column")
     return buf.getvalue()
@@ -225,10 +235,9 @@ def xlsx_bytes(trial, style=LAB) -> bytes:
     """
     st = _style(style)
     scale = 180.0 / np.pi if st["degrees"] else 1.0
-    unit = " [deg]" if st["degrees"] else ""
-    head = {c: (st["names"] or {}).get(c, c) + ("" if c == "time" else unit) for c in st["columns"]}
+    head = _header_names({**st, "units_row": False})   # a workbook's units stand in its names
     frame = pd.DataFrame({head[c]: (trial.time if c == "time" else scale * getattr(trial, c)) for c in st["columns"]})
-    meta = pd.DataFrame([[f"{LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"],
+    meta = pd.DataFrame([[_label(trial)],
                          [f"Trial: {trial.spec.name}"], ["Sample rate [Hz]: " + f"{1.0 / (trial.time[1] - trial.time[0]):g}"]])
     buf = io.BytesIO()
     with pd.ExcelWriter(buf, engine="openpyxl") as book:
