@@ -24,8 +24,13 @@ counts): how many runs of each condition are named ``motion_feedback``, what els
 and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
-        [--style lab|daq|matlab|mat|xlsx] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
+        [--style lab|daq|matlab|mat|mat-runs|xlsx] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
         [--logged-run-in 8.08] [--logged-run-out 3]
+
+``--style`` writes the files otherwise (module ``STYLES``): ``mat-runs`` saves a person's runs of a
+condition together in one ``.mat`` (a matrix column per run), read with ``--columns
+time=t,reference=ft:*,disturbance=fd:*,output=x:*,control=u:*``; its runs are diagnosed one at
+a time (``x:2``).
 
 ``--threshold S`` gives every person an indifference threshold on the perceived error, a dead
 zone of S times the error's RMS (the generator's ``threshold``; McRuer and Jex's nonlinear
@@ -57,28 +62,33 @@ import numpy as np
 
 from hesspipe.cli import main as hesspipe
 from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_file_runs
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import csv_bytes, draw_trial, simulate_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
 from hesspipe.humanlike.plants import ANGLE_MOTION
-from hesspipe.humanlike.writer import DAQ, LAB, MAT_NAMES, MATLAB, mat_bytes, plants_dict, xlsx_bytes
+from hesspipe.humanlike.writer import DAQ, LAB, MAT_NAMES, MATLAB, mat_bytes, mat_runs_bytes, plants_dict, xlsx_bytes
 
 COLUMNS = ",".join(f"{role}={LAB['names'][role]}" for role in ("reference", "disturbance", "output", "control"))
 MAT = {"format": "mat"}
 """A MATLAB workspace saved as ``.mat`` (:func:`~hesspipe.humanlike.writer.mat_bytes`: variables
 t, ft, fd, x, u in seconds and degrees)."""
+MAT_RUNS = {"format": "mat", "together": True}
+"""A person's runs of a condition saved together in one ``.mat`` (:func:`~hesspipe.humanlike.writer.mat_runs_bytes`:
+matrices ft, fd, x, u of one column per run, t a vector), read with starred names (``x:*``)."""
 XLSX = {"format": "xlsx"}
 """An Excel workbook (:func:`~hesspipe.humanlike.writer.xlsx_bytes`: the LAB columns and names, metadata
 above the header)."""
-STYLES = {"lab": LAB, "daq": DAQ, "matlab": MATLAB, "mat": MAT, "xlsx": XLSX}
+STYLES = {"lab": LAB, "daq": DAQ, "matlab": MATLAB, "mat": MAT, "mat-runs": MAT_RUNS, "xlsx": XLSX}
 
 
 def columns(style) -> str:
     """The ``--columns`` mapping that reads files of `style`: the lab's names, positions (1 =
     first) for a file without a header row (:data:`~hesspipe.humanlike.writer.MATLAB`), or a
-    MAT file's variable names."""
+    MAT file's variable names (a matrix's columns, one per run, ``x:*``, for :data:`MAT_RUNS`)."""
     if style.get("format") == "mat":
-        return ",".join(f"{role}={var}" for role, var in MAT_NAMES.items())
+        star = {role: ":*" if style.get("together") and role != "time" else "" for role in MAT_NAMES}
+        return ",".join(f"{role}={var}{star[role]}" for role, var in MAT_NAMES.items())
     if style.get("header", True):
         return COLUMNS
     return ",".join(f"{role}={k}" for k, role in enumerate(style["columns"], 1))
@@ -137,7 +147,7 @@ def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, 
     effects = ("motion_feedback",) if cond == "motion" else ()
     truth, spec = {}, None
     for s in range(persons):
-        person = None
+        person, session = None, []
         for r in range(runs):
             kw = dict(TRIAL, name=f"s{s + 1:02d}_{cond}_r{r + 1}", **options)
             seed_r = derive_seed(seed, tag, cond, str(s), str(r))
@@ -147,7 +157,13 @@ def write_condition(folder: Path, tag: str, cond: str, persons: int, runs: int, 
                 truth[f"s{s + 1:02d}"] = {k: v for k, v in person.items() if isinstance(v, (int, float, str))}
             else:   # the same person again: only forcing phases, remnant and wander are new
                 spec = draw_trial(PLANTS[tag], seed_r, effects=effects, pilot_params=person, **kw)
-            lab_file(simulate_trial(spec), folder / f"{spec.name}{suffix(style)}", style)
+            trial = simulate_trial(spec)
+            if style.get("together"):
+                session.append(trial)
+            else:
+                lab_file(trial, folder / f"{spec.name}{suffix(style)}", style)
+        if style.get("together"):   # the person's runs in one file: s01_motion.mat
+            (folder / f"s{s + 1:02d}_{cond}{suffix(style)}").write_bytes(mat_runs_bytes(session))
     stated = plants_dict(spec)
     if cab is not None:   # the lab states the ideal path
         stated["motion_path"] = {"num": list(ANGLE_MOTION[0]), "den": list(ANGLE_MOTION[1])}
@@ -181,20 +197,23 @@ def diagnose_file(path: Path, plants: Path, out_json: Path, cols: str = COLUMNS)
 
 def diagnose_runs(folder: Path, plants: Path, cols: str = COLUMNS) -> tuple[int, int, dict, float]:
     """``hesspipe diagnose`` on every run of `folder` (.csv, .txt, .mat, .xlsx), one at a time, read with the
-    mapping `cols`: (runs named motion_feedback, runs, other names -> count, median CPU s per
-    diagnosis)."""
+    mapping `cols` (starred: each run of a file on its own, ``x:2``): (runs named motion_feedback,
+    runs, other names -> count, median CPU s per diagnosis)."""
     named, others, cpu = 0, {}, []
     paths = sorted(p for p in folder.iterdir() if p.suffix in (".csv", ".txt", ".mat", ".xlsx"))
-    for path in paths:
-        report, seconds = diagnose_file(path, plants, folder.parent / f"{folder.name}-{path.stem}.diagnosis.json",
-                                        cols)
+    each = [(path, cols, path.stem) for path in paths] if "*" not in cols else [
+        (path, cols.replace("*", str(r.number)), f"{path.stem}_r{r.number}")
+        for path in paths for r in read_file_runs(path, columns=cols)]
+    for path, run_cols, name in each:
+        report, seconds = diagnose_file(path, plants, folder.parent / f"{folder.name}-{name}.diagnosis.json",
+                                        run_cols)
         cpu.append(seconds)
         names = report["named_effects"]
         named += "motion_feedback" in names
         for n in names:
             if n != "motion_feedback":
                 others[n] = others.get(n, 0) + 1
-    return named, len(paths), others, statistics.median(cpu)
+    return named, len(each), others, statistics.median(cpu)
 
 
 def variation(comparison: dict) -> tuple[float, float]:
@@ -231,7 +250,8 @@ def main(argv=None) -> int:
                     help="the files' style: lab (LAB: semicolons, decimal commas), daq (DAQ: metadata above "
                          "the header, a units row, clock times across midnight, frames written twice, UTF-16) "
                          "matlab (MATLAB: save -ascii, no header row, read by position), mat (a .mat "
-                         "file of variables t, ft, fd, x, u) or xlsx (an Excel workbook, the lab's names)")
+                         "file of variables t, ft, fd, x, u), mat-runs (a person's runs of a condition in one "
+                         ".mat, a column per run) or xlsx (an Excel workbook, the lab's names)")
     ap.add_argument("--threshold", type=float, default=0.0,
                     help="each person's indifference threshold, share of the error's RMS (0: none)")
     ap.add_argument("--cab-washout", type=float, default=0.0,

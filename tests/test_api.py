@@ -7,7 +7,7 @@ import sys
 
 import hesspipe
 
-REQUIRED = ("read_run", "read_plants", "fly", "fit_plants", "PilotModel", "simulate", "identify",
+REQUIRED = ("read_run", "read_file_runs", "read_plants", "fly", "fit_plants", "PilotModel", "simulate", "identify",
             "estimate_frf", "average_frf", "compare_pilots", "compare_conditions", "diagnose", "DiagnoseConfig")
 
 

@@ -488,7 +488,8 @@ def test_diagnose_stage_reads_the_run_the_pilots_stage_declared(tmp_path):
         config = {"pilots": {"data": ""}}
         upstream = {"pilots": pilots}
 
-    assert _diagnose_run(Ctx) == pilots / "cohort" / "pilot01.csv"
+    chosen = pilots / "cohort" / "pilot01.csv"
+    assert _diagnose_run(Ctx) == (chosen, str(chosen))
     (pilots / "comparison.json").write_text(json.dumps({"pilots": []}))
     with pytest.raises(HesspipeError, match=r"comparison.json: the pilots stage compared no runs"):
         _diagnose_run(Ctx)

@@ -22,7 +22,7 @@ from .core.lazy import attach
 #: package of the same name (``hesspipe.flight``, ``hesspipe.plants``, ``hesspipe.pilots``,
 #: ``hesspipe.diagnose``); the ``diagnose`` package is callable as the stage's function.
 _API = {
-    "read_run": "core.formats", "write_run": "core.formats", "read_plants": "core.formats",
+    "read_run": "core.formats", "read_file_runs": "core.formats", "write_run": "core.formats", "read_plants": "core.formats",
     "write_plants": "core.formats", "Run": "core.formats", "Plants": "core.formats",
     "fly": "flight", "FlightConfig": "flight", "fly_pilot": "flight",
     "fit_plants": "plants", "PlantsConfig": "plants",

@@ -45,12 +45,13 @@ def cli_message(message: str, args: argparse.Namespace | None) -> str:
 def add_run_options(parser: argparse.ArgumentParser) -> None:
     """``--columns`` and ``--resample`` for a command that reads measured runs.
 
-    Pass them on with ``read_run(path, **run_options(args))``.
+    Pass them on with ``read_file_runs(path, **run_options(args))``.
     """
     parser.add_argument("--columns", metavar="ROLE=NAME,...",
                         help="map other column names, e.g. control=stick,output=p (a file without a "
                              "header row: by position, time=1,control=4; a .mat file: by variable, "
-                             "time=t,control=u)")
+                             "time=t,control=u; a file of several runs, a column each: '*' for the "
+                             "run's number, output=x:*,control=u:*)")
     parser.add_argument("--resample", action="store_true",
                         help="interpolate a non-uniform time column onto a uniform grid "
                              "(default: refuse it)")
@@ -79,7 +80,8 @@ def reading_lines(reading) -> list[str]:
         if len(sources) == 1:
             where = sources[0]
         else:
-            where = f"{len(sources)} files ({sources[0]} … {sources[-1]})"
+            noun = "runs" if any("#" in s for s in sources) else "files"   # PATH#k: a file's run k
+            where = f"{len(sources)} {noun} ({sources[0]} … {sources[-1]})"
         lines.append(f"hesspipe: note: {where}: {note}")
     return lines
 
@@ -104,11 +106,12 @@ def read_cli_plants(path):
 
 
 def read_cli_runs(paths, args: argparse.Namespace, **kwargs) -> list:
-    """:func:`hesspipe.core.formats.read_run` of each path with the command's run options;
-    the notes of all of them on stderr once they are read (:func:`reading_lines`)."""
-    from ..core.formats import read_run
+    """:func:`hesspipe.core.formats.read_file_runs` of each path with the command's run
+    options, the runs in file order; the notes of all of them on stderr once they are read
+    (:func:`reading_lines`)."""
+    from ..core.formats import read_file_runs
 
-    runs = [read_run(path, **run_options(args), **kwargs) for path in paths]
+    runs = [run for path in paths for run in read_file_runs(path, **run_options(args), **kwargs)]
     print_reading({run.source: run.notes for run in runs})
     return runs
 

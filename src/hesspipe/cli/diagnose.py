@@ -76,9 +76,9 @@ def _diagnose(args) -> int:
 
     plants = read_cli_plants(args.plants)
 
-    runs = read_cli_runs([*args.run, *(args.baseline_run or [])], args, min_samples=WELCH_SEGMENT)
-    run, *repeats = runs[:len(args.run)]
-    base = None if args.baseline_run is None else runs[len(args.run):]
+    # A file may hold several runs (a starred column name): the two lists are read apart.
+    run, *repeats = read_cli_runs(args.run, args, min_samples=WELCH_SEGMENT)
+    base = None if args.baseline_run is None else read_cli_runs(args.baseline_run, args, min_samples=WELCH_SEGMENT)
     result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
                       baseline_run=base, repeat_runs=repeats)
     print(format_report(result))

@@ -7,29 +7,20 @@ with decimal commas in European locales), capitalised headers, and a unit beside
 (``Time [s]``, ``roll rate (deg/s)``), or in a row of their own under the names; lines of
 metadata above the header (``Subject: s02``); quoted cells; a frame the logger wrote twice;
 no header at all (MATLAB's ``save -ascii``: the columns are then named by position, 1 to k).
-MATLAB files (:mod:`._mat`) are read apart; an Excel workbook's sheet (:mod:`._excel`) is read
-as the text it would be saved as.
-They are valid input; this module reads them into the roles the caller asks for and
-converts the units it knows to SPEC.md's (:data:`UNIT_FACTORS`), saying what it did
-(:attr:`Table.notes`).
+They are valid input; this module finds the text's shape (encoding, separator, decimal mark,
+where the header is) and the units it knows (:data:`UNIT_FACTORS`); :mod:`._table` reads the
+columns into the roles the caller asks for, saying what it did.
 """
 
 from __future__ import annotations
 
 import csv as _csvmod
-import io as _io
 import math
 import re
-import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping
 
 import numpy as np
-import pandas as pd
 
-from ._excel import EXCEL_SUFFIXES, excel_text
-from ._mat import mat_frame
 from .errors import HesspipeError
 from .io import read_bytes
 
@@ -52,35 +43,9 @@ written, in the plants' units, and noted."""
 
 _DIMENSIONLESS = ("", "-", "1", "none", "n/a", "norm", "normalised", "normalized")
 _UNIT = re.compile(r"^(?P<name>.*?)\s*(?:\[(?P<u1>[^\]]*)\]|\((?P<u2>[^)]*)\))\s*$")
+_TIME_OF_DAY = re.compile(r"^(\d{1,2}):(\d{2}):(\d{2}(?:[.,]\d+)?)$")
+_ISO_DATE = re.compile(r"^\d{4}-\d{2}-\d{2}[T ]\d")
 _DECIMAL_COMMA = re.compile(r"^\s*[+-]?\d+,\d+(?:[eE][+-]?\d+)?\s*$")
-
-
-@dataclass(frozen=True)
-class Table:
-    """Columns read by role.
-
-    Attributes
-    ----------
-    data : dict of str to ndarray
-        Role → float array in SPEC.md's units (all finite).
-    comments : tuple of str
-        The file's ``#`` comment lines, without the ``#``.
-    columns : dict of str to str
-        Role → the header the values came from.
-    notes : tuple of str
-        What reading did beyond the plain format (a delimiter, a unit converted or taken as
-        written), one sentence each.
-    resolution : dict of str to ndarray
-        ``"time"`` → the place value of the last digit each time was written with, in
-        SPEC.md's unit (1e-5 s for ``30,01000``): how much of an interval's deviation the
-        writing explains. Empty without a time role.
-    """
-
-    data: dict
-    comments: tuple
-    columns: dict
-    notes: tuple
-    resolution: dict = field(default_factory=dict)
 
 
 def decode(path: str | Path, what: str) -> tuple[str, str]:
@@ -264,239 +229,11 @@ def _with_units(header: str, units_row: str, sep: str) -> str:
     return (sep if sep != r"\s+" else " ").join(out)
 
 
-def _resolution(cells) -> np.ndarray:
-    """Place value of the last digit each cell was written with (``30,01000`` → 1e-5;
-    ``20`` → 1; ``1.5e-3`` → 1e-4); NaN where a cell is not a number."""
-    out = np.full(len(cells), np.nan)
-    for i, cell in enumerate(cells):
-        text = str(cell).strip().strip('"').replace(",", ".")
-        mant, _, exp = text.lower().partition("e")
-        frac = re.match(r"\d*", mant.partition(".")[2]).group()   # a clock's zone ends the digits
-        try:
-            out[i] = 10.0 ** (int(exp or 0) - len(frac))
-        except ValueError:
-            pass
-    return out
-
-
 def _split_unit(header: str) -> tuple[str, str | None]:
     m = _UNIT.match(header)
     if not m:
         return header.strip(), None
     return m.group("name").strip(), (m.group("u1") if m.group("u1") is not None else m.group("u2")).strip()
-
-
-def _match(path, headers: list[str], role: str, name: str) -> str | None:
-    """The header of `role` (asked for as `name`): the exact name, else the one whose name,
-    ignoring case and a unit in brackets, is `name`; two such headers are an error."""
-    if name in headers:
-        return name
-    want = name.strip().lower()
-    found = [h for h in headers if _split_unit(h)[0].lower() == want or h.strip().lower() == want]
-    if len(found) > 1:
-        raise HesspipeError(f"{path}: columns {', '.join(repr(h) for h in found)} all read as "
-                            f"'{name}' (role {role}); expected one")
-    return found[0] if found else None
-
-
-def read_table(path: str | Path, names: Mapping[str, str], *, optional=(), what: str = "a CSV",
-               hint: str | None = None) -> Table:
-    """Read numeric columns by role from a delimited text file with ``#`` comment lines.
-
-    Parameters
-    ----------
-    path : path
-    names : mapping
-        Role → column name (matched exactly, else ignoring case and a unit in brackets; a
-        file without that name may use the role's own, e.g. ``time``; ``-NAME`` reads
-        NAME with its sign flipped); every role is required unless listed in `optional`.
-    optional : sequence of str
-        Roles that may be missing (left out of the result); an optional column left empty
-        in every row counts as missing.
-    what : str
-        What the file should be, for messages ("a measured-run CSV").
-    hint : str, optional
-        Name of the setting that maps other column names (named in the message,
-        e.g. "columns": "map other names with columns control=NAME").
-
-    Returns
-    -------
-    Table
-
-    Raises
-    ------
-    HesspipeError
-        Naming the file, the column and the problem.
-    """
-    path = Path(path)
-    if path.suffix.lower() == ".mat":
-        df, comments, notes, others = mat_frame(path)
-        return _by_role(path, df, names, optional, hint, notes, comments, ".", None, others=others)
-    excel = path.suffix.lower() in EXCEL_SUFFIXES
-    if excel:
-        text, notes = excel_text(path)   # the sheet as the text it would be saved as
-    else:
-        text, encoding = decode(path, what)
-        notes = [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"]
-    # A workbook's tabs are ours: not said.
-    text, sep, decimal, positional = _prepare(text, notes, separator_said=not excel)
-    comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
-                     if line.lstrip().startswith("#"))
-    try:
-        with warnings.catch_warnings():
-            # index_col=False: a separator ending every data line (loggers write one) must not
-            # make pandas take the first column as an index and shift the names onto the next.
-            # More values than names is then pandas' warning, here an error.
-            warnings.simplefilter("error", pd.errors.ParserWarning)
-            df = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep,
-                             decimal=decimal, index_col=False,
-                             engine="python" if sep == r"\s+" else "c")
-    except (pd.errors.ParserWarning, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        long = _long_row(text, sep)
-        if long is not None:
-            row, values, names_ = long
-            raise HesspipeError(f"{path}: data row {row} holds {values} values where the header "
-                                f"names {names_}; expected one value per named column") from None
-        if isinstance(exc, pd.errors.ParserWarning):
-            raise HesspipeError(f"{path}: data rows hold more values than the header has names; "
-                                "expected one value per named column") from None
-        raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
-    df.columns = [str(c).strip() for c in df.columns]
-
-    def written(col: str) -> np.ndarray:
-        return pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
-                           usecols=[col], dtype=str, engine="python" if sep == r"\s+" else "c")[col].to_numpy()
-
-    return _by_role(path, df, names, optional, hint, notes, comments, decimal, written, positional=positional)
-
-
-def _by_role(path: Path, df: pd.DataFrame, names, optional, hint, notes: list, comments, decimal: str,
-             written, *, others: list | None = None, positional: bool = False) -> Table:
-    """:func:`read_table`'s columns found by role in `df`, checked and converted. `written`: the
-    time column's cells as text (for their resolution), None for a binary file; `others`: a
-    MAT file's variables of another length (named in a missing column's message);
-    `positional`: the columns are named by position (a file without a header row)."""
-    headers = list(df.columns)
-    data, used = {}, {}
-    flipped = set()
-    for role, name in names.items():
-        col = _match(path, headers, role, name)
-        if col is None and name.startswith("-") and name[1:].strip():
-            # "-NAME": the column NAME with its sign flipped (a stick convention opposite
-            # to the plants').
-            col = _match(path, headers, role, name[1:].strip())
-            if col is not None:
-                flipped.add(role)
-        if col is None and name != role:
-            # A mapping written for some files of a folder: the others keep the plain names.
-            col = _match(path, headers, role, role)
-        if col is not None and role in optional and df[col].isna().all():
-            col = None  # a column written but left empty: the default, as if absent
-        if col is None:
-            if role in optional:
-                continue
-            label = f" (role {role})" if role != name else ""
-            if others is not None:
-                tail = f"; map other names with {hint} {role}=NAME" if hint else ""
-                left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
-                raise HesspipeError(f"{path}: variable '{name}' missing{label}; found variables: "
-                                    f"{', '.join(headers)}{left}{tail}")
-            if positional:
-                tail = f"; map them with {hint} {role}=POSITION" if hint else ""
-                raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "
-                                    f"row, its columns are named by position 1-{len(headers)}{tail}")
-            tail = f"; map other names with {hint} {role}=NAME" if hint else ""
-            raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
-                                f"{', '.join(headers)}{tail}")
-        data[role], used[role] = _numeric(df[col], decimal), col
-        if role == "time" and data[role].size and np.mean(np.isfinite(data[role])) < 0.5:
-            clock = _clock(df[col])
-            if clock is not None:
-                data[role] = clock
-                notes.append(f"column '{col}' ({role}): clock times read as seconds from the first")
-    first, stop = _complete_rows(data)
-    bad = {role: first + int(np.argmax(~np.isfinite(v[first:stop]))) for role, v in data.items()
-           if not np.isfinite(v[first:stop]).all()}
-    if bad:
-        role = min(bad, key=lambda r: bad[r])   # the earliest bad value in the file
-        col, row = used[role], bad[role]
-        value = df[col].iloc[row]
-        got = "an empty or NaN cell" if pd.isna(value) else repr(value)
-        raise HesspipeError(f"{path}: column '{col}': expected finite numbers, got {got} "
-                            f"in data row {row + 1}")
-    if (first, stop) != (0, len(df)):
-        notes.append(f"dropped {first} incomplete row(s) at the start and {len(df) - stop} at the end "
-                     f"(a value missing or not a number); data rows {first + 1}-{stop} read")
-    keep = np.arange(first, stop)
-    if "time" in used and keep.size > 1:
-        # A logger that writes a frame twice repeats the whole row, time included: the
-        # record holds it once. Rows that share a time but not their values stay, for
-        # the caller to refuse.
-        block = np.column_stack([data[role][keep] for role in used])
-        again = np.all(block[1:] == block[:-1], axis=1)
-        if again.any():
-            notes.append(f"dropped {int(again.sum())} row(s) repeating the row before in every column "
-                         f"(first data row {int(keep[1:][again][0]) + 1}: a frame written twice)")
-            keep = keep[np.concatenate(([True], ~again))]
-    resolution = {}
-    if "time" in used and written is not None:
-        resolution["time"] = _resolution(written(used["time"])[keep])
-    for role, col in used.items():
-        values = data[role][keep]
-        if role in flipped:
-            values = -values
-            notes.append(f"column '{col}' ({role}): sign flipped, as mapped")
-        unit = _split_unit(col)[1]
-        if unit:
-            factor = UNIT_FACTORS.get(role, {}).get(unit.lower().replace(" ", ""))
-            if factor is None and unit.lower() not in _DIMENSIONLESS:
-                notes.append(f"column '{col}' ({role}): unit '{unit}' taken as written")
-            elif factor is not None and factor != 1.0:
-                values = values * factor
-                notes.append(f"column '{col}' ({role}): {unit} converted to SPEC.md's units (x {factor:.6g})")
-                if role in resolution:
-                    resolution[role] = resolution[role] * factor
-        data[role] = values
-    return Table(data, comments, used, tuple(notes), resolution)
-
-
-_TIME_OF_DAY = re.compile(r"^(\d{1,2}):(\d{2}):(\d{2}(?:[.,]\d+)?)$")
-_ISO_DATE = re.compile(r"^\d{4}-\d{2}-\d{2}[T ]\d")
-
-
-def _clock(column: pd.Series) -> np.ndarray | None:
-    """Seconds from the first row of a column of clock times (``14:03:05.120``, a day
-    rolled over at midnight, or ISO 8601 ``2026-11-01T14:03:05.120``), NaN where a cell is
-    not one; None unless at least 90 % of the cells are."""
-    cells = column.astype(str).str.strip().str.strip('"')
-    parts = cells.str.extract(_TIME_OF_DAY)
-    if parts.notna().all(axis=1).mean() >= 0.9:
-        sec = (parts[0].astype(float) * 3600 + parts[1].astype(float) * 60
-               + parts[2].str.replace(",", ".", regex=False).astype(float)).to_numpy()
-        held = pd.Series(sec).ffill().bfill().to_numpy()   # a cell that is not a time counts no day
-        days = np.concatenate(([0], np.cumsum(np.diff(held) < -43200)))
-        sec = sec + 86400.0 * days
-    else:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            stamps = pd.to_datetime(cells.str.replace(",", ".", regex=False), errors="coerce",
-                                    format="ISO8601")
-        if stamps.notna().mean() < 0.9:
-            return None
-        if getattr(stamps.dt, "tz", None) is not None:
-            stamps = stamps.dt.tz_convert(None)
-        sec = (stamps - stamps[stamps.notna()].iloc[0]).dt.total_seconds().to_numpy(dtype=float)
-    first = sec[np.isfinite(sec)][0]
-    return sec - first
-
-
-def _numeric(column: pd.Series, decimal: str) -> np.ndarray:
-    """Floats of a column, NaN where a cell is not a number. pandas applies a decimal comma
-    only to columns it reads as numbers: one text cell (``---``, a units row) leaves the
-    whole column as text, whose commas are converted here."""
-    if decimal == "," and not pd.api.types.is_numeric_dtype(column):
-        column = column.astype(str).str.strip().str.strip('"').str.replace(",", ".", regex=False)
-    return pd.to_numeric(column, errors="coerce").to_numpy(dtype=float)
 
 
 def _prepare(text: str, notes: list, *, separator_said: bool = True) -> tuple[str, str, str, bool]:
@@ -589,19 +326,3 @@ def unwrap_turns(values: np.ndarray) -> tuple[np.ndarray, float | None, int]:
                 np.ptp(values) <= 1.001 * period:
             return np.unwrap(values, period=period), period, int(wrap.sum())
     return values, None, 0
-
-
-def _complete_rows(data: Mapping[str, np.ndarray]) -> tuple[int, int]:
-    """(first, stop) of the rows to read: incomplete rows (a value missing or not a number)
-    at the start and end of a record are dropped, as a recorder's empty first row or a last
-    line cut short leave them, while at least 90 % of the rows remain; otherwise every row.
-    A bad value between complete rows stays for the caller to name."""
-    if not data:
-        return 0, 0
-    ok = np.logical_and.reduce([np.isfinite(v) for v in data.values()])
-    n = ok.size
-    if ok.all() or not ok.any():
-        return 0, n
-    first = int(np.argmax(ok))
-    stop = n - int(np.argmax(ok[::-1]))
-    return (first, stop) if stop - first >= 0.9 * n else (0, n)

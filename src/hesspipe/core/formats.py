@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Mapping
 
@@ -27,9 +27,11 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from ._csv import decode, read_table, unwrap_turns
+from ._csv import decode, unwrap_turns
+from ._table import RUN_NUMBER, read_frame, read_table, run_columns
 from ._tf import _read_tf, tf_coefficients
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
+from ._time import UNIFORM_RTOL, _check_plausible, _intercept, sample_interval
 from .errors import HesspipeError
 from .io import write_json, write_text
 from .paper import WELCH_SEGMENT
@@ -43,12 +45,6 @@ RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".xlsx", ".xlsm")
 TEXT_SUFFIXES = (".txt", ".dat")
 OPTIONAL_COLUMNS = ("reference",)
 
-#: "Uniform" sampling (SPEC.md "Time"): every interval within this fraction of the
-#: interval, beyond what the precision the times are written with explains.
-UNIFORM_RTOL = 1e-4
-#: Longest sample interval of a plausible tracking run, s (a time column in
-#: milliseconds read as seconds gives 10-20 s intervals).
-MAX_INTERVAL_S = 1.0
 #: Largest magnitude of a signal whose power spectrum is finite in float64 with room to spare.
 MAX_MAGNITUDE = 1e100
 #: Most samples of one run: the simulator's padded FFT grid holds up to 16 times this in
@@ -80,6 +76,9 @@ class Run:
     notes : tuple of str
         What the reader did beyond the plain format (an encoding, a delimiter, a unit
         converted), one sentence each.
+    number : int
+        The run's number in a file holding several (:func:`read_file_runs`; its id is then
+        ``STEM#number``); 0 when the file is this one run.
     """
 
     time: np.ndarray
@@ -93,6 +92,7 @@ class Run:
     source: str = ""
     interval: float = 0.0
     notes: tuple[str, ...] = ()
+    number: int = 0
 
     @property
     def dt(self) -> float:
@@ -121,6 +121,12 @@ class Run:
         that size, which the record, flown at that point all along, does not hold.
         """
         return self.reference - np.mean(self.reference)
+
+    @property
+    def file_id(self) -> str:
+        """The id of the file the run was read from: the id less ``#number`` (one person's
+        runs, by default, where a file holds several)."""
+        return self.id[:-len(f"#{self.number}")] if self.number else self.id
 
     def __len__(self) -> int:
         return len(self.time)
@@ -168,6 +174,9 @@ def _parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
                                 f"{', '.join(RUN_COLUMNS + OPTIONAL_COLUMNS)}")
         if not isinstance(pairs[role], str) or not pairs[role].strip():
             raise HesspipeError(f"columns: role {role!r}: expected a column name, got {pairs[role]!r}")
+        if pairs[role].count(RUN_NUMBER) > 1:
+            raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r} holds {pairs[role].count(RUN_NUMBER)} "
+                                f"'{RUN_NUMBER}'; expected at most one, standing for a run's number")
     return pairs
 
 
@@ -198,7 +207,8 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     columns : str or mapping, optional
         Role → column-name mapping for files with other names, e.g.
         ``"control=stick,output=p"``; ``"control=-stick"`` flips the sign of a column
-        logged with the opposite convention to the plants'.
+        logged with the opposite convention to the plants'. A name with ``*`` (a run's
+        number, :func:`read_file_runs`) must find one run here.
     resample : bool
         If the time column is not uniform, resample all signals linearly to
         the median interval instead of failing.
@@ -213,13 +223,73 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     HesspipeError
         Naming the file, the column and the problem.
     """
+    runs = read_file_runs(path, columns=columns, resample=resample, min_samples=min_samples, rtol=rtol)
+    if len(runs) > 1:
+        raise HesspipeError(f"{path}: the columns mapped with '{RUN_NUMBER}' find {len(runs)} runs "
+                            f"({runs[0].id} to {runs[-1].id}); expected one here: map one run's "
+                            "columns (x:2 for x:*), or read the file's runs together")
+    return runs[0]
+
+
+def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None = None,
+                   resample: bool = False, min_samples: int = 2,
+                   rtol: float = UNIFORM_RTOL) -> list[Run]:
+    """Read and validate the runs one file holds: one, or several side by side.
+
+    A laboratory that saves a session's runs together writes them as a matrix per signal
+    (MATLAB's ``u`` of 8192 x 5, read as columns ``u:1`` to ``u:5``), as a struct array
+    (``trial(3).u``) or as numbered columns (``u1``, ``u2``, ...). A mapped name holding
+    ``*`` stands for the run's number (:data:`hesspipe.core._table.RUN_NUMBER`):
+    ``output=x:*,control=u:*`` reads one run per number; a name without it (the time, the
+    forcing) is shared by every run. Without a star the file is one run, as
+    :func:`read_run` reads it.
+
+    Parameters
+    ----------
+    path : path
+        A run file (:func:`read_run`).
+    columns : str or mapping, optional
+        Role → column-name mapping (:func:`read_run`), a name possibly with one ``*``.
+    resample, min_samples, rtol
+        As for :func:`read_run`, for every run.
+
+    Returns
+    -------
+    list of Run
+        By run number. A run of several has the id ``STEM#k`` and the source ``PATH#k``
+        (``s01_motion#3``), one of one the file's stem and path.
+
+    Raises
+    ------
+    HesspipeError
+        Naming the file, the column and the problem (:func:`read_run`); starred names that
+        match no column or find different runs (:func:`hesspipe.core._table.run_columns`).
+    """
     path = Path(path)
     mapping = _parse_columns(columns)
     names = {role: mapping.get(role, role) for role in RUN_COLUMNS + OPTIONAL_COLUMNS}
     # An optional role the caller mapped to a column is required: a misspelt reference
     # column read as no target at all would change the answer without a word.
     optional = tuple(role for role in OPTIONAL_COLUMNS if role not in mapping)
-    table = read_table(path, names, optional=optional, what="a measured-run CSV", hint="columns")
+    frame = read_frame(path, "a measured-run CSV")
+    each = run_columns(frame, names, optional=optional, hint="columns")
+    runs = []
+    for k, run_names in each:
+        table = read_table(frame, run_names, optional=optional, hint="columns")
+        where = Path(f"{path}#{k}") if len(each) > 1 else path
+        run = _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol)
+        if len(each) > 1:
+            cols = ", ".join(f"{role} {names[role]}" for role in RUN_COLUMNS + OPTIONAL_COLUMNS
+                             if RUN_NUMBER in names[role])
+            run = replace(run, id=f"{path.stem}#{k}", number=k,
+                          notes=run.notes + (f"{len(each)} runs in the file, read as PATH#NUMBER from the "
+                                             f"columns numbered in place of '{RUN_NUMBER}' ({cols})",))
+        runs.append(run)
+    return runs
+
+
+def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol: float) -> Run:
+    """:func:`read_file_runs`'s checks of one run's columns, and the run (named after `path`)."""
     data, comments, notes = table.data, table.comments, table.notes
     n = len(data["time"])
     if n < max(min_samples, 2):
@@ -314,21 +384,11 @@ def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_sample
     return int(n)
 
 
-def _check_plausible(path, column: str, dt: float) -> None:
-    """Refuse sample intervals no tracking run has (usually times in milliseconds)."""
-    if dt > MAX_INTERVAL_S:
-        hint = (" (the time column looks like milliseconds: write it in seconds)"
-                if 1.0 < dt <= 100.0 else "")
-        raise HesspipeError(f"{path}: column '{column}': sample interval {dt:g} s "
-                            f"({1.0 / dt:.3g} Hz) is implausible for a tracking run; expected "
-                            f"seconds with an interval of at most {MAX_INTERVAL_S:g} s{hint}")
-
-
 def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
                      what: str = "a CSV", hint: str | None = None) -> tuple[dict, tuple[str, ...]]:
     """Read numeric columns of a CSV with ``#`` comment lines: ``(data, comments)``.
 
-    :func:`hesspipe.core._csv.read_table` without its notes: any text encoding,
+    :func:`hesspipe.core._table.read_table` without its notes: any text encoding,
     delimiter and header style it reads, units converted to SPEC.md's.
 
     Parameters
@@ -357,85 +417,6 @@ def read_csv_columns(path: str | Path, names: Mapping[str, str], *, optional=(),
     """
     table = read_table(path, names, optional=optional, what=what, hint=hint)
     return table.data, table.comments
-
-
-def _written_resolution(t: np.ndarray) -> np.ndarray:
-    """Place value of the last digit each time was written with (from the shortest text
-    that reads back as the same float): 1e-7 for ``60.0166667``, 1e-3 for ms stamps."""
-    out = np.empty(t.size)
-    for i, v in enumerate(t.tolist()):
-        mant, _, exp = repr(float(v)).partition("e")
-        whole, _, frac = mant.partition(".")
-        digits = 0 if frac in ("", "0") else len(frac)
-        out[i] = 10.0 ** (int(exp or 0) - digits)
-    return out
-
-
-def _intercept(t: np.ndarray, dt: float) -> float:
-    """Offset from ``t[0]`` of the uniform grid with interval `dt` closest to `t`."""
-    rel = t - t[0]
-    return float(np.mean(rel - dt * np.arange(t.size)))
-
-
-def sample_interval(path, t: np.ndarray, column: str = "time", *,
-                    rtol: float = UNIFORM_RTOL, resolution=None) -> tuple[float, bool]:
-    """Sample interval of `t` and whether the sampling is uniform.
-
-    Times are taken relative to the first (Unix-epoch stamps keep their
-    precision). The interval is the least-squares slope of time against
-    sample number over the whole record (rounding averages out). Uniform
-    means every interval is within `rtol` of it plus what the rounding of the
-    two written times explains (SPEC.md "Time"). For non-uniform times the
-    median interval is returned (the grid of a resampling).
-
-    Parameters
-    ----------
-    path : str or Path
-        The file `t` comes from (for messages).
-    t : array
-        Sample times, s.
-    column : str
-        Name of the time column (for messages).
-    rtol : float
-        Relative tolerance of a uniform interval.
-    resolution : array, optional
-        Place value of the last digit each time was written with, s
-        (:attr:`hesspipe.core._csv.Table.resolution`); by default inferred from the floats,
-        which cannot see written trailing zeros (``30.01000`` reads as ``30.01``: a whole
-        interval of tolerance at 100 Hz, where a missing sample would pass).
-
-    Returns
-    -------
-    dt : float
-        Sample interval, s (> 0).
-    uniform : bool
-
-    Raises
-    ------
-    HesspipeError
-        If `t` is not strictly increasing (naming the file, the column and the row).
-    """
-    t = np.asarray(t, dtype=float)
-    rel = t - t[0]
-    steps = np.diff(rel)
-    if np.any(steps <= 0):
-        row = int(np.argmax(steps <= 0)) + 1
-        raise HesspipeError(f"{path}: column '{column}': expected strictly increasing time, "
-                            f"not at data row {row + 1}")
-    # What writing the times to text explains: half a last digit on each end, plus the
-    # float64 spacing of the absolute times (epoch stamps) and of their difference.
-    res = _written_resolution(t) if resolution is None else np.asarray(resolution, dtype=float)
-    if res.shape != t.shape or not np.all(np.isfinite(res)):
-        res = _written_resolution(t)
-    rounding = 0.5 * (res[1:] + res[:-1]) + 2.0 * np.spacing(np.abs(t[1:]) + np.abs(t[:-1]))
-    # The interval over the whole record (rounded intervals are biased: with 6 digits most
-    # 1/60 s steps read 0.0167, so their median is not the interval).
-    i = np.arange(t.size, dtype=float)
-    i -= i.mean()
-    slope = float(np.dot(i, rel - rel.mean()) / np.dot(i, i))
-    if slope > 0 and np.all(np.abs(steps - slope) <= rtol * slope + rounding):
-        return slope, True
-    return float(np.median(steps)), False
 
 
 def write_run(path: str | Path, run: Run, comments: tuple[str, ...] | list[str] = ()) -> Path:

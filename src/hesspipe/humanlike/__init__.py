@@ -31,10 +31,10 @@ from .plants import Plant, make_plant
 from .retest import retest
 from .trial import EFFECTS, RANGES, Trial, TrialSpec, draw_trial, simulate_trial
 from .truth import GENERATOR, closed_loop, pilot_frf
-from .writer import csv_bytes, mat_bytes, plants_dict, write_trial, xlsx_bytes
+from .writer import csv_bytes, mat_bytes, mat_runs_bytes, plants_dict, write_trial, xlsx_bytes
 
 __all__ = ["EFFECTS", "GENERATOR", "RANGES", "Plant", "Trial", "TrialSpec", "closed_loop",
-           "csv_bytes", "mat_bytes", "draw_trial", "make_plant", "make_trials", "pilot_frf", "plants_dict",
+           "csv_bytes", "mat_bytes", "mat_runs_bytes", "draw_trial", "make_plant", "make_trials", "pilot_frf", "plants_dict",
            "retest", "simulate_trial", "write_trial", "xlsx_bytes"]
 
 

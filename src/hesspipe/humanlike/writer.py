@@ -1,7 +1,9 @@
 """Write generated trials the way real loggers write files.
 
 A trial becomes ``NAME.csv`` (SPEC measured-run format), ``NAME.truth.json``
-and the folder's ``plants.json`` (what a researcher would hand hesspipe). The
+and the folder's ``plants.json`` (what a researcher would hand hesspipe); or a MATLAB file
+(:func:`mat_bytes`; a session's runs together, :func:`mat_runs_bytes`) or a workbook
+(:func:`xlsx_bytes`). The
 CSV's style (time format, line ends, BOM, column order) is drawn per trial
 or given:
 
@@ -217,6 +219,38 @@ def mat_bytes(trial, names: dict | None = None, degrees: bool = True) -> bytes:
     scale = 180.0 / np.pi if degrees else 1.0
     data = {names[c]: (trial.time if c == "time" else scale * getattr(trial, c)).reshape(-1, 1) for c in COLUMNS}
     data["note"] = _label(trial)
+    buf = io.BytesIO()
+    savemat(buf, data, format="5", oned_as="column")
+    return buf.getvalue()
+
+
+def mat_runs_bytes(trials, names: dict | None = None, degrees: bool = True) -> bytes:
+    """The MATLAB file (version 5) of a session's `trials` saved together: each signal a matrix
+    of one column per run (``x`` of samples x runs, read as ``x:1`` ... ``x:R``), the time one
+    vector, angles in degrees when `degrees`, the runs' labels in the text variable ``note``.
+
+    Parameters
+    ----------
+    trials : sequence of Trial
+        Runs of one forcing layout: the same time grid (their phases may differ).
+    names : dict, optional
+        SPEC column name → variable name (default :data:`MAT_NAMES`).
+    degrees : bool
+        Every signal but time times 180/pi.
+
+    Raises
+    ------
+    HesspipeError
+        No trial, or trials of different time grids.
+    """
+    trials = list(trials)
+    if not trials or any(not np.array_equal(t.time, trials[0].time) for t in trials):
+        raise HesspipeError("trials: expected at least one trial, all on the same time grid")
+    names = {**MAT_NAMES, **(names or {})}
+    scale = 180.0 / np.pi if degrees else 1.0
+    data = {names[c]: np.column_stack([scale * getattr(t, c) for t in trials]) for c in COLUMNS if c != "time"}
+    data[names["time"]] = trials[0].time.reshape(-1, 1)
+    data["note"] = "; ".join(_label(t) for t in trials)
     buf = io.BytesIO()
     savemat(buf, data, format="5", oned_as="column")
     return buf.getvalue()

@@ -33,7 +33,7 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..core.errors import HesspipeError
-from ..core.formats import RUN_SUFFIXES, TEXT_SUFFIXES, Plants, Run, _parse_columns, plants_coefficients, read_run
+from ..core.formats import RUN_SUFFIXES, TEXT_SUFFIXES, Plants, Run, _parse_columns, plants_coefficients, read_file_runs
 from ..core.seeds import derive_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import benchmark as mcruer_benchmark
@@ -345,22 +345,23 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
     paths : sequence of Path
         The run files.
     columns, resample, min_samples
-        Passed to :func:`hesspipe.core.formats.read_run`.
+        Passed to :func:`hesspipe.core.formats.read_file_runs` (a file may hold several runs).
     """
     runs, failures = [], []
-    seen: dict[str, Path] = {}
+    seen: dict[str, str] = {}
     for path in paths:
         try:
-            run = read_run(path, columns=columns, resample=resample, min_samples=min_samples)
+            found = read_file_runs(path, columns=columns, resample=resample, min_samples=min_samples)
         except HesspipeError as exc:
             failures.append(PilotFailure(Path(path).stem, str(path), str(exc)))
             continue
-        if run.id in seen:
-            failures.append(PilotFailure(run.id, str(path), f"{path}: run id {run.id!r} repeats "
-                                         f"{seen[run.id]}; expected each file name (the run's id) once"))
-            continue
-        seen[run.id] = Path(path)
-        runs.append(run)
+        for run in found:
+            if run.id in seen:
+                failures.append(PilotFailure(run.id, run.source, f"{run.source}: run id {run.id!r} repeats "
+                                             f"{seen[run.id]}; expected each file name (the run's id) once"))
+                continue
+            seen[run.id] = run.source
+            runs.append(run)
     return runs, failures
 
 
@@ -386,7 +387,7 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
         Fields of :class:`CompareSettings` replacing those of `settings`, e.g.
         ``compare_pilots(folder, plants, seed=3, restarts=1)``.
     columns, resample
-        Passed to :func:`hesspipe.core.formats.read_run`.
+        Passed to :func:`hesspipe.core.formats.read_file_runs`.
     progress : bool, optional
         Progress bar (default: only on a terminal).
     job : callable, optional
@@ -396,7 +397,8 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
         Regular expression that finds the pilot in each file stem when pilots flew
         several runs (:func:`hesspipe.pilots.verdict.pilot_groups`, e.g. ``r"^(s\\d+)_"``):
         each run is still identified on its own, and the motion verdict combines a pilot's
-        runs before counting pilots. Default: each file is a pilot.
+        runs before counting pilots (in a file holding several runs, ``s01#2``, it is
+        searched in the whole id). Default: each file is a pilot, its runs one pilot's.
 
     Returns
     -------
@@ -414,8 +416,10 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
         settings = replace(settings, km_fixed=_km_fixed(settings, plants))
     _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
     paths = list_runs(paths_or_dir)
-    groups = pilot_groups([p.stem for p in paths], pilot_id, {p.stem: str(p) for p in paths})  # before any work
+    pilot_groups([p.stem for p in paths], pilot_id, {p.stem: str(p) for p in paths})  # before any work
     runs, failures = read_runs(paths, columns=columns, resample=resample)
+    groups = pilot_groups([r.id for r in runs], pilot_id, {r.id: r.source for r in runs},
+                          {r.id: r.file_id for r in runs})
     check_repeats([], runs)   # a record copied into the folder would count its evidence twice
     if job is None:
         job = functools.partial(compare_run, plants=plants, settings=settings)
@@ -423,8 +427,9 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
                         desc="pilots", unit="pilot", progress=progress)
     pilots = tuple(r for r in results if isinstance(r, PilotComparison))
     failures += [r for r in results if isinstance(r, PilotFailure)]
-    order = {str(p): i for i, p in enumerate(paths)}
-    failures.sort(key=lambda f: order.get(f.source, len(order)))
+    # In file order; a run of a file holding several is 'PATH#k'.
+    failures.sort(key=lambda f: next((i for i, p in enumerate(paths)
+                                      if f.source == str(p) or f.source.startswith(f"{p}#")), len(paths)))
 
     return Comparison(pilots=pilots, failures=tuple(failures), settings=settings, groups=groups,
                       reading={r.source: r.notes for r in runs if r.notes}, plants=plants_record(plants))

@@ -325,8 +325,8 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
         if not runs:
             raise HesspipeError(f"condition {label!r}: no runs; expected at least one")
         synthetic |= any(getattr(r, "synthetic", False) for r in runs)
-        groups = pilot_groups([r.id for r in runs], pilot_id, {r.id: r.source for r in runs if r.source}) \
-            or {r.id: r.id for r in runs}
+        groups = pilot_groups([r.id for r in runs], pilot_id, {r.id: r.source for r in runs if r.source},
+                              {r.id: getattr(r, "file_id", r.id) for r in runs}) or {r.id: r.id for r in runs}
         by: dict[str, list] = {}
         for r in runs:
             by.setdefault(groups[r.id], []).append(r)

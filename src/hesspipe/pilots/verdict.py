@@ -47,7 +47,8 @@ from ..identification.motion_test import ALPHA, analysis_window, forcing_lines, 
 
 
 def pilot_groups(run_ids: Sequence[str], pattern: str | None,
-                 sources: Mapping[str, str] | None = None) -> dict[str, str] | None:
+                 sources: Mapping[str, str] | None = None,
+                 files: Mapping[str, str] | None = None) -> dict[str, str] | None:
     """Pilot id of each run id: the part of the id that `pattern` captures.
 
     Parameters
@@ -60,11 +61,14 @@ def pilot_groups(run_ids: Sequence[str], pattern: str | None,
         run is its own pilot.
     sources : mapping, optional
         Run id → the file it was read from, named in the errors instead of the id.
+    files : mapping, optional
+        Run id → the id of the file it was read from (:attr:`hesspipe.core.formats.Run.file_id`):
+        without a pattern the runs of a file holding several are one pilot's.
 
     Returns
     -------
     dict or None
-        Run id → pilot id (None when `pattern` is None).
+        Run id → pilot id (None when `pattern` is None and every file holds one run).
 
     Raises
     ------
@@ -72,7 +76,8 @@ def pilot_groups(run_ids: Sequence[str], pattern: str | None,
         For a pattern that is not a regular expression, or a run id it does not match.
     """
     if pattern is None:
-        return None
+        files = {rid: (files or {}).get(rid, rid) for rid in run_ids}
+        return files if any(f != rid for rid, f in files.items()) else None
     try:
         rx = re.compile(pattern)
     except re.error as exc:

@@ -114,7 +114,7 @@ def validate(config: dict, source: str) -> None:
     HesspipeError
         Naming `source` and the first bad field.
     """
-    from ..core.formats import read_plants, read_run
+    from ..core.formats import read_file_runs, read_plants
     from ..diagnose.settings import DiagnoseConfig
     from ..diagnose.workflow import _resolve_candidates
     from ..flight.aircraft import load_aircraft
@@ -147,7 +147,7 @@ def validate(config: dict, source: str) -> None:
         # stage too).
         first = list_runs(pilots.data)[0]
         _in_field(source, "pilots.columns",
-                  lambda c: read_run(first, columns=c, resample=pilots.resample), pilots.columns)
+                  lambda c: read_file_runs(first, columns=c, resample=pilots.resample), pilots.columns)
     table, (run, model) = _split(config.get("diagnose", {}), "run", "model")
     diagnose = DiagnoseConfig.from_table(table, source)
     _in_field(source, "diagnose.model", model_from_name, model or "original")
@@ -356,8 +356,9 @@ def _config_terms(message: str) -> str:
 
 # -- diagnose -----------------------------------------------------------------------------
 
-def _diagnose_run(ctx) -> Path:
-    """The run to diagnose: ``[diagnose] run``, or the first run the pilots stage compared.
+def _diagnose_run(ctx) -> tuple[Path, str]:
+    """The file of the run to diagnose and the run's source: ``[diagnose] run``, or the first
+    run the pilots stage compared (``PATH#k`` in a file holding several).
 
     The run is taken by id from the pilots stage's ``comparison.json`` (one of its
     outputs, so in this stage's fingerprint), never by listing a folder: a file put
@@ -365,7 +366,7 @@ def _diagnose_run(ctx) -> Path:
     """
     chosen = ctx.section.get("run", "")
     if chosen:
-        return Path(chosen)
+        return Path(chosen), str(chosen)
     folder = ctx.upstream["pilots"]
     try:
         record = json.loads((folder / "comparison.json").read_text(encoding="utf-8"))
@@ -376,7 +377,11 @@ def _diagnose_run(ctx) -> Path:
         raise HesspipeError(f"{folder / 'comparison.json'}: the pilots stage compared no runs; "
                             "set [diagnose] run = \"FILE\"")
     source = Path(pilots[0]["source"])
-    return source if source.is_absolute() else folder / source
+    source = source if source.is_absolute() else folder / source
+    head, _, number = source.name.rpartition("#")
+    if not source.is_file() and head and number.isdigit():   # PATH#k: run k of a file
+        return source.with_name(head), str(source)
+    return source, str(source)
 
 
 def diagnose(ctx) -> None:
@@ -392,7 +397,7 @@ def diagnose(ctx) -> None:
         The stage's table (``ctx.section``), seed, staging folder
         (``ctx.out_dir``) and upstream folders.
     """
-    from ..core.formats import read_run
+    from ..core.formats import read_file_runs
     from ..core.io import write_json, write_text
     from ..core.paper import WELCH_SEGMENT
     from ..diagnose.report import format_report
@@ -403,9 +408,12 @@ def diagnose(ctx) -> None:
     table, (_, model) = _split(ctx.section, "run", "model")
     config = DiagnoseConfig.from_table(table, ctx.source)
     pilots_cfg = ctx.config.get("pilots", {})  # the runs' format settings ([pilots] columns, resample)
+    path, source = _diagnose_run(ctx)
     try:
-        run = read_run(_diagnose_run(ctx), min_samples=WELCH_SEGMENT, columns=pilots_cfg.get("columns") or None,
-                       resample=bool(pilots_cfg.get("resample", False)))
+        runs = read_file_runs(path, min_samples=WELCH_SEGMENT, columns=pilots_cfg.get("columns") or None,
+                              resample=bool(pilots_cfg.get("resample", False)))
+        # A file holding several runs: the one the pilots stage compared first, else its first.
+        run = next((r for r in runs if r.source == source), runs[0])
     except HesspipeError as exc:
         raise HesspipeError(_config_terms(str(exc))) from None
     result = run_diagnose(run, _study_plants(ctx), model=model or "original", seed=ctx.seed, config=config)

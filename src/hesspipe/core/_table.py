@@ -1,0 +1,439 @@
+"""A run file's columns, read once and picked by role.
+
+:func:`read_frame` reads a file as written: text in any of the shapes :mod:`._csv` knows, a
+MATLAB file (:mod:`._mat`), an Excel workbook's sheet as the text it would be saved as
+(:mod:`._excel`). :func:`read_table` picks the caller's roles from it, checks them and converts
+their units to SPEC.md's (:data:`hesspipe.core._csv.UNIT_FACTORS`), saying what it did
+(:attr:`Table.notes`). A frame read once serves several runs of one file.
+"""
+
+from __future__ import annotations
+
+import io as _io
+import re
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+
+from ._csv import _DIMENSIONLESS, _TIME_OF_DAY, UNIT_FACTORS, _long_row, _prepare, _split_unit, decode
+from ._excel import EXCEL_SUFFIXES, excel_text
+from ._mat import mat_frame
+from .errors import HesspipeError
+
+
+@dataclass(frozen=True)
+class Table:
+    """Columns read by role.
+
+    Attributes
+    ----------
+    data : dict of str to ndarray
+        Role → float array in SPEC.md's units (all finite).
+    comments : tuple of str
+        The file's ``#`` comment lines, without the ``#``.
+    columns : dict of str to str
+        Role → the header the values came from.
+    notes : tuple of str
+        What reading did beyond the plain format (a delimiter, a unit converted or taken as
+        written), one sentence each.
+    resolution : dict of str to ndarray
+        ``"time"`` → the place value of the last digit each time was written with, in
+        SPEC.md's unit (1e-5 s for ``30,01000``): how much of an interval's deviation the
+        writing explains. Empty without a time role.
+    """
+
+    data: dict
+    comments: tuple
+    columns: dict
+    notes: tuple
+    resolution: dict = field(default_factory=dict)
+
+
+def _resolution(cells) -> np.ndarray:
+    """Place value of the last digit each cell was written with (``30,01000`` → 1e-5;
+    ``20`` → 1; ``1.5e-3`` → 1e-4); NaN where a cell is not a number."""
+    out = np.full(len(cells), np.nan)
+    for i, cell in enumerate(cells):
+        text = str(cell).strip().strip('"').replace(",", ".")
+        mant, _, exp = text.lower().partition("e")
+        frac = re.match(r"\d*", mant.partition(".")[2]).group()   # a clock's zone ends the digits
+        try:
+            out[i] = 10.0 ** (int(exp or 0) - len(frac))
+        except ValueError:
+            pass
+    return out
+
+
+def _match(path, headers: list[str], role: str, name: str) -> str | None:
+    """The header of `role` (asked for as `name`): the exact name, else the one whose name,
+    ignoring case and a unit in brackets, is `name`; two such headers are an error."""
+    if name in headers:
+        return name
+    want = name.strip().lower()
+    found = [h for h in headers if _split_unit(h)[0].lower() == want or h.strip().lower() == want]
+    if len(found) > 1:
+        raise HesspipeError(f"{path}: columns {', '.join(repr(h) for h in found)} all read as "
+                            f"'{name}' (role {role}); expected one")
+    return found[0] if found else None
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A file's columns as written, before any is picked by role (:func:`read_frame`).
+
+    Attributes
+    ----------
+    path : Path
+    df : pandas.DataFrame
+        The columns under their headers (by position ``1`` to ``k`` without a header row).
+    comments : tuple of str
+        The file's comment lines (a MAT file's text variables).
+    notes : tuple of str
+        What reading did so far.
+    decimal : str
+        The decimal mark of the text.
+    written : callable or None
+        Header → that column's cells as text (the time column's resolution); None for a
+        binary file.
+    others : tuple of str or None
+        A MAT file's variables of another length; None for text.
+    positional : bool
+        The file has no header row.
+    """
+
+    path: Path
+    df: pd.DataFrame
+    comments: tuple
+    notes: tuple
+    decimal: str
+    written: object = None
+    others: tuple | None = None
+    positional: bool = False
+
+    @property
+    def headers(self) -> list[str]:
+        """The column names."""
+        return list(self.df.columns)
+
+
+def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
+    """Read a run file's columns as written: text, a MATLAB file or a workbook.
+
+    Parameters
+    ----------
+    path : path
+    what : str
+        What the file should be, for messages ("a measured-run CSV").
+
+    Returns
+    -------
+    Frame
+
+    Raises
+    ------
+    HesspipeError
+        Naming the file and the problem.
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".mat":
+        df, comments, notes, others = mat_frame(path)
+        return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others))
+    excel = path.suffix.lower() in EXCEL_SUFFIXES
+    if excel:
+        text, notes = excel_text(path)   # the sheet as the text it would be saved as
+    else:
+        text, encoding = decode(path, what)
+        notes = [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"]
+    # A workbook's tabs are ours: not said.
+    text, sep, decimal, positional = _prepare(text, notes, separator_said=not excel)
+    comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
+                     if line.lstrip().startswith("#"))
+    engine = "python" if sep == r"\s+" else "c"
+    try:
+        with warnings.catch_warnings():
+            # index_col=False: a separator ending every data line (loggers write one) must not
+            # make pandas take the first column as an index and shift the names onto the next.
+            # More values than names is then pandas' warning, here an error.
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            df = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep,
+                             decimal=decimal, index_col=False, engine=engine)
+    except (pd.errors.ParserWarning, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        long = _long_row(text, sep)
+        if long is not None:
+            row, values, names_ = long
+            raise HesspipeError(f"{path}: data row {row} holds {values} values where the header "
+                                f"names {names_}; expected one value per named column") from None
+        if isinstance(exc, pd.errors.ParserWarning):
+            raise HesspipeError(f"{path}: data rows hold more values than the header has names; "
+                                "expected one value per named column") from None
+        raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
+    df.columns = [str(c).strip() for c in df.columns]
+
+    def written(col: str) -> np.ndarray:
+        return pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
+                           usecols=[col], dtype=str, engine=engine)[col].to_numpy()
+
+    return Frame(path, df, comments, tuple(notes), decimal, written, None, positional)
+
+
+def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(), what: str = "a CSV",
+               hint: str | None = None) -> Table:
+    """Read numeric columns by role from a delimited text file with ``#`` comment lines.
+
+    Parameters
+    ----------
+    path : path or Frame
+        The file, or its columns already read (:func:`read_frame`: several runs in one file).
+    names : mapping
+        Role → column name (matched exactly, else ignoring case and a unit in brackets; a
+        file without that name may use the role's own, e.g. ``time``; ``-NAME`` reads
+        NAME with its sign flipped); every role is required unless listed in `optional`.
+    optional : sequence of str
+        Roles that may be missing (left out of the result); an optional column left empty
+        in every row counts as missing.
+    what : str
+        What the file should be, for messages ("a measured-run CSV").
+    hint : str, optional
+        Name of the setting that maps other column names (named in the message,
+        e.g. "columns": "map other names with columns control=NAME").
+
+    Returns
+    -------
+    Table
+
+    Raises
+    ------
+    HesspipeError
+        Naming the file, the column and the problem.
+    """
+    frame = path if isinstance(path, Frame) else read_frame(path, what)
+    return _by_role(frame, names, optional, hint)
+
+
+def _by_role(frame: Frame, names, optional, hint) -> Table:
+    """:func:`read_table`'s columns found by role in `frame`, checked and converted."""
+    path, df, decimal, written = frame.path, frame.df, frame.decimal, frame.written
+    others, positional, comments = frame.others, frame.positional, frame.comments
+    notes = list(frame.notes)   # a frame read once serves several runs: each its own notes
+    headers = list(df.columns)
+    data, used = {}, {}
+    flipped = set()
+    for role, name in names.items():
+        col = _match(path, headers, role, name)
+        if col is None and name.startswith("-") and name[1:].strip():
+            # "-NAME": the column NAME with its sign flipped (a stick convention opposite
+            # to the plants').
+            col = _match(path, headers, role, name[1:].strip())
+            if col is not None:
+                flipped.add(role)
+        if col is None and name != role:
+            # A mapping written for some files of a folder: the others keep the plain names.
+            col = _match(path, headers, role, role)
+        if col is not None and role in optional and df[col].isna().all():
+            col = None  # a column written but left empty: the default, as if absent
+        if col is None:
+            if role in optional:
+                continue
+            label = f" (role {role})" if role != name else ""
+            if others is not None:
+                tail = f"; map other names with {hint} {role}=NAME" if hint else ""
+                left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
+                raise HesspipeError(f"{path}: variable '{name}' missing{label}; found variables: "
+                                    f"{', '.join(headers)}{left}{tail}")
+            if positional:
+                tail = f"; map them with {hint} {role}=POSITION" if hint else ""
+                raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "
+                                    f"row, its columns are named by position 1-{len(headers)}{tail}")
+            tail = f"; map other names with {hint} {role}=NAME" if hint else ""
+            raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
+                                f"{', '.join(headers)}{tail}")
+        data[role], used[role] = _numeric(df[col], decimal), col
+        if role == "time" and data[role].size and np.mean(np.isfinite(data[role])) < 0.5:
+            clock = _clock(df[col])
+            if clock is not None:
+                data[role] = clock
+                notes.append(f"column '{col}' ({role}): clock times read as seconds from the first")
+    first, stop = _complete_rows(data)
+    bad = {role: first + int(np.argmax(~np.isfinite(v[first:stop]))) for role, v in data.items()
+           if not np.isfinite(v[first:stop]).all()}
+    if bad:
+        role = min(bad, key=lambda r: bad[r])   # the earliest bad value in the file
+        col, row = used[role], bad[role]
+        value = df[col].iloc[row]
+        got = "an empty or NaN cell" if pd.isna(value) else repr(value)
+        raise HesspipeError(f"{path}: column '{col}': expected finite numbers, got {got} "
+                            f"in data row {row + 1}")
+    if (first, stop) != (0, len(df)):
+        notes.append(f"dropped {first} incomplete row(s) at the start and {len(df) - stop} at the end "
+                     f"(a value missing or not a number); data rows {first + 1}-{stop} read")
+    keep = np.arange(first, stop)
+    if "time" in used and keep.size > 1:
+        # A logger that writes a frame twice repeats the whole row, time included: the
+        # record holds it once. Rows that share a time but not their values stay, for
+        # the caller to refuse.
+        block = np.column_stack([data[role][keep] for role in used])
+        again = np.all(block[1:] == block[:-1], axis=1)
+        if again.any():
+            notes.append(f"dropped {int(again.sum())} row(s) repeating the row before in every column "
+                         f"(first data row {int(keep[1:][again][0]) + 1}: a frame written twice)")
+            keep = keep[np.concatenate(([True], ~again))]
+    resolution = {}
+    if "time" in used and written is not None:
+        resolution["time"] = _resolution(written(used["time"])[keep])
+    for role, col in used.items():
+        values = data[role][keep]
+        if role in flipped:
+            values = -values
+            notes.append(f"column '{col}' ({role}): sign flipped, as mapped")
+        unit = _split_unit(col)[1]
+        if unit:
+            factor = UNIT_FACTORS.get(role, {}).get(unit.lower().replace(" ", ""))
+            if factor is None and unit.lower() not in _DIMENSIONLESS:
+                notes.append(f"column '{col}' ({role}): unit '{unit}' taken as written")
+            elif factor is not None and factor != 1.0:
+                values = values * factor
+                notes.append(f"column '{col}' ({role}): {unit} converted to SPEC.md's units (x {factor:.6g})")
+                if role in resolution:
+                    resolution[role] = resolution[role] * factor
+        data[role] = values
+    return Table(data, comments, used, tuple(notes), resolution)
+
+
+
+
+def _clock(column: pd.Series) -> np.ndarray | None:
+    """Seconds from the first row of a column of clock times (``14:03:05.120``, a day
+    rolled over at midnight, or ISO 8601 ``2026-11-01T14:03:05.120``), NaN where a cell is
+    not one; None unless at least 90 % of the cells are."""
+    cells = column.astype(str).str.strip().str.strip('"')
+    parts = cells.str.extract(_TIME_OF_DAY)
+    if parts.notna().all(axis=1).mean() >= 0.9:
+        sec = (parts[0].astype(float) * 3600 + parts[1].astype(float) * 60
+               + parts[2].str.replace(",", ".", regex=False).astype(float)).to_numpy()
+        held = pd.Series(sec).ffill().bfill().to_numpy()   # a cell that is not a time counts no day
+        days = np.concatenate(([0], np.cumsum(np.diff(held) < -43200)))
+        sec = sec + 86400.0 * days
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            stamps = pd.to_datetime(cells.str.replace(",", ".", regex=False), errors="coerce",
+                                    format="ISO8601")
+        if stamps.notna().mean() < 0.9:
+            return None
+        if getattr(stamps.dt, "tz", None) is not None:
+            stamps = stamps.dt.tz_convert(None)
+        sec = (stamps - stamps[stamps.notna()].iloc[0]).dt.total_seconds().to_numpy(dtype=float)
+    first = sec[np.isfinite(sec)][0]
+    return sec - first
+
+
+def _numeric(column: pd.Series, decimal: str) -> np.ndarray:
+    """Floats of a column, NaN where a cell is not a number. pandas applies a decimal comma
+    only to columns it reads as numbers: one text cell (``---``, a units row) leaves the
+    whole column as text, whose commas are converted here."""
+    if decimal == "," and not pd.api.types.is_numeric_dtype(column):
+        column = column.astype(str).str.strip().str.strip('"').str.replace(",", ".", regex=False)
+    return pd.to_numeric(column, errors="coerce").to_numpy(dtype=float)
+
+
+def _complete_rows(data: Mapping[str, np.ndarray]) -> tuple[int, int]:
+    """(first, stop) of the rows to read: incomplete rows (a value missing or not a number)
+    at the start and end of a record are dropped, as a recorder's empty first row or a last
+    line cut short leave them, while at least 90 % of the rows remain; otherwise every row.
+    A bad value between complete rows stays for the caller to name."""
+    if not data:
+        return 0, 0
+    ok = np.logical_and.reduce([np.isfinite(v) for v in data.values()])
+    n = ok.size
+    if ok.all() or not ok.any():
+        return 0, n
+    first = int(np.argmax(ok))
+    stop = n - int(np.argmax(ok[::-1]))
+    return (first, stop) if stop - first >= 0.9 * n else (0, n)
+
+
+#: In a mapped column name, the run's number: ``x:*`` is ``x:1``, ``x:2``, ... (one run each).
+RUN_NUMBER = "*"
+
+
+def run_columns(frame: Frame, names: Mapping[str, str], *, optional=(),
+                hint: str | None = None) -> list[tuple[int, dict[str, str]]]:
+    """The runs a file holds, as the names their roles are read under.
+
+    A name holding :data:`RUN_NUMBER` stands for one column per run, the star for the run's
+    number (digits; matched as :func:`read_table` matches names: exactly, else ignoring case
+    and a unit in brackets); a name without it is shared by every run (the time, the forcing).
+
+    Parameters
+    ----------
+    frame : Frame
+        The file's columns (:func:`read_frame`).
+    names : mapping
+        Role → column name, possibly with one star (and ``-`` before it: the sign flipped);
+        at most one each (:func:`hesspipe.core.formats._parse_columns` checks it).
+    optional : sequence of str
+        Roles that may be missing in the file.
+    hint : str, optional
+        Name of the setting that maps other column names (in messages).
+
+    Returns
+    -------
+    list of (int, dict)
+        Per run its number and role → column name, by number; ``[(0, names)]`` when no name
+        holds a star, or when none of the starred names is in the file and each has its
+        role's own column there (a folder's single-run files beside its multi-run ones).
+
+    Raises
+    ------
+    HesspipeError
+        A starred name matching no column; roles whose starred names find different run
+        numbers; two columns one run's role could be.
+    """
+    starred = {role: name for role, name in names.items() if RUN_NUMBER in name}
+    if not starred:
+        return [(0, dict(names))]
+    headers = frame.headers
+    found: dict[str, dict[int, str]] = {}
+    for role, name in starred.items():
+        sign, body = ("-", name[1:].strip()) if name.startswith("-") else ("", name)
+        head, tail = (re.escape(part.strip().lower()) for part in body.split(RUN_NUMBER))
+        rx = re.compile(rf"^{head}(\d+){tail}$")
+        runs: dict[int, str] = {}
+        for h in headers:
+            m = rx.match(h.strip().lower()) or rx.match(_split_unit(h)[0].lower())
+            if m:
+                k = int(m.group(1))
+                if k in runs:
+                    raise HesspipeError(f"{frame.path}: columns '{runs[k]}' and '{h}' both read as "
+                                        f"'{name}' for run {k} (role {role}); expected one")
+                runs[k] = sign + h
+        found[role] = runs
+    if not any(found.values()):
+        plain = {role: role for role in starred}
+        if all(_match(frame.path, headers, role, role) is not None or role in optional for role in plain):
+            return [(0, {**names, **plain})]
+    for role, runs in found.items():
+        if not runs:
+            tail = f"; map other names with {hint} {role}=NAME" if hint else ""
+            raise HesspipeError(f"{frame.path}: no column matches '{starred[role]}' (role {role}, "
+                                f"{RUN_NUMBER!r} standing for a run's number); found columns: "
+                                f"{', '.join(headers)}{tail}")
+    numbers = {role: sorted(runs) for role, runs in found.items()}
+    first = next(iter(numbers))
+    for role, ks in numbers.items():
+        if ks != numbers[first]:
+            raise HesspipeError(f"{frame.path}: '{starred[first]}' (role {first}) finds runs "
+                                f"{_numbers(numbers[first])} but '{starred[role]}' (role {role}) runs "
+                                f"{_numbers(ks)}; expected the same runs for every starred role")
+    return [(k, {**names, **{role: found[role][k] for role in starred}}) for k in numbers[first]]
+
+
+def _numbers(ks: list[int]) -> str:
+    """``1-5`` for consecutive numbers, else ``1, 2, 4``."""
+    if ks == list(range(ks[0], ks[-1] + 1)) and len(ks) > 2:
+        return f"{ks[0]}-{ks[-1]}"
+    return ", ".join(str(k) for k in ks)

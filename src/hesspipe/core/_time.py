@@ -1,0 +1,108 @@
+"""A run's time column: its sample interval, whether it is uniform, and its grid.
+
+Recorders write times rounded to a few digits, as epoch stamps or in milliseconds, with a
+little jitter; the interval is estimated over the whole record and "uniform" allows what
+the writing explains (SPEC.md "Time").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import HesspipeError
+
+#: "Uniform" sampling (SPEC.md "Time"): every interval within this fraction of the
+#: interval, beyond what the precision the times are written with explains.
+UNIFORM_RTOL = 1e-4
+#: Longest sample interval of a plausible tracking run, s (a time column in
+#: milliseconds read as seconds gives 10-20 s intervals).
+MAX_INTERVAL_S = 1.0
+
+
+def _check_plausible(path, column: str, dt: float) -> None:
+    """Refuse sample intervals no tracking run has (usually times in milliseconds)."""
+    if dt > MAX_INTERVAL_S:
+        hint = (" (the time column looks like milliseconds: write it in seconds)"
+                if 1.0 < dt <= 100.0 else "")
+        raise HesspipeError(f"{path}: column '{column}': sample interval {dt:g} s "
+                            f"({1.0 / dt:.3g} Hz) is implausible for a tracking run; expected "
+                            f"seconds with an interval of at most {MAX_INTERVAL_S:g} s{hint}")
+
+
+def _written_resolution(t: np.ndarray) -> np.ndarray:
+    """Place value of the last digit each time was written with (from the shortest text
+    that reads back as the same float): 1e-7 for ``60.0166667``, 1e-3 for ms stamps."""
+    out = np.empty(t.size)
+    for i, v in enumerate(t.tolist()):
+        mant, _, exp = repr(float(v)).partition("e")
+        whole, _, frac = mant.partition(".")
+        digits = 0 if frac in ("", "0") else len(frac)
+        out[i] = 10.0 ** (int(exp or 0) - digits)
+    return out
+
+
+def _intercept(t: np.ndarray, dt: float) -> float:
+    """Offset from ``t[0]`` of the uniform grid with interval `dt` closest to `t`."""
+    rel = t - t[0]
+    return float(np.mean(rel - dt * np.arange(t.size)))
+
+
+def sample_interval(path, t: np.ndarray, column: str = "time", *,
+                    rtol: float = UNIFORM_RTOL, resolution=None) -> tuple[float, bool]:
+    """Sample interval of `t` and whether the sampling is uniform.
+
+    Times are taken relative to the first (Unix-epoch stamps keep their
+    precision). The interval is the least-squares slope of time against
+    sample number over the whole record (rounding averages out). Uniform
+    means every interval is within `rtol` of it plus what the rounding of the
+    two written times explains (SPEC.md "Time"). For non-uniform times the
+    median interval is returned (the grid of a resampling).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file `t` comes from (for messages).
+    t : array
+        Sample times, s.
+    column : str
+        Name of the time column (for messages).
+    rtol : float
+        Relative tolerance of a uniform interval.
+    resolution : array, optional
+        Place value of the last digit each time was written with, s
+        (:attr:`hesspipe.core._table.Table.resolution`); by default inferred from the floats,
+        which cannot see written trailing zeros (``30.01000`` reads as ``30.01``: a whole
+        interval of tolerance at 100 Hz, where a missing sample would pass).
+
+    Returns
+    -------
+    dt : float
+        Sample interval, s (> 0).
+    uniform : bool
+
+    Raises
+    ------
+    HesspipeError
+        If `t` is not strictly increasing (naming the file, the column and the row).
+    """
+    t = np.asarray(t, dtype=float)
+    rel = t - t[0]
+    steps = np.diff(rel)
+    if np.any(steps <= 0):
+        row = int(np.argmax(steps <= 0)) + 1
+        raise HesspipeError(f"{path}: column '{column}': expected strictly increasing time, "
+                            f"not at data row {row + 1}")
+    # What writing the times to text explains: half a last digit on each end, plus the
+    # float64 spacing of the absolute times (epoch stamps) and of their difference.
+    res = _written_resolution(t) if resolution is None else np.asarray(resolution, dtype=float)
+    if res.shape != t.shape or not np.all(np.isfinite(res)):
+        res = _written_resolution(t)
+    rounding = 0.5 * (res[1:] + res[:-1]) + 2.0 * np.spacing(np.abs(t[1:]) + np.abs(t[:-1]))
+    # The interval over the whole record (rounded intervals are biased: with 6 digits most
+    # 1/60 s steps read 0.0167, so their median is not the interval).
+    i = np.arange(t.size, dtype=float)
+    i -= i.mean()
+    slope = float(np.dot(i, rel - rel.mean()) / np.dot(i, i))
+    if slope > 0 and np.all(np.abs(steps - slope) <= rtol * slope + rounding):
+        return slope, True
+    return float(np.median(steps)), False
