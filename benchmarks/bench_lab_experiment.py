@@ -24,7 +24,7 @@ counts): how many runs of each condition are named ``motion_feedback``, what els
 and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
-        [--style lab|daq|matlab|mat|mat-runs|xlsx] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
+        [--style lab|daq|matlab|mat|mat-runs|xlsx|lab-error] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
         [--logged-run-in 8.08] [--logged-run-out 3]
 
 ``--style`` writes the files otherwise (module ``STYLES``): ``mat-runs`` saves a person's runs of a
@@ -79,7 +79,12 @@ matrices ft, fd, x, u of one column per run, t a vector), read with starred name
 XLSX = {"format": "xlsx"}
 """An Excel workbook (:func:`~hesspipe.humanlike.writer.xlsx_bytes`: the LAB columns and names, metadata
 above the header)."""
-STYLES = {"lab": LAB, "daq": DAQ, "matlab": MATLAB, "mat": MAT, "mat-runs": MAT_RUNS, "xlsx": XLSX}
+LAB_ERROR = {**LAB, "columns": ["time", "error", "disturbance", "output", "control"],
+             "names": {**LAB["names"], "error": "Error"}}
+"""The :data:`~hesspipe.humanlike.writer.LAB` files with the displayed error (``Error [deg]``, e = r - y)
+logged in place of the target."""
+STYLES = {"lab": LAB, "daq": DAQ, "matlab": MATLAB, "mat": MAT, "mat-runs": MAT_RUNS, "xlsx": XLSX,
+          "lab-error": LAB_ERROR}
 
 
 def columns(style) -> str:
@@ -89,6 +94,8 @@ def columns(style) -> str:
     if style.get("format") == "mat":
         star = {role: ":*" if style.get("together") and role != "time" else "" for role in MAT_NAMES}
         return ",".join(f"{role}={var}{star[role]}" for role, var in MAT_NAMES.items())
+    if "error" in style.get("columns", ()):
+        return COLUMNS.replace(f"reference={LAB['names']['reference']}", f"error={style['names']['error']}")
     if style.get("header", True):
         return COLUMNS
     return ",".join(f"{role}={k}" for k, role in enumerate(style["columns"], 1))
@@ -251,7 +258,8 @@ def main(argv=None) -> int:
                          "the header, a units row, clock times across midnight, frames written twice, UTF-16) "
                          "matlab (MATLAB: save -ascii, no header row, read by position), mat (a .mat "
                          "file of variables t, ft, fd, x, u), mat-runs (a person's runs of a condition in one "
-                         ".mat, a column per run) or xlsx (an Excel workbook, the lab's names)")
+                         ".mat, a column per run), xlsx (an Excel workbook, the lab's names) or lab-error (the "
+                         "lab's files with the displayed error logged in place of the target)")
     ap.add_argument("--threshold", type=float, default=0.0,
                     help="each person's indifference threshold, share of the error's RMS (0: none)")
     ap.add_argument("--cab-washout", type=float, default=0.0,

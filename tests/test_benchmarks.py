@@ -121,6 +121,37 @@ def test_lab_experiment_files_from_matlab_and_excel_read_as_the_trial(tmp_path, 
     assert np.allclose(estimate_frf(run).feedback.H, lab, rtol=1e-4, atol=0)
 
 
+def test_lab_experiment_sessions_and_logged_errors_read_as_the_trials(tmp_path):
+    # A person's runs saved together (a .mat column per run, read with x:*) are the runs saved
+    # one per file; a LAB file logging the displayed error in place of the target gives the
+    # target back (r = e + y) and the LAB file's describing function.
+    from hesspipe.core.formats import read_file_runs, read_run
+    from hesspipe.humanlike import draw_trial, mat_runs_bytes, simulate_trial
+    from hesspipe.identification.frf import estimate_frf
+
+    m = _load("bench_lab_experiment")
+    trials = [simulate_trial(draw_trial("1/s", seed, task="both", pilot="precision", output="angle",
+                                        name=f"s01_motion_r{seed}")) for seed in (1, 2)]
+    assert m.columns(m.STYLES["mat-runs"]) == "time=t,reference=ft:*,disturbance=fd:*,output=x:*,control=u:*"
+    (tmp_path / "s01_motion.mat").write_bytes(mat_runs_bytes(trials))
+    together = read_file_runs(tmp_path / "s01_motion.mat", columns=m.columns(m.STYLES["mat-runs"]))
+    assert [r.id for r in together] == ["s01_motion#1", "s01_motion#2"] and all(r.synthetic for r in together)
+    for trial, run in zip(trials, together):
+        m.lab_file(trial, tmp_path / f"{trial.spec.name}.mat", m.STYLES["mat"])
+        alone = read_run(tmp_path / f"{trial.spec.name}.mat", columns=m.columns(m.STYLES["mat"]))
+        for name in ("time", "reference", "disturbance", "output", "control"):
+            assert np.array_equal(getattr(run, name), getattr(alone, name)), name
+    st = m.STYLES["lab-error"]
+    assert m.columns(st) == "error=Error,disturbance=Disturbance,output=Yaw,control=Stick"
+    m.lab_file(trials[0], tmp_path / "e.csv", st)
+    m.lab_file(trials[0], tmp_path / "b.csv")
+    run = read_run(tmp_path / "e.csv", columns=m.columns(st))
+    assert any("the reference taken as error + output" in n for n in run.notes)
+    assert np.allclose(run.reference, trials[0].reference, rtol=0, atol=1e-6)   # 5 decimals of degrees, twice
+    lab = estimate_frf(read_run(tmp_path / "b.csv", columns=m.COLUMNS)).feedback.H
+    assert np.allclose(estimate_frf(run).feedback.H, lab, rtol=1e-4, atol=0)
+
+
 def test_lab_experiment_gives_its_persons_the_threshold_asked_for(tmp_path):
     from hesspipe.core.formats import read_run
 

@@ -304,3 +304,35 @@ def test_as_runs():
     for bad in ("r1.csv", ["r1.csv"], None):
         with pytest.raises(HesspipeError, match="expected a Run or a list of Runs"):
             as_runs(bad)
+
+
+def test_a_logged_error_gives_the_reference_or_is_checked_against_it(tmp_path):
+    # A laboratory that logs what the display shows (e = r - y) and not the target: the
+    # reference is e + y. Beside a logged target the error is checked, never used.
+    t = 0.01 * np.arange(300)
+    r, y = 0.2 * np.sin(0.9 * t), 0.15 * np.sin(0.9 * t - 0.4) + 0.01 * np.cos(7 * t)
+    d, u = np.sin(0.5 * t), np.cos(1.7 * t)
+
+    def rows(*cols):
+        return [tuple(f"{v:.12g}" for v in row) for row in zip(t, *cols)]
+
+    path = _csv(tmp_path / "e.csv", ("time", "wind", "Yaw [deg]", "stick", "E [deg]"),
+                rows(d, np.degrees(y), u, np.degrees(r - y)))
+    run = read_run(path, columns="disturbance=wind,output=yaw,control=stick,error=e")
+    np.testing.assert_allclose(run.reference, r, atol=1e-10)
+    np.testing.assert_allclose(run.error, r - y, atol=1e-10)
+    assert any("the reference taken as error + output" in n for n in run.notes)
+    # Logged the other way round (y - r): mapped with its sign flipped.
+    path = _csv(tmp_path / "f.csv", ("time", "disturbance", "output", "control", "error"), rows(d, y, u, y - r))
+    np.testing.assert_allclose(read_run(path, columns="error=-error").reference, r, atol=1e-10)
+    # Beside a target: agreeing, nothing said; the opposite sign or another signal, said.
+    for e, said in ((r - y, None), (y - r, "it is output - reference, the opposite sign"),
+                    (r - np.roll(y, 20), "they differ by")):
+        path = _csv(tmp_path / "g.csv", ("time", "disturbance", "output", "control", "reference", "error"),
+                    rows(d, y, u, r, e))
+        run = read_run(path)
+        np.testing.assert_allclose(run.reference, r, atol=1e-10)
+        notes = [n for n in run.notes if "(error)" in n]
+        assert (notes == []) if said is None else (said in notes[0] and "the reference is used" in notes[0])
+    with pytest.raises(HesspipeError, match=r"column 'err' missing \(role error\)"):
+        read_run(tmp_path / "e.csv", columns="disturbance=wind,output=yaw,control=stick,error=err")

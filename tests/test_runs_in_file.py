@@ -189,3 +189,61 @@ def test_conditions_take_a_files_runs_as_one_persons(tmp_path):
     with pytest.raises(HesspipeError, match=r"no person flew both 'static' and 'motion': the persons \(a run's "
                                             r"file name\) are s01 and s02"):
         compare_conditions(a, b, paper_plants(), labels=("static", "motion"))
+
+
+def test_a_session_of_one_run_saved_as_vectors_is_that_run(tmp_path):
+    # MATLAB saves a matrix of one column as a vector (x, not x:1) and a struct array of one
+    # element as a struct (trial.u): the starred mapping reads it as the file's one run.
+    s = signals()
+    savemat(tmp_path / "s04.mat", {"t": s["time"], "fd": s["disturbance"], "ft": s["reference"],
+                                   "x": s["output"], "u": s["control"]})
+    (run,) = read_file_runs(tmp_path / "s04.mat", columns=STARRED.replace("control=u:*", "control=-u:*"))
+    assert (run.id, run.number) == ("s04", 0)
+    np.testing.assert_allclose(run.control, -s["control"], rtol=1e-12)
+    savemat(tmp_path / "s05.mat", {"trial": {"t": s["time"], "u": s["control"], "y": s["output"], "d": s["disturbance"]}})
+    (run,) = read_file_runs(tmp_path / "s05.mat",
+                            columns="time=trial(*).t,control=trial(*).u,output=trial(*).y,disturbance=trial(*).d")
+    np.testing.assert_allclose(run.output, s["output"], rtol=1e-12)
+
+
+def test_a_file_without_times_is_read_at_the_sample_rate_given(tmp_path, capsys):
+    # A MATLAB workspace saved without its time vector (the rate a scalar beside the signals).
+    from hesspipe.cli import main
+
+    s = signals()
+    savemat(tmp_path / "s06.mat", {"fs": 100.0, "fd": s["disturbance"], "x": s["output"], "u": s["control"]})
+    cols = "disturbance=fd,output=x,control=u"
+    with pytest.raises(HesspipeError, match=r"s06.mat: variable 'time' missing; found variables: fd, x, u "
+                                            r"\(left out, another length: fs \(1 value\)\); map other names with "
+                                            r"columns time=NAME, or give the sample rate \(sample_rate\)"):
+        read_run(tmp_path / "s06.mat", columns=cols)
+    run = read_run(tmp_path / "s06.mat", columns=cols, sample_rate=100)
+    np.testing.assert_allclose(run.time, s["time"], rtol=0, atol=1e-12)
+    assert run.dt == pytest.approx(0.01) and "no time column: sample k at k / 100 Hz" in run.notes
+    # A file with times keeps them, and they must agree with the rate given.
+    savemat(tmp_path / "s07.mat", {"t": s["time"], "fd": s["disturbance"], "x": s["output"], "u": s["control"]})
+    timed = "time=t," + cols
+    assert np.array_equal(read_run(tmp_path / "s07.mat", columns=timed, sample_rate=100).time,
+                          read_run(tmp_path / "s07.mat", columns=timed).time)
+    with pytest.raises(HesspipeError, match=r"s07.mat: column 't': samples at 100 Hz; expected the sample rate "
+                                            r"given, 60 Hz"):
+        read_run(tmp_path / "s07.mat", columns=timed, sample_rate=60)
+    for bad in (0.5, float("nan"), "100", True):
+        with pytest.raises(HesspipeError, match=r"^sample_rate: expected a number of Hz >= 1"):
+            read_run(tmp_path / "s07.mat", columns=timed, sample_rate=bad)
+    # The command line names its own option.
+    from hesspipe.core.formats import write_plants
+    from test_compare import paper_plants
+
+    write_plants(tmp_path / "p.json", paper_plants())
+    assert main(["frf", str(tmp_path / "s06.mat"), "--plants", str(tmp_path / "p.json"), "--columns", cols]) == 1
+    assert "give the sample rate (--sample-rate HZ)" in capsys.readouterr().err
+
+
+def test_the_pilots_table_takes_a_sample_rate():
+    from hesspipe.pilots.settings import PilotsConfig
+
+    assert PilotsConfig.from_table({"data": "runs/", "sample_rate": 100}, "c.toml").sample_rate == 100.0
+    assert PilotsConfig.from_table({}, "c.toml").sample_rate is None
+    with pytest.raises(HesspipeError, match=r"c.toml: field 'pilots.sample_rate'"):
+        PilotsConfig.from_table({"sample_rate": 0.2}, "c.toml")

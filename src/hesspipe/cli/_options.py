@@ -21,6 +21,8 @@ RUN_TERMS = {
     r"\bset resample\b": "pass --resample",
     r"\bwith columns\b": "with --columns",
     r"(^|: )columns: ": r"\1--columns: ",
+    r"\(sample_rate\)": "(--sample-rate HZ)",
+    r"(^|: )sample_rate: ": r"\1--sample-rate: ",
 }
 
 
@@ -43,7 +45,7 @@ def cli_message(message: str, args: argparse.Namespace | None) -> str:
 
 
 def add_run_options(parser: argparse.ArgumentParser) -> None:
-    """``--columns`` and ``--resample`` for a command that reads measured runs.
+    """``--columns``, ``--resample`` and ``--sample-rate`` for a command that reads measured runs.
 
     Pass them on with ``read_file_runs(path, **run_options(args))``.
     """
@@ -55,12 +57,15 @@ def add_run_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--resample", action="store_true",
                         help="interpolate a non-uniform time column onto a uniform grid "
                              "(default: refuse it)")
+    parser.add_argument("--sample-rate", type=float, metavar="HZ",
+                        help="sample rate of files without a time column (sample k at k/HZ s); "
+                             "a file with times must agree with it")
     add_terms(parser, RUN_TERMS)
 
 
 def run_options(args: argparse.Namespace) -> dict:
     """Keyword arguments of :func:`hesspipe.core.formats.read_run` from :func:`add_run_options`."""
-    return {"columns": args.columns, "resample": bool(args.resample)}
+    return {"columns": args.columns, "resample": bool(args.resample), "sample_rate": args.sample_rate}
 
 
 def reading_lines(reading) -> list[str]:

@@ -32,6 +32,7 @@ UNIT_FACTORS: dict[str, dict[str, float]] = {
     "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3},
     "output": dict(_ANGLES),
     "reference": dict(_ANGLES),
+    "error": dict(_ANGLES),
     "control": dict(_ANGLES),
     "disturbance": {**_ANGLES, "ft/s": 1.0, "fps": 1.0, "m/s": 1.0 / _FT,
                     "kt": 1852.0 / 3600.0 / _FT, "kn": 1852.0 / 3600.0 / _FT},

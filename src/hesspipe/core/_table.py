@@ -181,7 +181,7 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
 
 
 def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(), what: str = "a CSV",
-               hint: str | None = None) -> Table:
+               hint: str | None = None, also: Mapping[str, str] | None = None) -> Table:
     """Read numeric columns by role from a delimited text file with ``#`` comment lines.
 
     Parameters
@@ -200,6 +200,8 @@ def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(
     hint : str, optional
         Name of the setting that maps other column names (named in the message,
         e.g. "columns": "map other names with columns control=NAME").
+    also : mapping, optional
+        Role → what else a missing column's message says (another remedy).
 
     Returns
     -------
@@ -211,10 +213,10 @@ def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(
         Naming the file, the column and the problem.
     """
     frame = path if isinstance(path, Frame) else read_frame(path, what)
-    return _by_role(frame, names, optional, hint)
+    return _by_role(frame, names, optional, hint, also or {})
 
 
-def _by_role(frame: Frame, names, optional, hint) -> Table:
+def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str]) -> Table:
     """:func:`read_table`'s columns found by role in `frame`, checked and converted."""
     path, df, decimal, written = frame.path, frame.df, frame.decimal, frame.written
     others, positional, comments = frame.others, frame.positional, frame.comments
@@ -240,15 +242,15 @@ def _by_role(frame: Frame, names, optional, hint) -> Table:
                 continue
             label = f" (role {role})" if role != name else ""
             if others is not None:
-                tail = f"; map other names with {hint} {role}=NAME" if hint else ""
+                tail = (f"; map other names with {hint} {role}=NAME" if hint else "") + also.get(role, "")
                 left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
                 raise HesspipeError(f"{path}: variable '{name}' missing{label}; found variables: "
                                     f"{', '.join(headers)}{left}{tail}")
             if positional:
-                tail = f"; map them with {hint} {role}=POSITION" if hint else ""
+                tail = (f"; map them with {hint} {role}=POSITION" if hint else "") + also.get(role, "")
                 raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "
                                     f"row, its columns are named by position 1-{len(headers)}{tail}")
-            tail = f"; map other names with {hint} {role}=NAME" if hint else ""
+            tail = (f"; map other names with {hint} {role}=NAME" if hint else "") + also.get(role, "")
             raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
                                 f"{', '.join(headers)}{tail}")
         data[role], used[role] = _numeric(df[col], decimal), col
@@ -358,6 +360,9 @@ def _complete_rows(data: Mapping[str, np.ndarray]) -> tuple[int, int]:
 
 #: In a mapped column name, the run's number: ``x:*`` is ``x:1``, ``x:2``, ... (one run each).
 RUN_NUMBER = "*"
+#: The star and what binds it to the name (``x:*``, ``trial(*).u``, ``u_*``): removed, the name a
+#: file of one run has.
+_UNSTARRED = re.compile(r"\(\*\)|[:_. -]?\*")
 
 
 def run_columns(frame: Frame, names: Mapping[str, str], *, optional=(),
@@ -384,8 +389,9 @@ def run_columns(frame: Frame, names: Mapping[str, str], *, optional=(),
     -------
     list of (int, dict)
         Per run its number and role → column name, by number; ``[(0, names)]`` when no name
-        holds a star, or when none of the starred names is in the file and each has its
-        role's own column there (a folder's single-run files beside its multi-run ones).
+        holds a star, or when none of the starred names is in the file and each is there
+        without its star (``x`` for ``x:*``: MATLAB's vector of a session of one run) or under
+        its role's own name (a folder's single-run files beside its multi-run ones).
 
     Raises
     ------
@@ -413,9 +419,13 @@ def run_columns(frame: Frame, names: Mapping[str, str], *, optional=(),
                 runs[k] = sign + h
         found[role] = runs
     if not any(found.values()):
-        plain = {role: role for role in starred}
-        if all(_match(frame.path, headers, role, role) is not None or role in optional for role in plain):
-            return [(0, {**names, **plain})]
+        # A file of one run: MATLAB saves a session of one as vectors (x, not x:1; trial.u,
+        # not trial(1).u), or it has the roles' plain columns.
+        for plain in ({role: _UNSTARRED.sub("", name) for role, name in starred.items()},
+                      {role: role for role in starred}):
+            if all(_match(frame.path, headers, role, name.lstrip("-").strip()) is not None or role in optional
+                   for role, name in plain.items()):
+                return [(0, {**names, **plain})]
     for role, runs in found.items():
         if not runs:
             tail = f"; map other names with {hint} {role}=NAME" if hint else ""

@@ -4,7 +4,8 @@ Measured run
     One CSV per run, ``#`` comment lines allowed, a header row, columns
     ``time`` (s, uniform), ``disturbance`` (input of Yd; lateral wind, ft/s),
     ``output`` (controlled variable; roll rate, rad/s), ``control`` (pilot
-    control, input of Yc) and optionally ``reference`` (default 0). A comment
+    control, input of Yc) and optionally ``reference`` (default 0; or an ``error`` column,
+    e = r - y as displayed, from which it is taken). A comment
     line containing the word ``synthetic`` marks the run as synthetic data.
     A folder of such files is a set of pilots; the file stem is the pilot id.
 
@@ -17,23 +18,22 @@ Plants
 
 from __future__ import annotations
 
-import json
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Mapping
 
-import control as ct
 import numpy as np
 import pandas as pd
 
-from ._csv import decode, unwrap_turns
+from ._csv import unwrap_turns
+from ._plants import Plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
 from ._table import RUN_NUMBER, read_frame, read_table, run_columns
-from ._tf import _read_tf, tf_coefficients
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
-from ._time import UNIFORM_RTOL, _check_plausible, _intercept, sample_interval
+from ._tf import tf_coefficients as tf_coefficients  # re-exported: the plants report and the flight use it
+from ._time import MAX_INTERVAL_S, UNIFORM_RTOL, _check_plausible, _intercept, sample_interval
 from .errors import HesspipeError
-from .io import write_json, write_text
+from .io import write_text
 from .paper import WELCH_SEGMENT
 
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
@@ -43,7 +43,11 @@ RUN_COLUMNS = ("time", "disturbance", "output", "control")
 RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".xlsx", ".xlsm")
 #: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
 TEXT_SUFFIXES = (".txt", ".dat")
-OPTIONAL_COLUMNS = ("reference",)
+#: Columns a run may have: the target, and the displayed error e = reference - output (the
+#: reference where a laboratory logged the error and not the target).
+OPTIONAL_COLUMNS = ("reference", "error")
+#: The displayed error agrees with reference - output within this fraction of its RMS.
+ERROR_AGREES = 0.05
 
 #: Largest magnitude of a signal whose power spectrum is finite in float64 with room to spare.
 MAX_MAGNITUDE = 1e100
@@ -181,7 +185,8 @@ def _parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
 
 
 def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None,
-             resample: bool = False, min_samples: int = 2, rtol: float = UNIFORM_RTOL) -> Run:
+             resample: bool = False, min_samples: int = 2, rtol: float = UNIFORM_RTOL,
+             sample_rate: float | None = None) -> Run:
     """Read and validate a measured run.
 
     Times are accepted as written by real recorders: rounded to any number of
@@ -217,13 +222,18 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     rtol : float
         Relative tolerance on every interval for "uniform", beyond the rounding
         of the written times (SPEC.md: 1e-4).
+    sample_rate : float, optional
+        Hz. For a file without a time column (a MATLAB workspace saved without ``t``): the
+        times are ``k / sample_rate`` from 0. A file that has times must agree with it
+        (within 0.1 %); unmapped, a missing time column then is no error.
 
     Raises
     ------
     HesspipeError
         Naming the file, the column and the problem.
     """
-    runs = read_file_runs(path, columns=columns, resample=resample, min_samples=min_samples, rtol=rtol)
+    runs = read_file_runs(path, columns=columns, resample=resample, min_samples=min_samples, rtol=rtol,
+                          sample_rate=sample_rate)
     if len(runs) > 1:
         raise HesspipeError(f"{path}: the columns mapped with '{RUN_NUMBER}' find {len(runs)} runs "
                             f"({runs[0].id} to {runs[-1].id}); expected one here: map one run's "
@@ -233,7 +243,7 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
 
 def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None = None,
                    resample: bool = False, min_samples: int = 2,
-                   rtol: float = UNIFORM_RTOL) -> list[Run]:
+                   rtol: float = UNIFORM_RTOL, sample_rate: float | None = None) -> list[Run]:
     """Read and validate the runs one file holds: one, or several side by side.
 
     A laboratory that saves a session's runs together writes them as a matrix per signal
@@ -250,7 +260,7 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
         A run file (:func:`read_run`).
     columns : str or mapping, optional
         Role → column-name mapping (:func:`read_run`), a name possibly with one ``*``.
-    resample, min_samples, rtol
+    resample, min_samples, rtol, sample_rate
         As for :func:`read_run`, for every run.
 
     Returns
@@ -271,13 +281,18 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     # An optional role the caller mapped to a column is required: a misspelt reference
     # column read as no target at all would change the answer without a word.
     optional = tuple(role for role in OPTIONAL_COLUMNS if role not in mapping)
+    fs = check_sample_rate(sample_rate)
+    if fs is not None and "time" not in mapping:
+        optional += ("time",)
+    also = {"time": ", or give the sample rate (sample_rate) of a file without times"}
     frame = read_frame(path, "a measured-run CSV")
     each = run_columns(frame, names, optional=optional, hint="columns")
     runs = []
     for k, run_names in each:
-        table = read_table(frame, run_names, optional=optional, hint="columns")
+        table = read_table(frame, run_names, optional=optional, hint="columns", also=also)
         where = Path(f"{path}#{k}") if len(each) > 1 else path
-        run = _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol)
+        run = _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
+                              sample_rate=fs)
         if len(each) > 1:
             cols = ", ".join(f"{role} {names[role]}" for role in RUN_COLUMNS + OPTIONAL_COLUMNS
                              if RUN_NUMBER in names[role])
@@ -288,10 +303,11 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     return runs
 
 
-def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol: float) -> Run:
+def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol: float,
+                    sample_rate: float | None) -> Run:
     """:func:`read_file_runs`'s checks of one run's columns, and the run (named after `path`)."""
     data, comments, notes = table.data, table.comments, table.notes
-    n = len(data["time"])
+    n = len(data["output"])
     if n < max(min_samples, 2):
         raise HesspipeError(f"{path}: {n} samples; expected at least {max(min_samples, 2)}")
     if n > MAX_SAMPLES:
@@ -303,10 +319,17 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
             raise HesspipeError(f"{path}: column '{table.columns[role]}': values up to {big:.3g} overflow a "
                                 f"power spectrum; expected magnitudes below {MAX_MAGNITUDE:g} "
                                 "(check the column's units)")
-    notes = notes + _unwrapped(data, table.columns)
+    notes = notes + _unwrapped(data, table.columns) + _with_error(data, table.columns)
+    if "time" not in data:   # a file without times, read at the sample rate given
+        data["time"] = np.arange(n, dtype=float) / sample_rate
+        notes += (f"no time column: sample k at k / {sample_rate:g} Hz",)
+        return _run(path, data, comments, notes, 1.0 / sample_rate)
     t = data["time"]
     tcol = table.columns["time"]
     dt, uniform = sample_interval(path, t, tcol, rtol=rtol, resolution=table.resolution.get("time"))
+    if sample_rate is not None and abs(dt * sample_rate - 1.0) > 1e-3:
+        raise HesspipeError(f"{path}: column '{tcol}': samples at {1.0 / dt:.6g} Hz; expected the sample rate "
+                            f"given, {sample_rate:g} Hz (a file's own times are used where it has them)")
     if not uniform:
         steps = np.diff(t - t[0])
         if not resample:
@@ -324,11 +347,63 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
     else:
         data["time"] = t[0] + dt * np.arange(n, dtype=float) + _intercept(t, dt)
     _check_plausible(path, tcol, dt)
+    return _run(path, data, comments, notes, dt)
+
+
+def _run(path: Path, data: dict, comments: tuple, notes: tuple, dt: float) -> Run:
+    """The :class:`Run` of checked columns, named after `path`."""
     ref = data.get("reference", np.zeros_like(data["time"]))
     return Run(time=data["time"], disturbance=data["disturbance"], output=data["output"],
                control=data["control"], reference=ref, id=path.stem,
                synthetic=any("synthetic" in c.lower() for c in comments),
                comments=comments, source=str(path), interval=dt, notes=notes)
+
+
+def check_sample_rate(sample_rate) -> float | None:
+    """`sample_rate` (Hz) checked: None, or a finite number whose interval a tracking run can
+    have (at most :data:`hesspipe.core._time.MAX_INTERVAL_S`).
+
+    Parameters
+    ----------
+    sample_rate : float or None
+        Hz.
+
+    Returns
+    -------
+    float or None
+
+    Raises
+    ------
+    HesspipeError
+        Naming ``sample_rate`` and what was expected.
+    """
+    if sample_rate is None:
+        return None
+    if isinstance(sample_rate, bool) or not isinstance(sample_rate, (int, float)) or not math.isfinite(sample_rate) \
+            or sample_rate * MAX_INTERVAL_S < 1.0:
+        raise HesspipeError(f"sample_rate: expected a number of Hz >= {1.0 / MAX_INTERVAL_S:g}, got {sample_rate!r}")
+    return float(sample_rate)
+
+
+def _with_error(data: dict, columns: Mapping[str, str]) -> tuple[str, ...]:
+    """Take the displayed error out of `data`, in place: where no reference is logged it gives
+    the reference (``r = e + y``); beside a logged one it is checked against it and said where
+    it disagrees (the reference is used)."""
+    if "error" not in data:
+        return ()
+    e, col = data.pop("error"), columns["error"]
+    if "reference" not in data:
+        data["reference"] = e + data["output"]
+        return (f"column '{col}' (error): the reference taken as error + output (the error as "
+                "displayed, e = r - y; logged as y - r it maps as error=-NAME)",)
+    size = float(np.sqrt(np.mean(e ** 2)))
+    gap, flipped = (float(np.sqrt(np.mean((data["reference"] - data["output"] - sign * e) ** 2)))
+                    for sign in (1.0, -1.0))
+    if size == 0.0 or gap <= ERROR_AGREES * size:
+        return ()
+    what = ("it is output - reference, the opposite sign" if flipped <= ERROR_AGREES * size else
+            f"they differ by {gap / size:.0%} of its RMS (a display delay, another scale or another signal?)")
+    return (f"column '{col}' (error): not reference - output: {what}; the reference is used",)
 
 
 def _unwrapped(data: dict, columns: Mapping[str, str]) -> tuple[str, ...]:
@@ -446,127 +521,3 @@ def write_run(path: str | Path, run: Run, comments: tuple[str, ...] | list[str] 
     df = pd.DataFrame({"time": run.time, "disturbance": run.disturbance, "output": run.output,
                        "control": run.control, "reference": run.reference})
     return write_text(path, header + df.to_csv(index=False, float_format="%.9g"))
-
-
-@dataclass(frozen=True)
-class Plants:
-    """The two continuous-time plants a pilot loop is closed around.
-
-    Attributes
-    ----------
-    control_to_output : control.TransferFunction
-        Yc: pilot control (aileron, normalised -1..1) → roll rate (rad/s).
-    disturbance_to_output : control.TransferFunction
-        Yd: lateral wind (ft/s) → roll rate (rad/s).
-    meta : dict
-        Extra keys of the JSON file (units, orders, fit, source...).
-    motion_path : control.TransferFunction or None
-        Controlled output → angular velocity (rad/s) the simulator cab imposes on the
-        pilot, platform and motion filter included (SPEC.md "Data formats"). None: the
-        paper's platform × washout acting on the output (a rate task). The vestibular
-        part (canals, Km; otoliths) belongs to the pilot model, not to this path.
-    """
-
-    control_to_output: ct.TransferFunction
-    disturbance_to_output: ct.TransferFunction
-    meta: dict = field(default_factory=dict)
-    motion_path: ct.TransferFunction | None = None
-
-    @property
-    def Yc(self) -> ct.TransferFunction:
-        """``Yc``: the control-to-output transfer function (the paper's name)."""
-        return self.control_to_output
-
-    @property
-    def Yd(self) -> ct.TransferFunction:
-        """``Yd``: the disturbance-to-output transfer function (the paper's name)."""
-        return self.disturbance_to_output
-
-
-def read_plants(path: str | Path) -> Plants:
-    """Read a plants JSON file (SPEC.md format) into :class:`Plants`.
-
-    Parameters
-    ----------
-    path : path
-        JSON with ``control_to_output`` and ``disturbance_to_output`` (continuous
-        time, coefficients in descending powers of s); other keys are kept as
-        :attr:`Plants.meta`.
-
-    Returns
-    -------
-    Plants
-
-    Raises
-    ------
-    HesspipeError
-        Naming the file and the field: unreadable JSON, a missing or malformed
-        transfer function, a discrete-time one (``dt`` other than 0 or null).
-    """
-    path = Path(path)
-    try:
-        obj = json.loads(decode(path, "a plants JSON file")[0])
-    except json.JSONDecodeError as exc:
-        raise HesspipeError(f"{path}: not valid JSON ({exc})") from None
-    if not isinstance(obj, Mapping):
-        raise HesspipeError(f"{path}: expected a JSON object with 'control_to_output' and "
-                            "'disturbance_to_output'")
-    for key in ("control_to_output", "disturbance_to_output"):
-        if key not in obj:
-            raise HesspipeError(f"{path}: field '{key}' missing; expected "
-                                "{\"num\": [...], \"den\": [...]}")
-    tfs = ("control_to_output", "disturbance_to_output", "motion_path")
-    meta = {k: v for k, v in obj.items() if k not in tfs}
-    motion = obj.get("motion_path")
-    return Plants(_read_tf(obj["control_to_output"], path, "control_to_output"),
-                  _read_tf(obj["disturbance_to_output"], path, "disturbance_to_output"), meta,
-                  # The cab's rate of an angle display is s times the angle: a bare
-                  # differentiator is a natural motion path (the pilot's loop stays proper).
-                  None if motion is None else _read_tf(motion, path, "motion_path", excess=1))
-
-
-def plants_coefficients(plants: Plants) -> dict:
-    """The plants' transfer functions as SPEC.md's JSON writes them: the one record of a
-    plants file's paths in every output that carries them.
-
-    Parameters
-    ----------
-    plants : Plants
-        Yc (control → output), Yd (disturbance → output) and the optional motion path
-        (output → the cab's angular velocity).
-
-    Returns
-    -------
-    dict
-        ``control_to_output``, ``disturbance_to_output`` and, where given,
-        ``motion_path``, each ``{"num": [...], "den": [...]}`` in descending powers of s.
-    """
-    obj = {"control_to_output": tf_coefficients(plants.control_to_output),
-           "disturbance_to_output": tf_coefficients(plants.disturbance_to_output)}
-    if plants.motion_path is not None:
-        obj["motion_path"] = tf_coefficients(plants.motion_path)
-    return obj
-
-
-def write_plants(path: str | Path, plants: Plants, **extra) -> Path:
-    """Write `plants` in the SPEC.md JSON format, atomically.
-
-    Parameters
-    ----------
-    path : path
-        The JSON file to write.
-    plants : Plants
-        Yc (control → output) and Yd (disturbance → output); its ``meta`` keys
-        are written too.
-    **extra
-        Further top-level keys (units, orders, fit, source ...).
-
-    Returns
-    -------
-    Path
-        `path`.
-    """
-    obj = plants_coefficients(plants)
-    obj.update(plants.meta)
-    obj.update(extra)
-    return write_json(path, obj)

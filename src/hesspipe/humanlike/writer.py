@@ -18,7 +18,8 @@ or given:
 ``bom``
     write a UTF-8 byte-order mark.
 ``columns``
-    column order (names as in SPEC).
+    column order (names as in SPEC; ``error``, the displayed ``reference - output``, may
+    stand in place of ``reference``: a laboratory that logs what the display shows).
 ``epoch0``
     Unix time of the first sample (epoch styles).
 
@@ -123,8 +124,9 @@ def _style(style) -> dict:
     if out["time"] not in (*TIME_STYLES, "clock") and not str(out["time"]).startswith("%"):
         raise HesspipeError(f"style: field 'time': expected one of {', '.join(TIME_STYLES)} "
                             f"or a printf format, got {out['time']!r}")
-    if sorted(out["columns"]) != sorted(COLUMNS):
-        raise HesspipeError(f"style: field 'columns': expected an order of {', '.join(COLUMNS)}")
+    if sorted(out["columns"]) not in (sorted(COLUMNS), sorted([*COLUMNS[:-1], "error"])):
+        raise HesspipeError(f"style: field 'columns': expected an order of {', '.join(COLUMNS)} "
+                            "(or 'error' in place of 'reference')")
     if out["sep"] not in (",", ";", "\t", "   ") or out["decimal"] not in (".", ",") or out["sep"] == out["decimal"]:
         raise HesspipeError(f"style: fields 'sep' and 'decimal': expected a separator of ',', ';', tab or three spaces "
                             f"and another decimal mark '.' or ',', got {out['sep']!r} and {out['decimal']!r}")
@@ -164,12 +166,13 @@ def csv_bytes(trial, style=None) -> bytes:
     st = _style(style)
     cols = {"time": _times(trial.time, st)}
     fmt, scale = st["values"], (180.0 / np.pi if st["degrees"] else 1.0)
-    for name in COLUMNS[1:]:
-        cols[name] = [fmt % (scale * v) for v in getattr(trial, name)]
+    for name in st["columns"]:
+        if name != "time":
+            cols[name] = [fmt % (scale * v) for v in _signal(trial, name)]
     if st["decimal"] != ".":
         cols = {c: [v.replace(".", st["decimal"]) for v in vals] for c, vals in cols.items()}
     units = {c: ("" if st["time"] == "clock" else "s") if c == "time" else ("deg" if st["degrees"] else "-")
-             for c in COLUMNS}
+             for c in st["columns"]}
     names = _header_names(st)
     nl, sep = st["newline"], st["sep"]
     rows = [*st["preamble"], f"# {_label(trial)}"]
@@ -185,6 +188,11 @@ def csv_bytes(trial, style=None) -> bytes:
     return bom + text.encode(st["encoding"])
 
 
+def _signal(trial, name: str) -> np.ndarray:
+    """Column `name` of `trial` (``error``: the displayed ``reference - output``)."""
+    return trial.reference - trial.output if name == "error" else getattr(trial, name)
+
+
 def _label(trial) -> str:
     """The line that marks a file of `trial` synthetic, naming the generator and the trial."""
     return f"{LABEL} ({trial.truth['generator']}); trial {trial.spec.name}"
@@ -194,7 +202,7 @@ def _header_names(st: dict) -> dict:
     """SPEC column name → the header `st` writes: its own name, `` [deg]`` after each signal in
     degrees unless a units row holds the units."""
     unit = " [deg]" if st["degrees"] and not st["units_row"] else ""
-    return {c: (st["names"] or {}).get(c, c) + ("" if c == "time" else unit) for c in COLUMNS}
+    return {c: (st["names"] or {}).get(c, c) + ("" if c == "time" else unit) for c in (*COLUMNS, "error")}
 
 
 MAT_NAMES = {"time": "t", "reference": "ft", "disturbance": "fd", "output": "x", "control": "u"}
@@ -270,7 +278,7 @@ def xlsx_bytes(trial, style=LAB) -> bytes:
     st = _style(style)
     scale = 180.0 / np.pi if st["degrees"] else 1.0
     head = _header_names({**st, "units_row": False})   # a workbook's units stand in its names
-    frame = pd.DataFrame({head[c]: (trial.time if c == "time" else scale * getattr(trial, c)) for c in st["columns"]})
+    frame = pd.DataFrame({head[c]: (trial.time if c == "time" else scale * _signal(trial, c)) for c in st["columns"]})
     meta = pd.DataFrame([[_label(trial)],
                          [f"Trial: {trial.spec.name}"], ["Sample rate [Hz]: " + f"{1.0 / (trial.time[1] - trial.time[0]):g}"]])
     buf = io.BytesIO()

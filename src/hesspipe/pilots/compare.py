@@ -33,7 +33,16 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from ..core.errors import HesspipeError
-from ..core.formats import RUN_SUFFIXES, TEXT_SUFFIXES, Plants, Run, _parse_columns, plants_coefficients, read_file_runs
+from ..core.formats import (
+    RUN_SUFFIXES,
+    TEXT_SUFFIXES,
+    Plants,
+    Run,
+    _parse_columns,
+    check_sample_rate,
+    plants_coefficients,
+    read_file_runs,
+)
 from ..core.seeds import derive_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import benchmark as mcruer_benchmark
@@ -335,7 +344,8 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
 
 
 def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
-              min_samples: int = MIN_SAMPLES) -> tuple[list[Run], list[PilotFailure]]:
+              min_samples: int = MIN_SAMPLES, sample_rate: float | None = None
+              ) -> tuple[list[Run], list[PilotFailure]]:
     """Read every file; a bad file becomes a :class:`PilotFailure`, not an exception.
 
     Returns ``(runs, failures)`` in file order; a repeated pilot id is a failure too.
@@ -344,14 +354,15 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
     ----------
     paths : sequence of Path
         The run files.
-    columns, resample, min_samples
+    columns, resample, min_samples, sample_rate
         Passed to :func:`hesspipe.core.formats.read_file_runs` (a file may hold several runs).
     """
     runs, failures = [], []
     seen: dict[str, str] = {}
     for path in paths:
         try:
-            found = read_file_runs(path, columns=columns, resample=resample, min_samples=min_samples)
+            found = read_file_runs(path, columns=columns, resample=resample, min_samples=min_samples,
+                                   sample_rate=sample_rate)
         except HesspipeError as exc:
             failures.append(PilotFailure(Path(path).stem, str(path), str(exc)))
             continue
@@ -368,7 +379,7 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
 def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | None = None, *,
                    workers: int | None = None, scheduler: str | None = None, columns=None,
                    resample: bool = False, progress: bool | None = None, job=None,
-                   pilot_id: str | None = None, **fields) -> Comparison:
+                   pilot_id: str | None = None, sample_rate: float | None = None, **fields) -> Comparison:
     """Identify original, expanded-fixed-Km and expanded models on each pilot's run.
 
     Parameters
@@ -386,7 +397,7 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     **fields
         Fields of :class:`CompareSettings` replacing those of `settings`, e.g.
         ``compare_pilots(folder, plants, seed=3, restarts=1)``.
-    columns, resample
+    columns, resample, sample_rate
         Passed to :func:`hesspipe.core.formats.read_file_runs`.
     progress : bool, optional
         Progress bar (default: only on a terminal).
@@ -417,7 +428,8 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
     paths = list_runs(paths_or_dir)
     pilot_groups([p.stem for p in paths], pilot_id, {p.stem: str(p) for p in paths})  # before any work
-    runs, failures = read_runs(paths, columns=columns, resample=resample)
+    check_sample_rate(sample_rate)   # the user's one mistake, not every file's
+    runs, failures = read_runs(paths, columns=columns, resample=resample, sample_rate=sample_rate)
     groups = pilot_groups([r.id for r in runs], pilot_id, {r.id: r.source for r in runs},
                           {r.id: r.file_id for r in runs})
     check_repeats([], runs)   # a record copied into the folder would count its evidence twice
@@ -494,7 +506,8 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
                      spec=cohort_spec(config.cohort, duration_s=config.duration_s, dt_s=config.dt_s))
     result = compare_pilots(source, plants, settings, workers=config.workers or None,
                             scheduler=config.scheduler or None, columns=config.columns or None,
-                            resample=config.resample, progress=progress, pilot_id=config.pilot_id or None)
+                            resample=config.resample, progress=progress, pilot_id=config.pilot_id or None,
+                            sample_rate=config.sample_rate)
     write_comparison(result, out_dir, draw=draw if config.figures else None)
     return result
 

@@ -173,6 +173,9 @@ class PilotsConfig(Settings):
         Column names of the data's files, "ROLE=NAME,..." ("": the format's names).
     resample : bool
         Interpolate non-uniform time columns onto a uniform grid instead of refusing them.
+    sample_rate : float or None
+        Hz, for data files without a time column (:func:`hesspipe.core.formats.read_run`);
+        None (default): every file has times.
     simulator : str
         How the synthetic cohort is made: "jsbsim" (the pilots fly the JSBSim
         aircraft in closed loop, :func:`hesspipe.pilots.flown.fly_cohort`) or "fft"
@@ -219,6 +222,7 @@ class PilotsConfig(Settings):
     figures: bool = True
     columns: str = ""
     resample: bool = False
+    sample_rate: float | None = None
     simulator: str = "jsbsim"
     criterion: str = DEFAULT_CRITERION
     display: str = DEFAULT_DISPLAY
@@ -238,7 +242,9 @@ class PilotsConfig(Settings):
                    dt_s=f.number("dt_s", min=0.0, max=0.1, strict_min=True),
                    workers=f.integer("workers", min=0), scheduler=f.string("scheduler"),
                    figures=f.boolean("figures"), columns=f.string("columns"),
-                   resample=f.boolean("resample"), simulator=f.string("simulator", choices=SIMULATORS),
+                   resample=f.boolean("resample"),
+                   sample_rate=None if f.table["sample_rate"] is None else f.number("sample_rate", min=1.0),
+                   simulator=f.string("simulator", choices=SIMULATORS),
                    cohort=f.string("cohort", choices=COHORT_DRAWS),
                    forcing=f.string("forcing", choices=FORCINGS), plants=f.string("plants"),
                    pilot_id=f.string("pilot_id"), **_identification(f, "band_hz"))

@@ -141,13 +141,14 @@ def validate(config: dict, source: str) -> None:
                             f"{pilots.data} not found")
     if pilots.plants:
         _in_field(source, "pilots.plants", read_plants, pilots.plants)   # as the stages read it
-    if pilots.data and pilots.columns:
+    if pilots.data and (pilots.columns or pilots.sample_rate):
         # The data's first run read as the pilots stage reads it: a misspelt column name fails
         # here, not after flight and plants (any other fault of that file would fail the
         # stage too).
         first = list_runs(pilots.data)[0]
-        _in_field(source, "pilots.columns",
-                  lambda c: read_file_runs(first, columns=c, resample=pilots.resample), pilots.columns)
+        _in_field(source, "pilots.columns" if pilots.columns else "pilots.sample_rate",
+                  lambda c: read_file_runs(first, columns=c, resample=pilots.resample,
+                                           sample_rate=pilots.sample_rate), pilots.columns)
     table, (run, model) = _split(config.get("diagnose", {}), "run", "model")
     diagnose = DiagnoseConfig.from_table(table, source)
     _in_field(source, "diagnose.model", model_from_name, model or "original")
@@ -351,6 +352,7 @@ def _config_terms(message: str) -> str:
     import re
 
     message = message.replace("set resample", "set [pilots] resample = true")
+    message = message.replace("(sample_rate)", "([pilots] sample_rate = HZ)")
     return re.sub(r"with columns (\S+)", r'with [pilots] columns = "\1"', message)
 
 
@@ -411,7 +413,8 @@ def diagnose(ctx) -> None:
     path, source = _diagnose_run(ctx)
     try:
         runs = read_file_runs(path, min_samples=WELCH_SEGMENT, columns=pilots_cfg.get("columns") or None,
-                              resample=bool(pilots_cfg.get("resample", False)))
+                              resample=bool(pilots_cfg.get("resample", False)),
+                              sample_rate=pilots_cfg.get("sample_rate"))
         # A file holding several runs: the one the pilots stage compared first, else its first.
         run = next((r for r in runs if r.source == source), runs[0])
     except HesspipeError as exc:
