@@ -322,6 +322,12 @@ def test_a_logged_error_gives_the_reference_or_is_checked_against_it(tmp_path):
     np.testing.assert_allclose(run.reference, r, atol=1e-10)
     np.testing.assert_allclose(run.error, r - y, atol=1e-10)
     assert any("the reference taken as error + output" in n for n in run.notes)
+    # A disturbance task's error is minus the output: what e + y leaves (here the output's step
+    # between two frames) is no target.
+    path = _csv(tmp_path / "h.csv", ("time", "disturbance", "output", "control", "error"),
+                rows(d, y, u, -np.concatenate(([y[0]], y[:-1]))))
+    run = read_run(path)
+    assert not run.reference.any() and any("no target (reference 0)" in n for n in run.notes)
     # Logged the other way round (y - r): mapped with its sign flipped.
     path = _csv(tmp_path / "f.csv", ("time", "disturbance", "output", "control", "error"), rows(d, y, u, y - r))
     np.testing.assert_allclose(read_run(path, columns="error=-error").reference, r, atol=1e-10)

@@ -392,11 +392,18 @@ def _with_error(data: dict, columns: Mapping[str, str]) -> tuple[str, ...]:
     if "error" not in data:
         return ()
     e, col = data.pop("error"), columns["error"]
+    size = float(np.sqrt(np.mean(e ** 2)))
     if "reference" not in data:
-        data["reference"] = e + data["output"]
+        r = e + data["output"]
+        if float(np.sqrt(np.mean(r ** 2))) <= ERROR_AGREES * size:
+            # A disturbance task: what is left is rounding, or the output's step between the
+            # frames the logger took the two from, not a target's lines.
+            data["reference"] = np.zeros_like(r)
+            return (f"column '{col}' (error): minus the output within {ERROR_AGREES:.0%} of its RMS: "
+                    "no target (reference 0)",)
+        data["reference"] = r
         return (f"column '{col}' (error): the reference taken as error + output (the error as "
                 "displayed, e = r - y; logged as y - r it maps as error=-NAME)",)
-    size = float(np.sqrt(np.mean(e ** 2)))
     gap, flipped = (float(np.sqrt(np.mean((data["reference"] - data["output"] - sign * e) ** 2)))
                     for sign in (1.0, -1.0))
     if size == 0.0 or gap <= ERROR_AGREES * size:
