@@ -305,8 +305,6 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str]) -> Ta
     return Table(data, comments, used, tuple(notes), resolution)
 
 
-
-
 def _clock(column: pd.Series) -> np.ndarray | None:
     """Seconds from the first row of a column of clock times (``14:03:05.120``, a day
     rolled over at midnight, or ISO 8601 ``2026-11-01T14:03:05.120``), NaN where a cell is
