@@ -4,6 +4,7 @@ from __future__ import annotations
 
 # Imports sit inside the functions: `hesspipe --help` and argument errors load no numpy
 # (tests/test_api.py), and each command loads only its own stage.
+import sys
 from dataclasses import replace
 
 from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
@@ -21,7 +22,7 @@ def register(sub) -> None:
                    help="measured run (time, disturbance, output, control); more runs of the same pilot "
                         "and condition (the same forcing) are repeats: pooled with it in the motion "
                         "test when the forcing is the disturbance alone, and in the delay test "
-                        "against --baseline-run")
+                        "against --baseline-run (with --each: runs or folders of runs, each alone)")
     p.add_argument("--plants", metavar="PLANTS.json", required=True, help="plants file (Yc, Yd)")
     p.add_argument("--model", default="original", help="baseline model: original or expanded "
                                                        "(default: %(default)s)")
@@ -42,7 +43,11 @@ def register(sub) -> None:
                    help=f"what the pilot saw (default {DEFAULT_DISPLAY}): compensatory (the error alone), "
                         "pursuit (target and output apart: the motion test fits the feedforward humans "
                         "add) or either (not known: motion only if the test finds it for both)")
-    p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON")
+    p.add_argument("--each", action="store_true",
+                   help="diagnose every run on its own (RUN may then be a folder of runs): a line per "
+                        "run and how often each effect was named, as a motion / no-motion check counts")
+    p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON (with --each: every "
+                                                      "run's and the tally, in one file)")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
     from ._options import add_run_options, add_seed, add_terms, field_terms
 
@@ -74,6 +79,8 @@ def _diagnose(args) -> int:
             raise HesspipeError("--candidates: expected effect ids separated by commas, got nothing")
     from ._options import read_cli_plants, read_cli_runs
 
+    if args.each:
+        return _each(args, cfg, candidates)
     plants = read_cli_plants(args.plants)
 
     # A file may hold several runs (a starred column name): the two lists are read apart.
@@ -91,3 +98,32 @@ def _diagnose(args) -> int:
         plot_diagnosis(result, args.figure)
         print(f"wrote {args.figure}")
     return 0
+
+
+def _each(args, cfg, candidates) -> int:
+    # Every run alone: a folder's runs (or the files given, each file's runs), read as
+    # `pilots` reads them (a file it cannot read is a failure, not the end), then tallied.
+    from ..core.errors import HesspipeError
+    from ..core.io import write_json
+    from ..core.paper import WELCH_SEGMENT
+    from ..diagnose.each import RunDiagnoses, diagnose_each
+    from ..pilots.compare import list_runs, read_runs
+    from ._options import cli_message, print_reading, read_cli_plants, run_options
+
+    if args.baseline_run or args.figure:
+        raise HesspipeError(f"{'--baseline-run' if args.baseline_run else '--figure'}: not with --each, which "
+                            "diagnoses every run alone (one figure per run: diagnose the run without --each)")
+    plants = read_cli_plants(args.plants)
+    paths = [path for arg in args.run for path in list_runs(arg)]
+    runs, unread = read_runs(paths, min_samples=WELCH_SEGMENT, **run_options(args))
+    print_reading({run.source: run.notes for run in runs})
+    result = diagnose_each(runs, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg)
+    unread = tuple((f.source, f.error.removeprefix(f"{f.source}: ")) for f in unread)
+    result = RunDiagnoses(result.diagnoses, unread + result.failures)
+    print("\n".join(result.lines(failures=False)))
+    if args.json:
+        write_json(args.json, result.to_dict())
+        print(f"wrote {args.json}")
+    for where, message in result.failures:
+        print(f"hesspipe: error: {where}: {cli_message(message, args)}", file=sys.stderr)
+    return 1 if result.failures else 0

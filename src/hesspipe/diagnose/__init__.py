@@ -23,7 +23,8 @@ Modules: ``settings`` (DiagnoseConfig), ``checks`` (the plant check), ``spectra`
 statistics, expected-PSD kernel, bands), ``expected`` (a model's expected control
 spectrum), ``likelihood`` (log-spectral residuals and their likelihood), ``fitting`` (the
 fits), ``motion`` (the describing-function verdicts), ``aircraft`` (aircraft-side
-candidates), ``results``, ``report`` (text), ``workflow`` (the rounds), ``examples``
+candidates), ``results``, ``report`` (text), ``workflow`` (the rounds), ``each`` (every run
+on its own, the names tallied), ``examples``
 (SYNTHETIC test data made by hesspipe's own simulator).
 """
 
@@ -35,6 +36,7 @@ from ..core.lazy import attach
 __getattr__, __dir__, __all__ = attach(__name__, {
     "DiagnoseConfig": "settings", "Diagnosis": "results", "Step": "results", "diagnose": "workflow",
     "format_report": "report", "plant_check": "checks", "PlantCheck": "checks",
+    "diagnose_each": "each", "RunDiagnoses": "each",
 })
 
 

@@ -1,0 +1,58 @@
+"""Every run on its own (:mod:`hesspipe.diagnose.each`, ``hesspipe diagnose --each``): the
+per-run diagnoses a motion / no-motion check counts. The runs are SYNTHETIC (hesspipe's own
+simulator, :mod:`hesspipe.diagnose.examples`): what is tested is the bookkeeping, each run's
+diagnosis being the one ``diagnose`` gives it alone."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from hesspipe.cli import main
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import write_plants, write_run
+from hesspipe.core.io import to_json
+from hesspipe.diagnose import diagnose, diagnose_each
+from hesspipe.diagnose.examples import hidden_effect_run, validation_plants
+
+
+@pytest.fixture(scope="module")
+def runs():
+    plants = validation_plants()
+    return plants, [hidden_effect_run(plants, effect, seed=seed, duration=30.0)
+                    for effect, seed in ((None, 3), ("remnant", 4))]
+
+
+def test_each_run_is_diagnosed_as_alone_and_the_names_are_tallied(runs):
+    plants, rs = runs
+    each = diagnose_each(rs, plants, seed=5)
+    alone = [diagnose(r, plants, seed=5) for r in rs]
+    assert [to_json(d.to_dict()) for d in each.diagnoses] == [to_json(d.to_dict()) for d in alone]
+    names = [n for d in alone for n in d.named_effects]
+    assert each.tally() == {n: names.count(n) for n in sorted(set(names), key=lambda n: (-names.count(n), n))}
+    assert each.synthetic and each.lines()[0].startswith("*** SYNTHETIC DATA")
+    assert each.lines()[-1] == f"SUMMARY: {each.summary()}"
+    with pytest.raises(HesspipeError, match="each run is diagnosed alone"):
+        diagnose_each(rs, plants, repeat_runs=rs[1:])
+
+
+def test_the_command_diagnoses_a_folder_run_by_run(runs, tmp_path, capsys):
+    plants, rs = runs
+    folder = tmp_path / "static"
+    for r in rs:
+        write_run(folder / f"{r.id}_{id(r) % 1000}.csv", r)
+    (folder / "z_cut.csv").write_text("time,disturbance,output\n0,0,0\n")
+    write_plants(tmp_path / "p.json", plants)
+    code = main(["diagnose", str(folder), "--each", "--plants", str(tmp_path / "p.json"),
+                 "--json", str(tmp_path / "each.json")])
+    out, err = capsys.readouterr()
+    assert code == 1   # a file it could not read
+    assert f"hesspipe: error: {folder / 'z_cut.csv'}: column 'control' missing" in err
+    report = json.loads((tmp_path / "each.json").read_text())
+    assert report["runs"] == 2 and report["failures"][0]["source"] == str(folder / "z_cut.csv")
+    assert report["named"] == diagnose_each(rs, plants).tally()
+    assert f"SUMMARY: {report['summary']}" in out and out.count(" named") >= 2
+    assert main(["diagnose", str(folder), "--each", "--plants", str(tmp_path / "p.json"),
+                 "--figure", str(tmp_path / "x.png")]) == 1
+    assert "--figure: not with --each" in capsys.readouterr().err
