@@ -56,3 +56,17 @@ def test_the_command_diagnoses_a_folder_run_by_run(runs, tmp_path, capsys):
     assert main(["diagnose", str(folder), "--each", "--plants", str(tmp_path / "p.json"),
                  "--figure", str(tmp_path / "x.png")]) == 1
     assert "--figure: not with --each" in capsys.readouterr().err
+    assert main(["diagnose", str(folder), "--each", "--plants", str(tmp_path / "p.json"), "--workers", "0"]) == 1
+    assert "--workers: expected an integer >= 1, got 0" in capsys.readouterr().err
+    assert main(["diagnose", str(folder / "z_cut.csv"), "--plants", str(tmp_path / "p.json"), "--workers", "2"]) == 1
+    assert "--workers: only with --each" in capsys.readouterr().err
+
+
+def test_runs_diagnosed_in_worker_processes_are_the_same(runs):
+    from hesspipe.pilots.batch import run_batch
+
+    plants, rs = runs
+    one = diagnose_each(rs, plants, seed=5)
+    two = diagnose_each(rs, plants, seed=5, mapper=lambda f, items: run_batch(f, items, workers=2))
+    assert [to_json(d.to_dict()) for d in two.diagnoses] == [to_json(d.to_dict()) for d in one.diagnoses]
+    assert two.tally() == one.tally()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 # Imports sit inside the functions: `hesspipe --help` and argument errors load no numpy
 # (tests/test_api.py), and each command loads only its own stage.
+import functools
 import sys
 from dataclasses import replace
 
@@ -46,6 +47,8 @@ def register(sub) -> None:
     p.add_argument("--each", action="store_true",
                    help="diagnose every run on its own (RUN may then be a folder of runs): a line per "
                         "run and how often each effect was named, as a motion / no-motion check counts")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="with --each: local worker processes, a run each at a time (default: all cores)")
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON (with --each: every "
                                                       "run's and the tally, in one file)")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
@@ -54,6 +57,7 @@ def register(sub) -> None:
     add_run_options(p)
     add_terms(p, field_terms("DiagnoseConfig", {"alpha": "--alpha", "max_effects": "--max-effects",
                                                   "max_pilot_delay": "--max-pilot-delay"}))
+    add_terms(p, {r"(^|: )workers: ": r"\1--workers: "})
     add_seed(p, 0, "seed of the remnant draws")
     p.set_defaults(func=_diagnose)
 
@@ -81,6 +85,8 @@ def _diagnose(args) -> int:
 
     if args.each:
         return _each(args, cfg, candidates)
+    if args.workers is not None:
+        raise HesspipeError("--workers: only with --each (one run's diagnosis runs in one process)")
     plants = read_cli_plants(args.plants)
 
     # A file may hold several runs (a starred column name): the two lists are read apart.
@@ -107,17 +113,21 @@ def _each(args, cfg, candidates) -> int:
     from ..core.io import write_json
     from ..core.paper import WELCH_SEGMENT
     from ..diagnose.each import RunDiagnoses, diagnose_each
+    from ..pilots.batch import check_workers, run_batch
     from ..pilots.compare import list_runs, read_runs
     from ._options import cli_message, print_reading, read_cli_plants, run_options
 
     if args.baseline_run or args.figure:
         raise HesspipeError(f"{'--baseline-run' if args.baseline_run else '--figure'}: not with --each, which "
                             "diagnoses every run alone (one figure per run: diagnose the run without --each)")
+    if args.workers is not None:
+        check_workers(args.workers)   # before any work
     plants = read_cli_plants(args.plants)
     paths = [path for arg in args.run for path in list_runs(arg)]
     runs, unread = read_runs(paths, min_samples=WELCH_SEGMENT, **run_options(args))
     print_reading({run.source: run.notes for run in runs})
-    result = diagnose_each(runs, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg)
+    result = diagnose_each(runs, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
+                           mapper=functools.partial(run_batch, workers=args.workers, desc="diagnose", unit="run"))
     unread = tuple((f.source, f.error.removeprefix(f"{f.source}: ")) for f in unread)
     result = RunDiagnoses(result.diagnoses, unread + result.failures)
     print("\n".join(result.lines(failures=False)))

@@ -7,8 +7,9 @@ same seed and settings as ``diagnose`` on that run by itself, and the names are 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence
 
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run, as_runs
@@ -97,7 +98,8 @@ class RunDiagnoses:
                 "failures": [{"source": w, "error": m} for w, m in self.failures]}
 
 
-def diagnose_each(runs: Run | Sequence[Run], plants: Plants, **options) -> RunDiagnoses:
+def diagnose_each(runs: Run | Sequence[Run], plants: Plants, *, mapper: Callable | None = None,
+                  **options) -> RunDiagnoses:
     """Diagnose every run on its own, as :func:`hesspipe.diagnose.workflow.diagnose` would
     one run alone (no repeats, no baseline); a run it cannot diagnose is a failure, not an
     exception.
@@ -108,6 +110,11 @@ def diagnose_each(runs: Run | Sequence[Run], plants: Plants, **options) -> RunDi
         The runs (e.g. a condition's, :func:`hesspipe.core.formats.read_file_runs` of each file).
     plants : Plants
         Yc, Yd and the motion path, shared by every run.
+    mapper : callable, optional
+        ``mapper(func, runs) -> [func(run) for run in runs]`` in order, e.g. in parallel
+        (:func:`hesspipe.pilots.batch.run_batch` with its workers); ``func`` is picklable.
+        Default: one run after another in this process. Each run's diagnosis is the same
+        either way.
     **options
         ``model``, ``candidates``, ``seed``, ``config`` of
         :func:`hesspipe.diagnose.workflow.diagnose`, the same for every run.
@@ -123,11 +130,18 @@ def diagnose_each(runs: Run | Sequence[Run], plants: Plants, **options) -> RunDi
     """
     if {"baseline_run", "repeat_runs"} & set(options):
         raise HesspipeError("options: each run is diagnosed alone; expected no baseline_run or repeat_runs")
-    done, failed = [], []
-    for run in as_runs(runs):
-        try:
-            done.append(diagnose(run, plants, **options))
-        except HesspipeError as exc:
-            where = run.source or run.id
-            failed.append((where, str(exc).removeprefix(f"{where}: ")))
-    return RunDiagnoses(tuple(done), tuple(failed))
+    job = functools.partial(_diagnose_one, plants=plants, options=options)
+    runs = as_runs(runs)
+    results = list(mapper(job, runs)) if mapper is not None else [job(run) for run in runs]
+    return RunDiagnoses(tuple(r for r in results if isinstance(r, Diagnosis)),
+                        tuple(r for r in results if not isinstance(r, Diagnosis)))
+
+
+def _diagnose_one(run: Run, plants: Plants, options: dict):
+    # One run's diagnosis, or (its file, the error) where it has none: module-level, so
+    # that a process pool can pickle it.
+    try:
+        return diagnose(run, plants, **options)
+    except HesspipeError as exc:
+        where = run.source or run.id
+        return where, str(exc).removeprefix(f"{where}: ")
