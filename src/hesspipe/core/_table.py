@@ -9,6 +9,7 @@ their units to SPEC.md's (:data:`hesspipe.core._csv.UNIT_FACTORS`), saying what 
 
 from __future__ import annotations
 
+import functools
 import io as _io
 import re
 import warnings
@@ -173,6 +174,7 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
         raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip() for c in df.columns]
 
+    @functools.lru_cache(maxsize=None)   # a file of several runs asks once per run
     def written(col: str) -> np.ndarray:
         return pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
                            usecols=[col], dtype=str, engine=engine)[col].to_numpy()
@@ -241,16 +243,16 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str]) -> Ta
             if role in optional:
                 continue
             label = f" (role {role})" if role != name else ""
+            what = "POSITION" if positional else "NAME"
+            tail = (f"; map {'them' if positional else 'other names'} with {hint} {role}={what}" if hint else "") \
+                + also.get(role, "")
             if others is not None:
-                tail = (f"; map other names with {hint} {role}=NAME" if hint else "") + also.get(role, "")
                 left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
                 raise HesspipeError(f"{path}: variable '{name}' missing{label}; found variables: "
                                     f"{', '.join(headers)}{left}{tail}")
             if positional:
-                tail = (f"; map them with {hint} {role}=POSITION" if hint else "") + also.get(role, "")
                 raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "
                                     f"row, its columns are named by position 1-{len(headers)}{tail}")
-            tail = (f"; map other names with {hint} {role}=NAME" if hint else "") + also.get(role, "")
             raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
                                 f"{', '.join(headers)}{tail}")
         data[role], used[role] = _numeric(df[col], decimal), col
