@@ -127,6 +127,38 @@ def test_non_uniform_time_fails_unless_resampled(tmp_path):
     np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(101), rtol=1e-9, atol=1e-9)
 
 
+def test_a_missed_frame_is_refused_unless_resampled_then_interpolated(tmp_path):
+    # A logger that misses a frame leaves empty cells (or NaN) between complete rows; a
+    # row may lose its time too. Built records, linear in time: interpolation is exact.
+    header = ("time", "disturbance", "output", "control")
+    rows = _rows(n=101)
+    rows[30] = (rows[30][0], "", "NaN", rows[30][3])
+    rows[31] = (rows[31][0], "", rows[31][2], rows[31][3])
+    rows[60] = ("", rows[60][1], rows[60][2], rows[60][3])
+    path = _csv(tmp_path / "g.csv", header, rows)
+    with pytest.raises(HesspipeError, match=r"g.csv: column 'disturbance': expected finite numbers, got an "
+                                            r"empty or NaN cell in data row 31; set resample to interpolate"):
+        read_run(path)
+    run = read_run(path, resample=True)
+    assert len(run) == 101
+    np.testing.assert_allclose(run.time, 0.02 * np.arange(101), atol=1e-12)
+    np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(101), atol=1e-9)
+    np.testing.assert_allclose(run.output, 0.01 * np.arange(101), atol=1e-9)
+    note = next(n for n in run.notes if n.startswith("missing samples"))
+    assert "1 row(s) without a time left out" in note, note
+    assert "'disturbance' 2, 'output' 1; at most 2 in a row" in note, note
+    # Text in a cell (a header repeated where two logs were joined) is no missed frame.
+    rows[80] = ("time", "disturbance", "output", "control")
+    _csv(path, header, rows)
+    with pytest.raises(HesspipeError, match=r"column 'time': expected finite numbers, got 'time' in data "
+                                            r"row 81$"):
+        read_run(path, resample=True)
+    # Without times, at the sample rate given, a missing cell is filled in sample number.
+    _csv(path, header[1:], [r[1:] for r in rows[:60]])
+    run = read_run(path, resample=True, sample_rate=50.0)
+    np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(60), atol=1e-9)
+
+
 def test_time_must_increase(tmp_path):
     rows = _rows()
     rows[10] = (rows[9][0],) + rows[10][1:]
@@ -232,6 +264,14 @@ def test_implausible_interval_and_overflowing_values_refused(tmp_path):
     ms = _time_csv(tmp_path / "ms.csv", [str(20 * i) for i in range(50)])
     with pytest.raises(HesspipeError, match=r"sample interval 20 s .*implausible.*milliseconds"):
         read_run(ms)
+    # Seconds under a header that says milliseconds: 0.01 ms intervals, a 100 kHz "run".
+    secs = _csv(tmp_path / "secs.csv", ("time [ms]", "disturbance", "output", "control"),
+                [(0.01 * i, i, 0.1 * i, -i) for i in range(50)])
+    with pytest.raises(HesspipeError, match=r"column 'time \[ms\]': sample interval 1e-05 s \(1e\+05 Hz\) is "
+                                            r"implausible.*at least 0.0001 s \(the column says milliseconds"):
+        read_run(secs)
+    with pytest.raises(HesspipeError, match=r"^sample_rate: expected a number of Hz from 1 to 10000, got 20000"):
+        read_run(secs, sample_rate=20000)
     rows = [(0.02 * i, 1e300, 0.0, 1e300 * (i % 2)) for i in range(50)]
     big = _csv(tmp_path / "big.csv", ("time", "disturbance", "output", "control"), rows)
     with pytest.raises(HesspipeError, match=r"column 'disturbance': values up to 1e\+300 overflow"):

@@ -102,6 +102,26 @@ def test_starred_names_that_do_not_find_the_same_runs_are_refused(tmp_path):
         read_file_runs(tmp_path / "twice.csv", columns="control=u*")
 
 
+def test_a_forcing_saved_once_serves_every_run_a_measured_signal_does_not(tmp_path):
+    # One mapping for a folder whose sessions saved the target once (ft) or per run (ft:k).
+    path = tmp_path / "s02.mat"
+    s = signals()
+    savemat(path, {"t": s["time"], "fd": s["disturbance"], "ft": s["reference"],
+                   "x": np.outer(s["output"], [1, 2]), "u": np.outer(s["control"], [1, 2])})
+    runs = read_file_runs(path, columns=STARRED)
+    assert [r.id for r in runs] == ["s02#1", "s02#2"]
+    for k, run in enumerate(runs, 1):
+        np.testing.assert_allclose(run.reference, s["reference"], rtol=1e-12)
+        np.testing.assert_allclose(run.control, k * s["control"], rtol=1e-12)
+        assert run.notes[-1].endswith("(output x:*, control u:*); reference 'ft' saved once, the same for "
+                                      "every run"), run.notes[-1]
+    # The person's own signals are never shared: a control saved once is no run's control.
+    savemat(path, {"t": s["time"], "fd": s["disturbance"], "ft": s["reference"],
+                   "x": np.outer(s["output"], [1, 2]), "u": s["control"]})
+    with pytest.raises(HesspipeError, match=r"s02.mat: no column matches 'u:\*' \(role control"):
+        read_file_runs(path, columns=STARRED)
+
+
 def test_a_single_run_file_beside_them_keeps_its_plain_names(tmp_path):
     # A folder's mapping written for its sessions: a file of one run under the roles' own names
     # is that one run, as an unstarred mapping falls back to them.
@@ -229,7 +249,7 @@ def test_a_file_without_times_is_read_at_the_sample_rate_given(tmp_path, capsys)
                                             r"given, 60 Hz"):
         read_run(tmp_path / "s07.mat", columns=timed, sample_rate=60)
     for bad in (0.5, float("nan"), "100", True):
-        with pytest.raises(HesspipeError, match=r"^sample_rate: expected a number of Hz >= 1"):
+        with pytest.raises(HesspipeError, match=r"^sample_rate: expected a number of Hz from 1 to 10000"):
             read_run(tmp_path / "s07.mat", columns=timed, sample_rate=bad)
     # The command line names its own option.
     from hesspipe.core.formats import write_plants

@@ -33,7 +33,8 @@ class Table:
     Attributes
     ----------
     data : dict of str to ndarray
-        Role → float array in SPEC.md's units (all finite).
+        Role → float array in SPEC.md's units (all finite, unless the reader was asked to
+        keep missing cells: NaN there).
     comments : tuple of str
         The file's ``#`` comment lines, without the ``#``.
     columns : dict of str to str
@@ -183,7 +184,8 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
 
 
 def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(), what: str = "a CSV",
-               hint: str | None = None, also: Mapping[str, str] | None = None) -> Table:
+               hint: str | None = None, also: Mapping[str, str] | None = None,
+               gaps: bool = False, gaps_hint: str = "") -> Table:
     """Read numeric columns by role from a delimited text file with ``#`` comment lines.
 
     Parameters
@@ -204,6 +206,11 @@ def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(
         e.g. "columns": "map other names with columns control=NAME").
     also : mapping, optional
         Role → what else a missing column's message says (another remedy).
+    gaps : bool
+        Keep a cell that is empty or not a number between complete rows (a sample the
+        logger missed) as NaN for the caller to fill; by default it is an error.
+    gaps_hint : str
+        What that error says besides (the remedy, e.g. "; set resample to ...").
 
     Returns
     -------
@@ -215,10 +222,10 @@ def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(
         Naming the file, the column and the problem.
     """
     frame = path if isinstance(path, Frame) else read_frame(path, what)
-    return _by_role(frame, names, optional, hint, also or {})
+    return _by_role(frame, names, optional, hint, also or {}, gaps_hint if not gaps else None)
 
 
-def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str]) -> Table:
+def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refuse_gaps: str | None) -> Table:
     """:func:`read_table`'s columns found by role in `frame`, checked and converted."""
     path, df, decimal, written = frame.path, frame.df, frame.decimal, frame.written
     others, positional, comments = frame.others, frame.positional, frame.comments
@@ -262,15 +269,21 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str]) -> Ta
                 data[role] = clock
                 notes.append(f"column '{col}' ({role}): clock times read as seconds from the first")
     first, stop = _complete_rows(data)
-    bad = {role: first + int(np.argmax(~np.isfinite(v[first:stop]))) for role, v in data.items()
-           if not np.isfinite(v[first:stop]).all()}
+    bad = {}
+    for role, v in data.items():
+        rows = first + np.flatnonzero(~np.isfinite(v[first:stop]))
+        if refuse_gaps is None:   # kept: a missed frame's empty cells, never a cell of text
+            rows = rows[~_empty(df[used[role]].iloc[rows])]
+        if rows.size:
+            bad[role] = int(rows[0])
     if bad:
         role = min(bad, key=lambda r: bad[r])   # the earliest bad value in the file
         col, row = used[role], bad[role]
         value = df[col].iloc[row]
-        got = "an empty or NaN cell" if pd.isna(value) else repr(value)
+        empty = bool(_empty(df[col].iloc[[row]])[0])
+        got = "an empty or NaN cell" if empty else repr(value)
         raise HesspipeError(f"{path}: column '{col}': expected finite numbers, got {got} "
-                            f"in data row {row + 1}")
+                            f"in data row {row + 1}{refuse_gaps if empty else ''}")
     if (first, stop) != (0, len(df)):
         notes.append(f"dropped {first} incomplete row(s) at the start and {len(df) - stop} at the end "
                      f"(a value missing or not a number); data rows {first + 1}-{stop} read")
@@ -333,6 +346,16 @@ def _clock(column: pd.Series) -> np.ndarray | None:
     return sec - first
 
 
+#: Cells a logger writes for a sample it has not got (lower case, stripped).
+_EMPTY_CELLS = frozenset({"", "nan", "-nan", "na", "n/a", "null", "none"})
+
+
+def _empty(cells: pd.Series) -> np.ndarray:
+    """True where a cell is empty or says not-a-number (a missed sample), not text."""
+    text = cells.astype(str).str.strip().str.strip('"').str.lower()
+    return (cells.isna() | text.isin(_EMPTY_CELLS)).to_numpy(dtype=bool)
+
+
 def _numeric(column: pd.Series, decimal: str) -> np.ndarray:
     """Floats of a column, NaN where a cell is not a number. pandas applies a decimal comma
     only to columns it reads as numbers: one text cell (``---``, a units row) leaves the
@@ -360,6 +383,9 @@ def _complete_rows(data: Mapping[str, np.ndarray]) -> tuple[int, int]:
 
 #: In a mapped column name, the run's number: ``x:*`` is ``x:1``, ``x:2``, ... (one run each).
 RUN_NUMBER = "*"
+#: Roles a session's runs may share (the clock, the forcing every run was given): a starred
+#: name for one of them that finds no numbered columns reads the column without the star.
+SHARED_ROLES = ("time", "reference", "disturbance")
 #: The star and what binds it to the name (``x:*``, ``trial(*).u``, ``u_*``): removed, the name a
 #: file of one run has.
 _UNSTARRED = re.compile(r"\(\*\)|[:_. -]?\*")
@@ -391,7 +417,9 @@ def run_columns(frame: Frame, names: Mapping[str, str], *, optional=(),
         Per run its number and role → column name, by number; ``[(0, names)]`` when no name
         holds a star, or when none of the starred names is in the file and each is there
         without its star (``x`` for ``x:*``: MATLAB's vector of a session of one run) or under
-        its role's own name (a folder's single-run files beside its multi-run ones).
+        its role's own name (a folder's single-run files beside its multi-run ones). A
+        starred name of a role in :data:`SHARED_ROLES` that finds no numbered columns while
+        the others do reads the name without the star for every run (the forcing saved once).
 
     Raises
     ------
@@ -427,6 +455,12 @@ def run_columns(frame: Frame, names: Mapping[str, str], *, optional=(),
                    for role, name in plain.items()):
                 return [(0, {**names, **plain})]
     for role, runs in found.items():
+        shared = _match(frame.path, headers, role, _UNSTARRED.sub("", starred[role]).lstrip("-").strip())
+        if not runs and role in SHARED_ROLES and shared is not None and any(found.values()):
+            # The forcing saved once for every run of the session (ft beside x:1..x:5).
+            found[role] = {k: ("-" if starred[role].startswith("-") else "") + shared
+                           for k in next(r for r in found.values() if r)}
+            continue
         if not runs:
             tail = f"; map other names with {hint} {role}=NAME" if hint else ""
             raise HesspipeError(f"{frame.path}: no column matches '{starred[role]}' (role {role}, "

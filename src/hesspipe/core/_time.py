@@ -17,10 +17,20 @@ UNIFORM_RTOL = 1e-4
 #: Longest sample interval of a plausible tracking run, s (a time column in
 #: milliseconds read as seconds gives 10-20 s intervals).
 MAX_INTERVAL_S = 1.0
+#: Shortest sample interval of a plausible tracking run, s (10 kHz; seconds labelled as
+#: milliseconds give 1e-5 s). A run of the longest length accepted lasts 26 s there.
+MIN_INTERVAL_S = 1e-4
 
 
 def _check_plausible(path, column: str, dt: float) -> None:
-    """Refuse sample intervals no tracking run has (usually times in milliseconds)."""
+    """Refuse sample intervals no tracking run has (usually times in milliseconds read as
+    seconds, or seconds labelled as milliseconds)."""
+    if dt < MIN_INTERVAL_S:
+        hint = (" (the column says milliseconds: are its values seconds?)"
+                if "ms" in column.lower().replace(" ", "") else "")
+        raise HesspipeError(f"{path}: column '{column}': sample interval {dt:g} s "
+                            f"({1.0 / dt:.3g} Hz) is implausible for a tracking run; expected "
+                            f"an interval of at least {MIN_INTERVAL_S:g} s{hint}")
     if dt > MAX_INTERVAL_S:
         hint = (" (the time column looks like milliseconds: write it in seconds)"
                 if 1.0 < dt <= 100.0 else "")
@@ -106,3 +116,49 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     if slope > 0 and np.all(np.abs(steps - slope) <= rtol * slope + rounding):
         return slope, True
     return float(np.median(steps)), False
+
+
+def fill_missing(data: dict, columns: dict) -> tuple[dict, tuple[str, ...]]:
+    """A run's missing samples filled, and what was done, in a note.
+
+    A logger that misses a frame leaves an empty cell or ``NaN`` between complete rows. A
+    row whose time is missing is left out (the uniform grid is then resampled over it); a
+    signal's missing cell is interpolated linearly between its neighbours in time (in
+    sample number without a time column).
+
+    Parameters
+    ----------
+    data : dict of str to ndarray
+        Role → values, NaN where a cell was missing; complete first and last rows.
+    columns : dict of str to str
+        Role → the header the values came from (for the note).
+
+    Returns
+    -------
+    data : dict of str to ndarray
+        Finite everywhere.
+    notes : tuple of str
+        Empty when nothing was missing.
+    """
+    if all(np.isfinite(v).all() for v in data.values()):
+        return data, ()
+    notes = []
+    if "time" in data and not np.isfinite(data["time"]).all():
+        keep = np.isfinite(data["time"])
+        data = {role: v[keep] for role, v in data.items()}
+        notes.append(f"{int((~keep).sum())} row(s) without a time left out")
+    x = data["time"] if "time" in data else np.arange(len(next(iter(data.values()))), dtype=float)
+    filled, longest = [], 0
+    for role, v in list(data.items()):
+        ok = np.isfinite(v)
+        if ok.all():
+            continue
+        data[role] = v.copy()
+        data[role][~ok] = np.interp(x[~ok], x[ok], v[ok])
+        filled.append(f"'{columns[role]}' {int((~ok).sum())}")
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], (~ok).astype(int), [0]))))
+        longest = max(longest, int(np.max(edges[1::2] - edges[::2])))
+    if filled:
+        notes.append(f"cells empty or not a number between complete rows interpolated linearly "
+                     f"({', '.join(filled)}; at most {longest} in a row)")
+    return data, ("missing samples: " + "; ".join(notes),)

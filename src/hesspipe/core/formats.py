@@ -31,7 +31,15 @@ from ._plants import Plants, plants_coefficients, read_plants, write_plants  # n
 from ._table import RUN_NUMBER, read_frame, read_table, run_columns
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
 from ._tf import tf_coefficients as tf_coefficients  # re-exported: the plants report and the flight use it
-from ._time import MAX_INTERVAL_S, UNIFORM_RTOL, _check_plausible, _intercept, sample_interval
+from ._time import (
+    MAX_INTERVAL_S,
+    MIN_INTERVAL_S,
+    UNIFORM_RTOL,
+    _check_plausible,
+    _intercept,
+    fill_missing,
+    sample_interval,
+)
 from .errors import HesspipeError
 from .io import write_text
 from .paper import WELCH_SEGMENT
@@ -216,7 +224,9 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
         number, :func:`read_file_runs`) must find one run here.
     resample : bool
         If the time column is not uniform, resample all signals linearly to
-        the median interval instead of failing.
+        the median interval instead of failing; a cell left empty or not a number between
+        complete rows (a missed frame) is then interpolated too (a row without a time
+        left out).
     min_samples : int
         Fewest samples accepted (callers pass what their spectra need).
     rtol : float
@@ -289,16 +299,20 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     each = run_columns(frame, names, optional=optional, hint="columns")
     runs = []
     for k, run_names in each:
-        table = read_table(frame, run_names, optional=optional, hint="columns", also=also)
+        table = read_table(frame, run_names, optional=optional, hint="columns", also=also, gaps=resample,
+                           gaps_hint="; set resample to interpolate over a missing sample")
         where = Path(f"{path}#{k}") if len(each) > 1 else path
         run = _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
                               sample_rate=fs)
         if len(each) > 1:
-            cols = ", ".join(f"{role} {names[role]}" for role in RUN_COLUMNS + OPTIONAL_COLUMNS
-                             if RUN_NUMBER in names[role])
+            starred = [role for role in RUN_COLUMNS + OPTIONAL_COLUMNS if RUN_NUMBER in names[role]]
+            once = [role for role in starred if len({m[role] for _, m in each}) == 1]
+            cols = ", ".join(f"{role} {names[role]}" for role in starred if role not in once)
+            also_once = "".join(f"; {role} '{run_names[role].lstrip('-')}' saved once, the same for every run"
+                                for role in once)
             run = replace(run, id=f"{path.stem}#{k}", number=k,
                           notes=run.notes + (f"{len(each)} runs in the file, read as PATH#NUMBER from the "
-                                             f"columns numbered in place of '{RUN_NUMBER}' ({cols})",))
+                                             f"columns numbered in place of '{RUN_NUMBER}' ({cols}){also_once}",))
         runs.append(run)
     return runs
 
@@ -306,7 +320,8 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
 def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol: float,
                     sample_rate: float | None) -> Run:
     """:func:`read_file_runs`'s checks of one run's columns, and the run (named after `path`)."""
-    data, comments, notes = table.data, table.comments, table.notes
+    data, filled = fill_missing(dict(table.data), table.columns)
+    comments, notes = table.comments, table.notes + filled
     n = len(data["output"])
     if n < max(min_samples, 2):
         raise HesspipeError(f"{path}: {n} samples; expected at least {max(min_samples, 2)}")
@@ -326,7 +341,10 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
         return _run(path, data, comments, notes, 1.0 / sample_rate)
     t = data["time"]
     tcol = table.columns["time"]
-    dt, uniform = sample_interval(path, t, tcol, rtol=rtol, resolution=table.resolution.get("time"))
+    resolution = table.resolution.get("time")
+    if resolution is not None and resolution.size != t.size:   # rows without a time left out
+        resolution = resolution[np.isfinite(table.data["time"])]
+    dt, uniform = sample_interval(path, t, tcol, rtol=rtol, resolution=resolution)
     if sample_rate is not None and abs(dt * sample_rate - 1.0) > 1e-3:
         raise HesspipeError(f"{path}: column '{tcol}': samples at {1.0 / dt:.6g} Hz; expected the sample rate "
                             f"given, {sample_rate:g} Hz (a file's own times are used where it has them)")
@@ -361,7 +379,8 @@ def _run(path: Path, data: dict, comments: tuple, notes: tuple, dt: float) -> Ru
 
 def check_sample_rate(sample_rate) -> float | None:
     """`sample_rate` (Hz) checked: None, or a finite number whose interval a tracking run can
-    have (at most :data:`hesspipe.core._time.MAX_INTERVAL_S`).
+    have (:data:`hesspipe.core._time.MIN_INTERVAL_S` to
+    :data:`hesspipe.core._time.MAX_INTERVAL_S`).
 
     Parameters
     ----------
@@ -380,8 +399,9 @@ def check_sample_rate(sample_rate) -> float | None:
     if sample_rate is None:
         return None
     if isinstance(sample_rate, bool) or not isinstance(sample_rate, (int, float)) or not math.isfinite(sample_rate) \
-            or sample_rate * MAX_INTERVAL_S < 1.0:
-        raise HesspipeError(f"sample_rate: expected a number of Hz >= {1.0 / MAX_INTERVAL_S:g}, got {sample_rate!r}")
+            or sample_rate * MAX_INTERVAL_S < 1.0 or sample_rate * MIN_INTERVAL_S > 1.0:
+        raise HesspipeError(f"sample_rate: expected a number of Hz from {1.0 / MAX_INTERVAL_S:g} to "
+                            f"{1.0 / MIN_INTERVAL_S:g}, got {sample_rate!r}")
     return float(sample_rate)
 
 
