@@ -49,6 +49,12 @@ def test_retest_keeps_the_pilot_and_the_aircraft_and_draws_a_new_run():
     assert retest(spec, 8, effects=()).pilot == again.pilot           # seeded
     with pytest.raises(HesspipeError, match="pilot-side"):
         retest(spec, 8, effects=("dutch_roll",))
+    # The logger too: a run-in and fade-out logged on the first run are logged on the second.
+    logged = draw_trial("roll", 7, task="both", pilot="hess", effects=(), fs=50.0, T_m=70.0,
+                        logged_run_in=5.0, logged_run_out=2.0)
+    again = retest(logged, 8)
+    assert {k: again.options[k] for k in ("run_in", "logged_run_in", "logged_run_out")} == {
+        k: logged.options[k] for k in ("run_in", "logged_run_in", "logged_run_out")}
 
 
 def test_extra_delay_is_named_against_the_baseline_run_and_not_without_one(tmp_path):

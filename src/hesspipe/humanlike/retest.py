@@ -78,6 +78,13 @@ def retest(spec: TrialSpec, seed: int, *, effects=None, name: str | None = None)
     if "motion_feedback" not in pilot_side:
         p["Km"] = 0.0
     over = {k: spec.options[k] for k in _OPTIONS if k in spec.options}
+    for key in ("logged_run_in", "logged_run_out"):
+        if spec.options.get(key):
+            over[key] = spec.options[key]
+    if spec.options.get("logged_run_in"):
+        # The logger starts as long before the measurement as on the first run, so the
+        # run-in it logs is the first run's too.
+        over["run_in"] = spec.options["run_in"]
     if "actuator_lag" in aircraft:
         over["actuator_tau"] = spec.actuator["tau"]
     if "rate_limit" in aircraft:
