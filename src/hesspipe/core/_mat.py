@@ -8,8 +8,9 @@ fields ``STRUCT.FIELD``, the elements of a struct or cell array ``NAME(i).FIELD`
 ``NAME(i)`` (several runs saved together: one is read at a time), and a labelled signal
 (dSPACE's ``Y(i).Name``/``.Data``/``.Unit``, Simulink's ``signals(i).label``/``.values``) also
 under its label, with its unit; text variables are the file's comments. A MAT file holds no
-units of its own: values are read as written, unless a label states one. Version 7.3 files are HDF5, which scipy does not read; they are
-refused with the remedy.
+units of its own: values are read as written, unless a label states one. Version 7.3 files
+are HDF5 in MATLAB's layout, which scipy does not read: :mod:`hesspipe.core._mat73` reads
+them into the same variables.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import numpy as np
 import pandas as pd
 from scipy import io as _sio
 
+from ._mat73 import hdf5_content
 from .errors import HesspipeError
 from .io import read_bytes
 
@@ -50,15 +52,14 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
     Raises
     ------
     HesspipeError
-        Naming the file: missing, not a MAT file, a version 7.3 file, no numeric vector in it.
+        Naming the file: missing, not a MAT file, no numeric vector in it.
     """
     path = Path(path)
     raw = read_bytes(path, "a MATLAB file")
     try:
         content = _sio.loadmat(_io.BytesIO(raw), squeeze_me=True, simplify_cells=True)
-    except NotImplementedError:
-        raise HesspipeError(f"{path}: a MATLAB version 7.3 (HDF5) file, which hesspipe does not read; "
-                            "expected versions 4 to 7: save it with -v7, or as text") from None
+    except NotImplementedError:   # version 7.3: HDF5
+        content = hdf5_content(raw, path)
     except (_sio.matlab.MatReadError, ValueError, TypeError, OSError, EOFError) as exc:
         raise HesspipeError(f"{path}: not a readable MATLAB file ({str(exc).splitlines()[0][:80]}); "
                             "expected a MAT file of versions 4 to 7") from None
@@ -119,6 +120,8 @@ def _collect(name: str, value, columns: dict, comments: list, labels: dict) -> N
             alias = (m.group(1) if m else alias, f" [{unit}]" if unit else "")
             labels[alias] = None if alias in labels else f"{name}.{data}"
         return
+    if isinstance(value, np.ndarray) and value.dtype == object:
+        value = list(value.ravel(order="F"))   # a cell array scipy left as objects
     if isinstance(value, list):   # a struct array or a cell array: NAME(1), NAME(2), ...
         for i, sub in enumerate(value, 1):
             _collect(f"{name}({i})", sub, columns, comments, labels)
