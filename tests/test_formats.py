@@ -264,13 +264,18 @@ def test_implausible_interval_and_overflowing_values_refused(tmp_path):
     ms = _time_csv(tmp_path / "ms.csv", [str(20 * i) for i in range(50)])
     with pytest.raises(HesspipeError, match=r"sample interval 20 s .*implausible.*milliseconds"):
         read_run(ms)
+    # Sample numbers (or milliseconds at 1 kHz) in the time column: 1 Hz is no tracking run.
+    frames = _time_csv(tmp_path / "frames.csv", [str(i) for i in range(50)])
+    with pytest.raises(HesspipeError, match=r"sample interval 1 s \(1 Hz\) is implausible.*at most 0.1 s \(the times "
+                                            r"are whole numbers, one apart: sample numbers, or milliseconds\?"):
+        read_run(frames)
     # Seconds under a header that says milliseconds: 0.01 ms intervals, a 100 kHz "run".
     secs = _csv(tmp_path / "secs.csv", ("time [ms]", "disturbance", "output", "control"),
                 [(0.01 * i, i, 0.1 * i, -i) for i in range(50)])
     with pytest.raises(HesspipeError, match=r"column 'time \[ms\]': sample interval 1e-05 s \(1e\+05 Hz\) is "
                                             r"implausible.*at least 0.0001 s \(the column says milliseconds"):
         read_run(secs)
-    with pytest.raises(HesspipeError, match=r"^sample_rate: expected a number of Hz from 1 to 10000, got 20000"):
+    with pytest.raises(HesspipeError, match=r"^sample_rate: expected a number of Hz from 10 to 10000, got 20000"):
         read_run(secs, sample_rate=20000)
     rows = [(0.02 * i, 1e300, 0.0, 1e300 * (i % 2)) for i in range(50)]
     big = _csv(tmp_path / "big.csv", ("time", "disturbance", "output", "control"), rows)

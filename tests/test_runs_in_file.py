@@ -249,7 +249,7 @@ def test_a_file_without_times_is_read_at_the_sample_rate_given(tmp_path, capsys)
                                             r"given, 60 Hz"):
         read_run(tmp_path / "s07.mat", columns=timed, sample_rate=60)
     for bad in (0.5, float("nan"), "100", True):
-        with pytest.raises(HesspipeError, match=r"^sample_rate: expected a number of Hz from 1 to 10000"):
+        with pytest.raises(HesspipeError, match=r"^sample_rate: expected a number of Hz from 10 to 10000"):
             read_run(tmp_path / "s07.mat", columns=timed, sample_rate=bad)
     # The command line names its own option.
     from hesspipe.core.formats import write_plants

@@ -14,17 +14,19 @@ from .errors import HesspipeError
 #: "Uniform" sampling (SPEC.md "Time"): every interval within this fraction of the
 #: interval, beyond what the precision the times are written with explains.
 UNIFORM_RTOL = 1e-4
-#: Longest sample interval of a plausible tracking run, s (a time column in
-#: milliseconds read as seconds gives 10-20 s intervals).
-MAX_INTERVAL_S = 1.0
+#: Longest sample interval of a plausible tracking run, s (10 Hz: the paper's fitness band
+#: reaches 5 Hz). Sample numbers, or milliseconds at 1 kHz, read as seconds give 1 s;
+#: milliseconds at 50-100 Hz give 10-20 s.
+MAX_INTERVAL_S = 0.1
 #: Shortest sample interval of a plausible tracking run, s (10 kHz; seconds labelled as
 #: milliseconds give 1e-5 s). A run of the longest length accepted lasts 26 s there.
 MIN_INTERVAL_S = 1e-4
 
 
-def _check_plausible(path, column: str, dt: float) -> None:
+def _check_plausible(path, column: str, dt: float, t: np.ndarray | None = None) -> None:
     """Refuse sample intervals no tracking run has (usually times in milliseconds read as
-    seconds, or seconds labelled as milliseconds)."""
+    seconds, sample numbers, or seconds labelled as milliseconds); `t`, the times read,
+    tells whole numbers apart."""
     if dt < MIN_INTERVAL_S:
         hint = (" (the column says milliseconds: are its values seconds?)"
                 if "ms" in column.lower().replace(" ", "") else "")
@@ -32,7 +34,10 @@ def _check_plausible(path, column: str, dt: float) -> None:
                             f"({1.0 / dt:.3g} Hz) is implausible for a tracking run; expected "
                             f"an interval of at least {MIN_INTERVAL_S:g} s{hint}")
     if dt > MAX_INTERVAL_S:
-        hint = (" (the time column looks like milliseconds: write it in seconds)"
+        whole = t is not None and bool(np.all(t == np.round(t)))
+        hint = (" (the times are whole numbers, one apart: sample numbers, or milliseconds? write "
+                "seconds, or map no time column and give the sample rate (sample_rate))" if whole and dt == 1.0
+                else " (the time column looks like milliseconds: write it in seconds)"
                 if 1.0 < dt <= 100.0 else "")
         raise HesspipeError(f"{path}: column '{column}': sample interval {dt:g} s "
                             f"({1.0 / dt:.3g} Hz) is implausible for a tracking run; expected "

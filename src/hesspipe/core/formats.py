@@ -364,7 +364,7 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
                   f"linearly onto a uniform {dt:.9g} s grid ({n} samples read, {grid.size} kept)",)
     else:
         data["time"] = t[0] + dt * np.arange(n, dtype=float) + _intercept(t, dt)
-    _check_plausible(path, tcol, dt)
+    _check_plausible(path, tcol, dt, t)
     return _run(path, data, comments, notes, dt)
 
 
