@@ -53,10 +53,11 @@ def add_run_options(parser: argparse.ArgumentParser) -> None:
                         help="map other column names, e.g. control=stick,output=p (a file without a "
                              "header row: by position, time=1,control=4; a .mat file: by variable, "
                              "time=t,control=u; a file of several runs, a column each: '*' for the "
-                             "run's number, output=x:*,control=u:*)")
+                             "run's number, output=x:*,control=u:*; runs one after another in a long "
+                             "table: the columns that tell them apart, person=Subject,run=Trial)")
     parser.add_argument("--resample", action="store_true",
-                        help="interpolate a non-uniform time column onto a uniform grid "
-                             "(default: refuse it)")
+                        help="interpolate a non-uniform time column onto a uniform grid, and a "
+                             "missed sample (an empty or NaN cell) (default: refuse them)")
     parser.add_argument("--sample-rate", type=float, metavar="HZ",
                         help="sample rate of files without a time column (sample k at k/HZ s); "
                              "a file with times must agree with it")

@@ -91,6 +91,11 @@ def _diagnose(args) -> int:
 
     # A file may hold several runs (a starred column name): the two lists are read apart.
     run, *repeats = read_cli_runs(args.run, args, min_samples=WELCH_SEGMENT)
+    persons = list(dict.fromkeys(r.person for r in (run, *repeats) if r.person))
+    if len(persons) > 1:   # a long table of several persons: repeats are one person's runs
+        raise HesspipeError(f"{args.run[0]}: runs of {len(persons)} persons ({', '.join(persons[:4])}"
+                            f"{', ...' if len(persons) > 4 else ''}); expected one person's runs, the run and "
+                            "its repeats: diagnose every run alone with --each")
     base = None if args.baseline_run is None else read_cli_runs(args.baseline_run, args, min_samples=WELCH_SEGMENT)
     result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
                       baseline_run=base, repeat_runs=repeats)

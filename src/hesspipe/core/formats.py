@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ._csv import unwrap_turns
+from ._long import KEY_COLUMNS, row_groups
 from ._plants import Plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
 from ._table import RUN_NUMBER, read_frame, read_table, run_columns
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
@@ -90,7 +91,10 @@ class Run:
         converted), one sentence each.
     number : int
         The run's number in a file holding several (:func:`read_file_runs`; its id is then
-        ``STEM#number``); 0 when the file is this one run.
+        ``STEM#number``, or in a long table ``STEM#PERSON#RUN`` from its key columns' values);
+        0 when the file is this one run.
+    person : str
+        The person a long table's ``person`` key column names ("" otherwise).
     """
 
     time: np.ndarray
@@ -105,6 +109,7 @@ class Run:
     interval: float = 0.0
     notes: tuple[str, ...] = ()
     number: int = 0
+    person: str = ""
 
     @property
     def dt(self) -> float:
@@ -136,9 +141,10 @@ class Run:
 
     @property
     def file_id(self) -> str:
-        """The id of the file the run was read from: the id less ``#number`` (one person's
-        runs, by default, where a file holds several)."""
-        return self.id[:-len(f"#{self.number}")] if self.number else self.id
+        """Whose run this is when no pattern says: a long table's person (``s01``, the same
+        in every file), else the id of the file it was read from (the id less ``#number``:
+        a file's runs are one person's)."""
+        return self.person or (self.id.rpartition("#")[0] if self.number else self.id)
 
     def __len__(self) -> int:
         return len(self.time)
@@ -181,11 +187,14 @@ def _parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
             role, name = (s.strip() for s in item.split("=", 1))
             pairs[role] = name
     for role in pairs:
-        if role not in RUN_COLUMNS + OPTIONAL_COLUMNS:
+        if role not in RUN_COLUMNS + OPTIONAL_COLUMNS + KEY_COLUMNS:
             raise HesspipeError(f"columns: unknown role {role!r}; expected one of "
-                                f"{', '.join(RUN_COLUMNS + OPTIONAL_COLUMNS)}")
+                                f"{', '.join(RUN_COLUMNS + OPTIONAL_COLUMNS + KEY_COLUMNS)}")
         if not isinstance(pairs[role], str) or not pairs[role].strip():
             raise HesspipeError(f"columns: role {role!r}: expected a column name, got {pairs[role]!r}")
+        if role in KEY_COLUMNS and RUN_NUMBER in pairs[role]:
+            raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r}: expected the name of the column "
+                                "whose values tell runs apart, without '*'")
         if pairs[role].count(RUN_NUMBER) > 1:
             raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r} holds {pairs[role].count(RUN_NUMBER)} "
                                 f"'{RUN_NUMBER}'; expected at most one, standing for a run's number")
@@ -261,23 +270,28 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     (``trial(3).u``) or as numbered columns (``u1``, ``u2``, ...). A mapped name holding
     ``*`` stands for the run's number (:data:`hesspipe.core._table.RUN_NUMBER`):
     ``output=x:*,control=u:*`` reads one run per number; a name without it (the time, the
-    forcing) is shared by every run. Without a star the file is one run, as
-    :func:`read_run` reads it.
+    forcing) is shared by every run. A long table holds its runs one after another, its
+    rows keyed by the columns mapped as ``person`` and ``run``
+    (:data:`hesspipe.core._long.KEY_COLUMNS`): ``person=Subject,run=Trial`` reads one run per
+    pair of values, ``STEM#s01#3``. Otherwise the file is one run, as :func:`read_run`
+    reads it.
 
     Parameters
     ----------
     path : path
         A run file (:func:`read_run`).
     columns : str or mapping, optional
-        Role → column-name mapping (:func:`read_run`), a name possibly with one ``*``.
+        Role → column-name mapping (:func:`read_run`), a name possibly with one ``*``; or
+        with ``person`` and/or ``run`` mapped to key columns.
     resample, min_samples, rtol, sample_rate
         As for :func:`read_run`, for every run.
 
     Returns
     -------
     list of Run
-        By run number. A run of several has the id ``STEM#k`` and the source ``PATH#k``
-        (``s01_motion#3``), one of one the file's stem and path.
+        By run number (a long table's in the order they start). A run of several has the id
+        ``STEM#k`` and the source ``PATH#k`` (``s01_motion#3``; a long table's ``STEM#s01#3``),
+        one of one the file's stem and path.
 
     Raises
     ------
@@ -296,6 +310,21 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
         optional += ("time",)
     also = {"time": ", or give the sample rate (sample_rate) of a file without times"}
     frame = read_frame(path, "a measured-run CSV")
+    keys = {role: mapping[role] for role in KEY_COLUMNS if role in mapping}
+    if keys:   # a long table: runs one after another, told apart by their key columns
+        if any(RUN_NUMBER in name for name in names.values()):
+            raise HesspipeError(f"columns: {', '.join(keys)} with '{RUN_NUMBER}': expected runs side by side "
+                                f"('{RUN_NUMBER}') or one after another (person, run), not both")
+        runs = []
+        for n, (labels, rows, note) in enumerate(row_groups(frame, keys), 1):
+            table = read_table(rows, names, optional=optional, hint="columns", also=also, gaps=resample,
+                               gaps_hint="; set resample to interpolate over a missing sample")
+            tag = "#".join(labels)
+            run = _run_from_table(Path(f"{path}#{tag}"), table, resample=resample, min_samples=min_samples,
+                                  rtol=rtol, sample_rate=fs)
+            runs.append(replace(run, id=f"{path.stem}#{tag}", number=n, notes=run.notes + (note,),
+                                person=labels[0] if "person" in keys else ""))
+        return runs
     each = run_columns(frame, names, optional=optional, hint="columns")
     runs = []
     for k, run_names in each:

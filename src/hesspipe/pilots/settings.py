@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from ..core._time import MAX_INTERVAL_S, MIN_INTERVAL_S
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, DEFAULT_DISPLAY, DISPLAYS, OPTIMIZERS
 from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
@@ -172,7 +173,8 @@ class PilotsConfig(Settings):
     columns : str
         Column names of the data's files, "ROLE=NAME,..." ("": the format's names).
     resample : bool
-        Interpolate non-uniform time columns onto a uniform grid instead of refusing them.
+        Interpolate non-uniform time columns onto a uniform grid, and missed samples (empty
+        or NaN cells), instead of refusing them.
     sample_rate : float or None
         Hz, for data files without a time column (:func:`hesspipe.core.formats.read_run`);
         None (default): every file has times.
@@ -243,7 +245,8 @@ class PilotsConfig(Settings):
                    workers=f.integer("workers", min=0), scheduler=f.string("scheduler"),
                    figures=f.boolean("figures"), columns=f.string("columns"),
                    resample=f.boolean("resample"),
-                   sample_rate=None if f.table["sample_rate"] is None else f.number("sample_rate", min=1.0),
+                   sample_rate=None if f.table["sample_rate"] is None else f.number(
+                       "sample_rate", min=1.0 / MAX_INTERVAL_S, max=1.0 / MIN_INTERVAL_S),
                    simulator=f.string("simulator", choices=SIMULATORS),
                    cohort=f.string("cohort", choices=COHORT_DRAWS),
                    forcing=f.string("forcing", choices=FORCINGS), plants=f.string("plants"),

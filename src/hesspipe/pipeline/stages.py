@@ -380,10 +380,10 @@ def _diagnose_run(ctx) -> tuple[Path, str]:
                             "set [diagnose] run = \"FILE\"")
     source = Path(pilots[0]["source"])
     source = source if source.is_absolute() else folder / source
-    head, _, number = source.name.rpartition("#")
-    if not source.is_file() and head and number.isdigit():   # PATH#k: run k of a file
-        return source.with_name(head), str(source)
-    return source, str(source)
+    path = source
+    while not path.is_file() and "#" in path.name:   # PATH#k, PATH#PERSON#RUN: a run of a file
+        path = path.with_name(path.name.rpartition("#")[0])
+    return (path if path.is_file() else source), str(source)
 
 
 def diagnose(ctx) -> None:

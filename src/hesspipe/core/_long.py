@@ -1,0 +1,102 @@
+"""Runs one after another in one table: a long (tidy) file, rows keyed by person and run.
+
+Shared datasets and statistics packages keep an experiment as one long table, a row per
+sample, with columns that say whose run a row belongs to (``Subject``, ``Trial``) beside
+the signals. The key columns' values cut the table into runs, each then read as a file of
+one run is (:func:`hesspipe.core._table.read_table` on its rows).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+from typing import Mapping
+
+import numpy as np
+import pandas as pd
+
+from ._table import Frame, _match
+from .errors import HesspipeError
+
+#: Roles that name a row's owner, not a signal, in the order they key a run.
+KEY_COLUMNS = ("person", "run")
+
+
+def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, ...], Frame, str]]:
+    """The runs of a long table: the rows that share their key columns' values.
+
+    Parameters
+    ----------
+    frame : Frame
+        The file's columns (:func:`hesspipe.core._table.read_frame`).
+    keys : mapping
+        Key role (``person``, ``run``; :data:`KEY_COLUMNS`) → column name, matched as a
+        signal's name is.
+
+    Returns
+    -------
+    list of (labels, Frame, note)
+        In the order the runs start in the file: the run's labels (person's, then run's
+        values, as written, ``#`` and path separators replaced; a run key not mapped is
+        ``1``), its rows as a frame of their own, and a note of what was read.
+
+    Raises
+    ------
+    HesspipeError
+        A key column missing; a run whose rows are not together (a key left out that tells
+        two runs apart).
+    """
+    path, df = frame.path, frame.df
+    cols = {}
+    for role in KEY_COLUMNS:
+        if role in keys:
+            col = _match(path, frame.headers, role, keys[role])
+            if col is None:
+                raise HesspipeError(f"{path}: column '{keys[role]}' missing (role {role}); found columns: "
+                                    f"{', '.join(frame.headers)}")
+            cols[role] = col
+    text = {role: _labels(df[col]) for role, col in cols.items()}
+    keyed = np.logical_and.reduce([t != "" for t in text.values()])
+    label = pd.Series(["\x1f".join(parts) for parts in zip(*text.values())])
+    label[~keyed] = ""
+    groups = []
+    for value in pd.unique(label[keyed]):
+        rows = np.flatnonzero(label.to_numpy() == value)
+        if rows[-1] - rows[0] + 1 != rows.size:
+            gap = int(rows[np.argmax(np.diff(rows) > 1)])
+            names = ", ".join(f"{role} '{cols[role]}'" for role in cols)
+            raise HesspipeError(f"{path}: the rows of run {value.replace(chr(31), ' ')!r} ({names}) are not "
+                                f"together: data rows {rows[0] + 1}-{gap + 1}, then from "
+                                f"{int(rows[rows > gap + 1][0]) + 1}; expected each run's rows in one "
+                                f"block (map the column that tells its runs apart too: columns "
+                                f"{'run' if 'run' not in cols else 'person'}=NAME)")
+        parts = tuple(value.split("\x1f")) + (() if "run" in cols else ("1",))
+        groups.append((parts, _rows(frame, rows)))
+    if not groups:
+        raise HesspipeError(f"{path}: no row has a value in {', '.join(repr(c) for c in cols.values())}; "
+                            "expected the key columns filled on every row of a run")
+    said = ", ".join(f"{role} '{col}'" for role, col in cols.items())
+    left = int((~keyed).sum())
+    note = (f"{len(groups)} runs in the file, one after another, told apart by {said}"
+            + (f"; {left} row(s) without a key left out" if left else ""))
+    return [(parts, sub, note) for parts, sub in groups]
+
+
+def _labels(column: pd.Series) -> np.ndarray:
+    """A key column's values as text for ids: ``3.0`` as ``3``, blanks as ``""``; ``#``, path
+    separators and spaces as ``_``."""
+    def one(value) -> str:
+        if pd.isna(value):
+            return ""
+        if isinstance(value, float) and value.is_integer():
+            return str(int(value))
+        return re.sub(r"[#/\\\s]+", "_", str(value).strip().strip('"'))
+
+    return np.array([one(v) for v in column], dtype=object)
+
+
+def _rows(frame: Frame, rows: np.ndarray) -> Frame:
+    """`frame` cut to `rows` (the cells as written cut alike)."""
+    written = frame.written
+    cut = None if written is None else (lambda col: written(col)[rows])
+    return replace(frame, df=frame.df.iloc[rows].reset_index(drop=True), written=cut)

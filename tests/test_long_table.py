@@ -1,0 +1,98 @@
+"""Runs one after another in one long table (:mod:`hesspipe.core._long`): rows keyed by the
+columns mapped as ``person`` and ``run``, as shared datasets and statistics packages keep an
+experiment. The runs are built here from known signals (SYNTHETIC)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_file_runs
+from hesspipe.pilots.verdict import pilot_groups
+from test_runs_in_file import signals
+
+ROLES = ("time", "reference", "disturbance", "output", "control")
+KEYED = "person=Subject,run=Trial,time=t,reference=ft,disturbance=fd,output=x,control=u"
+
+
+def _long(path, keys, scale=1.0, sep=";", decimal=","):
+    """A long table: per (person, trial) in `keys` the known signals scaled by the trial's
+    number (and `scale`), the forcing unscaled, written row after row."""
+    s = signals()
+    lines = [f"# synthetic long table{sep}", sep.join(("Subject", "Trial", "t", "ft", "fd", "x", "u"))]
+    for person, trial in keys:
+        k = scale * float(trial)
+        for row in zip(s["time"], s["reference"], s["disturbance"], k * s["output"], k * s["control"]):
+            lines.append(sep.join([person, str(trial)] + [f"{v:.12g}".replace(".", decimal) for v in row]))
+    path.write_text("\r\n".join(lines) + "\r\n", encoding="utf-8")
+    return s
+
+
+def test_a_long_tables_runs_are_read_by_their_keys(tmp_path):
+    s = _long(tmp_path / "static.csv", [("s01", 1), ("s01", 2), ("s02", 1), ("s02", 2)])
+    runs = read_file_runs(tmp_path / "static.csv", columns=KEYED)
+    assert [(r.id, r.number, r.person, r.file_id) for r in runs] == [
+        ("static#s01#1", 1, "s01", "s01"), ("static#s01#2", 2, "s01", "s01"),
+        ("static#s02#1", 3, "s02", "s02"), ("static#s02#2", 4, "s02", "s02")]
+    assert runs[3].source == f"{tmp_path / 'static.csv'}#s02#2" and runs[3].synthetic
+    for run, k in zip(runs, (1, 2, 1, 2)):
+        np.testing.assert_allclose(run.time, s["time"], atol=1e-12)
+        np.testing.assert_allclose(run.control, k * s["control"], rtol=1e-10)
+        np.testing.assert_allclose(run.reference, s["reference"], rtol=1e-10)
+        assert run.notes[-1] == "4 runs in the file, one after another, told apart by person 'Subject', run 'Trial'"
+    # Without a pattern the persons are the key's: pilots and conditions group by them.
+    ids = [r.id for r in runs]
+    assert pilot_groups(ids, None, files={r.id: r.file_id for r in runs}) == {i: i.split("#")[1] for i in ids}
+    # A file of one person's runs keyed by trial alone: the file is the person.
+    _long(tmp_path / "s03.csv", [("s03", 1), ("s03", 2)])
+    one = read_file_runs(tmp_path / "s03.csv", columns=KEYED.replace("person=Subject,", ""))
+    assert [(r.id, r.file_id, r.person) for r in one] == [("s03#1", "s03", ""), ("s03#2", "s03", "")]
+    # A person's one run keyed by person alone.
+    _long(tmp_path / "once.csv", [("s04", 1), ("s05", 1)])
+    once = read_file_runs(tmp_path / "once.csv", columns=KEYED.replace(",run=Trial", ""))
+    assert [(r.id, r.file_id) for r in once] == [("once#s04#1", "s04"), ("once#s05#1", "s05")]
+
+
+def test_a_key_that_does_not_tell_runs_apart_and_other_mistakes(tmp_path):
+    _long(tmp_path / "all.csv", [("s01", 1), ("s01", 2), ("s02", 1)])
+    # Trial 1 of s01 and of s02 read as one run: its rows are in two blocks.
+    with pytest.raises(HesspipeError, match=r"all.csv: the rows of run '1' \(run 'Trial'\) are not together: data "
+                                            r"rows 1-2048, then from 4097; expected each run's rows in one block "
+                                            r"\(map the column that tells its runs apart too: columns person=NAME\)"):
+        read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("person=Subject,", ""))
+    with pytest.raises(HesspipeError, match=r"all.csv: column 'Session' missing \(role run\); found columns: "
+                                            r"Subject, Trial, t"):
+        read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("run=Trial", "run=Session"))
+    with pytest.raises(HesspipeError, match=r"^columns: person, run with '\*': expected runs side by side"):
+        read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("output=x", "output=x:*"))
+    with pytest.raises(HesspipeError, match=r"^columns: role 'run': 'Trial\*': expected the name of the column"):
+        read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("run=Trial", "run=Trial*"))
+
+
+def test_diagnose_takes_one_persons_runs_and_the_pipeline_finds_a_keyed_run(tmp_path, capsys):
+    from hesspipe.cli import main
+    from hesspipe.core.formats import write_plants
+    from hesspipe.pipeline.stages import _diagnose_run
+    from test_compare import paper_plants
+
+    _long(tmp_path / "all.csv", [("s01", 1), ("s02", 1)])
+    write_plants(tmp_path / "p.json", paper_plants())
+    assert main(["diagnose", str(tmp_path / "all.csv"), "--plants", str(tmp_path / "p.json"),
+                 "--columns", KEYED]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == (f"hesspipe: error: {tmp_path / 'all.csv'}: runs of 2 persons (s01, s02); expected one "
+                       "person's runs, the run and its repeats: diagnose every run alone with --each")
+    pilots = tmp_path / "pilots"
+    pilots.mkdir()
+    (pilots / "comparison.json").write_text(json.dumps({"pilots": [{"id": "all#s02#1",
+                                                                   "source": str(tmp_path / "all.csv#s02#1")}]}))
+
+    class Ctx:
+        section = {}
+        config = {"pilots": {"data": ""}}
+        upstream = {"pilots": pilots}
+
+    assert _diagnose_run(Ctx) == (tmp_path / "all.csv", f"{tmp_path / 'all.csv'}#s02#1")
