@@ -42,7 +42,7 @@ def test_a_long_tables_runs_are_read_by_their_keys(tmp_path):
         np.testing.assert_allclose(run.time, s["time"], atol=1e-12)
         np.testing.assert_allclose(run.control, k * s["control"], rtol=1e-10)
         np.testing.assert_allclose(run.reference, s["reference"], rtol=1e-10)
-        assert run.notes[-1] == "4 runs in the file, one after another, told apart by person 'Subject', run 'Trial'"
+        assert run.notes[-1] == "4 run(s) in the file, one after another, told apart by person 'Subject', run 'Trial'"
     # Without a pattern the persons are the key's: pilots and conditions group by them.
     ids = [r.id for r in runs]
     assert pilot_groups(ids, None, files={r.id: r.file_id for r in runs}) == {i: i.split("#")[1] for i in ids}
@@ -66,7 +66,7 @@ def test_a_key_that_does_not_tell_runs_apart_and_other_mistakes(tmp_path):
     with pytest.raises(HesspipeError, match=r"all.csv: column 'Session' missing \(role run\); found columns: "
                                             r"Subject, Trial, t"):
         read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("run=Trial", "run=Session"))
-    with pytest.raises(HesspipeError, match=r"^columns: person, run with '\*': expected runs side by side"):
+    with pytest.raises(HesspipeError, match=r"^columns: person, run with '\*': expected runs side by side \('\*'\) or one after another \(condition, person, run\)"):
         read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("output=x", "output=x:*"))
     with pytest.raises(HesspipeError, match=r"^columns: role 'run': 'Trial\*': expected the name of the column"):
         read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("run=Trial", "run=Trial*"))
@@ -96,3 +96,27 @@ def test_diagnose_takes_one_persons_runs_and_the_pipeline_finds_a_keyed_run(tmp_
         upstream = {"pilots": pilots}
 
     assert _diagnose_run(Ctx) == (tmp_path / "all.csv", f"{tmp_path / 'all.csv'}#s02#1")
+
+
+def test_one_table_of_both_conditions_is_read_a_condition_at_a_time(tmp_path):
+    from hesspipe.core.formats import columns_for_condition
+
+    s = signals()
+    lines = ["Subject,Condition,Trial,t,ft,fd,x,u"]
+    for cond, k in (("static", 1.0), ("motion", 2.0)):
+        for person in ("s01", "s02"):
+            for row in zip(s["time"], s["reference"], s["disturbance"], k * s["output"], k * s["control"]):
+                lines.append(",".join([person, cond, "1"] + [f"{v:.12g}" for v in row]))
+    (tmp_path / "all.csv").write_text("\n".join(lines) + "\n")
+    cols = KEYED + ",condition=Condition"
+    with pytest.raises(HesspipeError, match=r"^columns: role 'condition': 'Condition': expected COLUMN=VALUE"):
+        read_file_runs(tmp_path / "all.csv", columns=cols)
+    motion = read_file_runs(tmp_path / "all.csv", columns=columns_for_condition(cols, "motion"))
+    assert [(r.id, r.person) for r in motion] == [("all#motion#s01#1", "s01"), ("all#motion#s02#1", "s02")]
+    np.testing.assert_allclose(motion[1].control, 2.0 * s["control"], rtol=1e-10)
+    assert motion[0].notes[-1] == ("2 run(s) in the file, one after another, told apart by condition 'Condition' "
+                                   "= 'motion', person 'Subject', run 'Trial'; 4096 other row(s) left out")
+    with pytest.raises(HesspipeError, match=r"all.csv: no row holds 'moving' in column 'Condition' \(role "
+                                            r"condition\); found static, motion$"):
+        read_file_runs(tmp_path / "all.csv", columns=cols + "=moving")
+    assert columns_for_condition(KEYED, "motion") == KEYED   # no condition mapped: as given

@@ -113,11 +113,11 @@ def read_cli_plants(path):
 
 def read_cli_runs(paths, args: argparse.Namespace, **kwargs) -> list:
     """:func:`hesspipe.core.formats.read_file_runs` of each path with the command's run
-    options, the runs in file order; the notes of all of them on stderr once they are read
+    options (`kwargs` over them), the runs in file order; the notes of all of them on stderr once they are read
     (:func:`reading_lines`)."""
     from ..core.formats import read_file_runs
 
-    runs = [run for path in paths for run in read_file_runs(path, **run_options(args), **kwargs)]
+    runs = [run for path in paths for run in read_file_runs(path, **{**run_options(args), **kwargs})]
     print_reading({run.source: run.notes for run in runs})
     return runs
 

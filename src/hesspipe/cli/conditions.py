@@ -16,7 +16,8 @@ def register(subparsers) -> None:
     p.add_argument("second", metavar="DIR_B", help="the second condition's runs; differences are B minus A")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants (Yc is used)")
     p.add_argument("--labels", metavar="A,B", default=None,
-                   help="the conditions' names, e.g. static,motion (default: the folders' names)")
+                   help="the conditions' names, e.g. static,motion (default: the folders' names); "
+                        "with --columns condition=COLUMN (one long table for both), the values read")
     p.add_argument("--pilot-id", metavar="REGEX",
                    help="a regular expression that finds the person in each file name (its group 'pilot', "
                         "else its first group), e.g. '^(s[0-9]+)_' (default: the file name, the same in both "
@@ -34,9 +35,9 @@ def register(subparsers) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from ..core.formats import read_plants
+    from ..core.formats import columns_for_condition, read_plants
     from ..pilots.compare import list_runs
-    from ..pilots.conditions import compare_conditions, format_conditions
+    from ..pilots.conditions import check_labels, compare_conditions, format_conditions
     from ._options import read_cli_runs
     from ._outputs import check_file_outputs, write_result_json
 
@@ -45,9 +46,13 @@ def run(args) -> int:
               else (Path(args.first).resolve().name or "A", Path(args.second).resolve().name or "B"))
     if args.labels is None and labels[0] == labels[1]:
         labels = (f"{labels[0]} (A)", f"{labels[1]} (B)")
+    labels = check_labels(labels)   # before the runs are read by them
     plants = read_plants(args.plants)
     files = [list_runs(args.first), list_runs(args.second)]
-    runs_a, runs_b = (read_cli_runs(f, args) for f in files)
+    # One long table holding both conditions: a condition column mapped without a value
+    # reads each side's rows by its label.
+    runs_a, runs_b = (read_cli_runs(f, args, columns=columns_for_condition(args.columns, label))
+                      for f, label in zip(files, labels))
     result = compare_conditions(runs_a, runs_b, plants, labels=labels, pilot_id=args.pilot_id, seed=args.seed)
     print(format_conditions(result))
     if args.json:

@@ -18,8 +18,10 @@ import pandas as pd
 from ._table import Frame, _match
 from .errors import HesspipeError
 
-#: Roles that name a row's owner, not a signal, in the order they key a run.
-KEY_COLUMNS = ("person", "run")
+#: Roles that name a row's owner, not a signal, in the order they key a run. Mapped as
+#: ``ROLE=COLUMN``, or ``ROLE=COLUMN=VALUE`` to keep only the rows holding VALUE there (a
+#: condition always so: one condition's runs are read at a time).
+KEY_COLUMNS = ("condition", "person", "run")
 
 
 def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, ...], Frame, str]]:
@@ -30,33 +32,47 @@ def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, .
     frame : Frame
         The file's columns (:func:`hesspipe.core._table.read_frame`).
     keys : mapping
-        Key role (``person``, ``run``; :data:`KEY_COLUMNS`) → column name, matched as a
-        signal's name is.
+        Key role (:data:`KEY_COLUMNS`) → column name, matched as a signal's name is, or
+        ``COLUMN=VALUE``: only the rows whose value there is VALUE (``condition`` needs one).
 
     Returns
     -------
     list of (labels, Frame, note)
-        In the order the runs start in the file: the run's labels (person's, then run's
-        values, as written, ``#`` and path separators replaced; a run key not mapped is
-        ``1``), its rows as a frame of their own, and a note of what was read.
+        In the order the runs start in the file: the run's labels (the condition's, the
+        person's, then the run's values, as written, ``#`` and path separators replaced; a
+        run key not mapped is ``1``), its rows as a frame of their own, and a note of what
+        was read.
 
     Raises
     ------
     HesspipeError
-        A key column missing; a run whose rows are not together (a key left out that tells
-        two runs apart).
+        A key column missing; a condition without a value; a value no row holds; a run whose
+        rows are not together (a key left out that tells two runs apart).
     """
     path, df = frame.path, frame.df
-    cols = {}
+    cols, wanted = {}, {}
     for role in KEY_COLUMNS:
         if role in keys:
-            col = _match(path, frame.headers, role, keys[role])
+            name, _, value = keys[role].partition("=")
+            if role == "condition" and not value.strip():
+                raise HesspipeError(f"columns: role 'condition': {keys[role]!r}: expected COLUMN=VALUE, the "
+                                    "condition whose rows to read (one condition at a time)")
+            col = _match(path, frame.headers, role, name.strip())
             if col is None:
-                raise HesspipeError(f"{path}: column '{keys[role]}' missing (role {role}); found columns: "
+                raise HesspipeError(f"{path}: column '{name.strip()}' missing (role {role}); found columns: "
                                     f"{', '.join(frame.headers)}")
             cols[role] = col
+            if value.strip():
+                wanted[role] = _labels(pd.Series([value.strip()]))[0]
     text = {role: _labels(df[col]) for role, col in cols.items()}
     keyed = np.logical_and.reduce([t != "" for t in text.values()])
+    for role, value in wanted.items():
+        if not np.any(text[role] == value):
+            found = list(dict.fromkeys(t for t in text[role] if t))
+            raise HesspipeError(f"{path}: no row holds {value!r} in column '{cols[role]}' (role {role}); found "
+                                f"{', '.join(found[:8])}{', ...' if len(found) > 8 else ''}")
+        keyed &= text[role] == value
+    left = int((~keyed).sum())
     label = pd.Series(["\x1f".join(parts) for parts in zip(*text.values())])
     label[~keyed] = ""
     groups = []
@@ -75,10 +91,10 @@ def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, .
     if not groups:
         raise HesspipeError(f"{path}: no row has a value in {', '.join(repr(c) for c in cols.values())}; "
                             "expected the key columns filled on every row of a run")
-    said = ", ".join(f"{role} '{col}'" for role, col in cols.items())
-    left = int((~keyed).sum())
-    note = (f"{len(groups)} runs in the file, one after another, told apart by {said}"
-            + (f"; {left} row(s) without a key left out" if left else ""))
+    said = ", ".join(f"{role} '{col}'" + (f" = {wanted[role]!r}" if role in wanted else "")
+                     for role, col in cols.items())
+    note = (f"{len(groups)} run(s) in the file, one after another, told apart by {said}"
+            + (f"; {left} other row(s) left out" if left else ""))
     return [(parts, sub, note) for parts, sub in groups]
 
 

@@ -201,6 +201,29 @@ def _parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
     return pairs
 
 
+def columns_for_condition(columns: str | Mapping[str, str] | None, value: str) -> str | dict | None:
+    """`columns` reading one condition of a long table that holds several.
+
+    Parameters
+    ----------
+    columns : str or mapping or None
+        A role → column mapping (:func:`read_file_runs`).
+    value : str
+        The condition to read, e.g. ``"motion"``.
+
+    Returns
+    -------
+    str or dict or None
+        `columns` itself, unless it maps ``condition`` to a column without a value: then
+        the mapping with ``condition=COLUMN=value``.
+    """
+    mapping = _parse_columns(columns)
+    name = mapping.get("condition")
+    if name is None or "=" in name:
+        return columns
+    return {**mapping, "condition": f"{name}={value}"}
+
+
 def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None,
              resample: bool = False, min_samples: int = 2, rtol: float = UNIFORM_RTOL,
              sample_rate: float | None = None) -> Run:
@@ -314,7 +337,7 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     if keys:   # a long table: runs one after another, told apart by their key columns
         if any(RUN_NUMBER in name for name in names.values()):
             raise HesspipeError(f"columns: {', '.join(keys)} with '{RUN_NUMBER}': expected runs side by side "
-                                f"('{RUN_NUMBER}') or one after another (person, run), not both")
+                                f"('{RUN_NUMBER}') or one after another ({', '.join(KEY_COLUMNS)}), not both")
         runs = []
         for n, (labels, rows, note) in enumerate(row_groups(frame, keys), 1):
             table = read_table(rows, names, optional=optional, hint="columns", also=also, gaps=resample,
@@ -323,7 +346,8 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
             run = _run_from_table(Path(f"{path}#{tag}"), table, resample=resample, min_samples=min_samples,
                                   rtol=rtol, sample_rate=fs)
             runs.append(replace(run, id=f"{path.stem}#{tag}", number=n, notes=run.notes + (note,),
-                                person=labels[0] if "person" in keys else ""))
+                                person=labels[[k for k in KEY_COLUMNS if k in keys].index("person")]
+                                if "person" in keys else ""))
         return runs
     each = run_columns(frame, names, optional=optional, hint="columns")
     runs = []

@@ -281,6 +281,29 @@ def _effect(m: Metric, t: Mapping) -> str:
             f"p = {t['p_value']:.2g}, Holm {t['p_holm']:.2g})")
 
 
+def check_labels(labels) -> tuple[str, str]:
+    """The two conditions' names, checked.
+
+    Parameters
+    ----------
+    labels : sequence of str
+        E.g. ``("static", "motion")``.
+
+    Returns
+    -------
+    tuple of str
+
+    Raises
+    ------
+    HesspipeError
+        Unless two different non-empty names.
+    """
+    labels = tuple(str(x) for x in labels)
+    if len(labels) != 2 or labels[0] == labels[1] or not all(labels):
+        raise HesspipeError(f"labels: expected two different non-empty names, got {labels!r}")
+    return labels
+
+
 def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tuple = ("A", "B"),
                        pilot_id: str | None = None, seed: int = 0) -> ConditionComparison:
     """Compare two conditions flown by the same persons (module doc).
@@ -312,9 +335,7 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
         pattern that does not match a run id, no person in both conditions, or what
         :func:`person_metrics` raises (naming the run).
     """
-    labels = tuple(str(x) for x in labels)
-    if len(labels) != 2 or labels[0] == labels[1] or not all(labels):
-        raise HesspipeError(f"labels: expected two different non-empty names, got {labels!r}")
+    labels = check_labels(labels)
     persons: dict[str, dict] = {}
     synthetic, grouped = False, []
     runs_a, runs_b = list(runs_a), list(runs_b)
