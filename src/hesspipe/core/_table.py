@@ -23,6 +23,7 @@ import pandas as pd
 from ._csv import _DIMENSIONLESS, _TIME_OF_DAY, UNIT_FACTORS, _long_row, _prepare, _split_unit, decode
 from ._excel import EXCEL_SUFFIXES, excel_text
 from ._mat import mat_frame
+from ._tdms import tdms_frame
 from .errors import HesspipeError
 
 
@@ -102,7 +103,7 @@ class Frame:
         Header → that column's cells as text (the time column's resolution); None for a
         binary file.
     others : tuple of str or None
-        A MAT file's variables of another length; None for text.
+        A MAT file's variables (a TDMS file's channels) of another length; None for text.
     positional : bool
         The file has no header row.
     """
@@ -123,7 +124,7 @@ class Frame:
 
 
 def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
-    """Read a run file's columns as written: text, a MATLAB file or a workbook.
+    """Read a run file's columns as written: text, a MATLAB file, a TDMS file or a workbook.
 
     Parameters
     ----------
@@ -141,8 +142,8 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
         Naming the file and the problem.
     """
     path = Path(path)
-    if path.suffix.lower() == ".mat":
-        df, comments, notes, others = mat_frame(path)
+    if path.suffix.lower() in (".mat", ".tdms"):
+        df, comments, notes, others = (mat_frame if path.suffix.lower() == ".mat" else tdms_frame)(path)
         return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others))
     excel = path.suffix.lower() in EXCEL_SUFFIXES
     if excel:
@@ -255,7 +256,8 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
                 + also.get(role, "")
             if others is not None:
                 left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
-                raise HesspipeError(f"{path}: variable '{name}' missing{label}; found variables: "
+                item = "channel" if path.suffix.lower() == ".tdms" else "variable"
+                raise HesspipeError(f"{path}: {item} '{name}' missing{label}; found {item}s: "
                                     f"{', '.join(headers)}{left}{tail}")
             if positional:
                 raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "
@@ -434,7 +436,8 @@ def run_columns(frame: Frame, names: Mapping[str, str], *, optional=(),
     found: dict[str, dict[int, str]] = {}
     for role, name in starred.items():
         sign, body = ("-", name[1:].strip()) if name.startswith("-") else ("", name)
-        head, tail = (re.escape(part.strip().lower()) for part in body.split(RUN_NUMBER))
+        left, right = body.split(RUN_NUMBER)   # "Run */Yaw": the space before the number is the name's
+        head, tail = re.escape(left.lstrip().lower()), re.escape(right.rstrip().lower())
         rx = re.compile(rf"^{head}(\d+){tail}$")
         runs: dict[int, str] = {}
         for h in headers:

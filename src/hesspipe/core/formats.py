@@ -48,8 +48,8 @@ from .paper import WELCH_SEGMENT
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
 #: File endings of measured runs when a folder is a set of pilots (tab-separated files and
 #: LabVIEW's measurement files are the same table, MATLAB files its columns as variables, a
-#: workbook's first sheet of numbers; :func:`read_run` reads each).
-RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".xlsx", ".xlsm")
+#: workbook's first sheet of numbers, LabVIEW's TDMS files channels; :func:`read_run` reads each).
+RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".xlsx", ".xlsm", ".tdms")
 #: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
 TEXT_SUFFIXES = (".txt", ".dat")
 #: Columns a run may have: the target, and the displayed error e = reference - output (the
@@ -243,12 +243,13 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
         matched ignoring case and a unit in brackets, whose units are converted to
         SPEC.md's (``time [ms]``, ``output [deg/s]``; :data:`hesspipe.core._csv.UNIT_FACTORS`);
         without a header row its columns are named by position, ``1`` to ``k``. Or a
-        MATLAB file (``.mat``, versions 4-7): each numeric vector a column named after its
+        MATLAB file (``.mat``, versions 4-7.3): each numeric vector a column named after its
         variable, a matrix's columns ``NAME:1`` to ``NAME:k``, a struct's fields
         ``STRUCT.FIELD``, a labelled signal under its label too, values as written unless
-        a label states a unit (:mod:`hesspipe.core._mat`). Or an Excel workbook
-        (``.xlsx``): its first sheet of numbers, read as the same table saved as text
-        (:mod:`hesspipe.core._excel`). What reading did is in :attr:`Run.notes`.
+        a label states a unit (:mod:`hesspipe.core._mat`). Or a LabVIEW TDMS file
+        (``.tdms``): each channel a column ``GROUP/CHANNEL [unit]`` (:mod:`hesspipe.core._tdms`).
+        Or an Excel workbook (``.xlsx``): its first sheet of numbers, read as the same table
+        saved as text (:mod:`hesspipe.core._excel`). What reading did is in :attr:`Run.notes`.
     columns : str or mapping, optional
         Role → column-name mapping for files with other names, e.g.
         ``"control=stick,output=p"``; ``"control=-stick"`` flips the sign of a column
