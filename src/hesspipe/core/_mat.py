@@ -82,10 +82,8 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
     if not columns:
         raise HesspipeError(f"{path}: no numeric vector or matrix in the MATLAB file; expected a "
                             "variable per signal, or a matrix of columns")
-    lengths = Counter(v.size for v in columns.values())
-    n = max(lengths, key=lambda k: (lengths[k], k))
-    frame = pd.DataFrame({k: v for k, v in columns.items() if v.size == n})
-    others = [f"{k} ({v.size} value{'s' if v.size != 1 else ''})" for k, v in columns.items() if v.size != n]
+    frame, others = record_columns(columns)
+    n = len(frame)
     notes = [f"MATLAB file: {frame.shape[1]} variable column(s) of {n} samples read, values as written "
              "unless a signal's label states its unit (a MAT file holds none of its own)"]
     if named:
@@ -94,6 +92,32 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
         notes.append(f"MATLAB file: left out {len(others)} variable(s) of another length: {', '.join(others[:6])}"
                      + (", ..." if len(others) > 6 else ""))
     return frame, tuple(comments), notes, others
+
+
+def record_columns(columns: dict, skip=()) -> tuple[pd.DataFrame, list[str]]:
+    """The columns of the record's length, and the others named with their lengths.
+
+    Parameters
+    ----------
+    columns : dict of str to ndarray
+        Name → values of a file's signals, of any lengths (a MAT file's variables, a TDMS
+        file's channels).
+    skip : collection of str
+        Names not to list among the others (aliases of a column listed under its own name).
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+        The columns of the length most share (the longest on a tie), in `columns`' order.
+    others : list of str
+        ``NAME (k values)`` of the rest: a sample rate, a forcing's frequencies.
+    """
+    lengths = Counter(v.size for v in columns.values())
+    n = max(lengths, key=lambda k: (lengths[k], k))
+    frame = pd.DataFrame({k: v for k, v in columns.items() if v.size == n})
+    others = [f"{k} ({v.size} value{'s' if v.size != 1 else ''})" for k, v in columns.items()
+              if v.size != n and k not in skip]
+    return frame, others
 
 
 _LABELS = ("Name", "name", "label", "title", "Label", "Title")

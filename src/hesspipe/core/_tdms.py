@@ -21,18 +21,18 @@ from __future__ import annotations
 
 import io as _io
 import struct
-from collections import Counter
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from ._mat import record_columns
 from .errors import HesspipeError
 from .io import read_bytes
 
 
 def tdms_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str], list[str]]:
-    """The columns of a TDMS file.
+    """The columns of a TDMS file (:func:`hesspipe.core._mat.record_columns` of its channels).
 
     Parameters
     ----------
@@ -92,11 +92,8 @@ def tdms_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[st
     for alias, sources in named.items():
         if len(sources) == 1 and alias not in columns:
             columns[alias] = columns[sources[0]]
-    lengths = Counter(v.size for v in columns.values())
-    n = max(lengths, key=lambda k: (lengths[k], k))
-    frame = pd.DataFrame({k: v for k, v in columns.items() if v.size == n})
-    others = [f"{k} ({v.size} value{'s' if v.size != 1 else ''})" for k, v in columns.items()
-              if v.size != n and k not in named]
+    frame, others = record_columns(columns, skip=named)
+    n = len(frame)
     waves = {steps[k] for k in frame.columns if k in steps}
     has_time = any(c.split("/")[-1].split(" [")[0].strip().lower() == "time" for c in frame.columns)
     if len(waves) == 1 and not has_time:
