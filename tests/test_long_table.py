@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from hesspipe.core.errors import HesspipeError
-from hesspipe.core.formats import read_file_runs
+from hesspipe.core.formats import read_file_runs, read_run
 from hesspipe.pilots.verdict import pilot_groups
 from test_runs_in_file import signals
 
@@ -46,6 +46,12 @@ def test_a_long_tables_runs_are_read_by_their_keys(tmp_path):
     # Without a pattern the persons are the key's: pilots and conditions group by them.
     ids = [r.id for r in runs]
     assert pilot_groups(ids, None, files={r.id: r.file_id for r in runs}) == {i: i.split("#")[1] for i in ids}
+    # One run: its rows picked by their key values, or an error saying how.
+    one = read_run(tmp_path / "static.csv", columns=KEYED.replace("Subject", "Subject=s02").replace("Trial", "Trial=2"))
+    assert one.id == "static#s02#2" and one.notes[-1].endswith("run 'Trial' = '2'; 6144 other row(s) left out")
+    with pytest.raises(HesspipeError, match=r"static.csv: the key columns find 4 runs \(static#s01#1 to static#s02#2\); "
+                                            r"expected one here: keep one run's rows \(run=COLUMN=VALUE\)"):
+        read_run(tmp_path / "static.csv", columns=KEYED)
     # A file of one person's runs keyed by trial alone: the file is the person.
     _long(tmp_path / "s03.csv", [("s03", 1), ("s03", 2)])
     one = read_file_runs(tmp_path / "s03.csv", columns=KEYED.replace("person=Subject,", ""))

@@ -278,9 +278,11 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     runs = read_file_runs(path, columns=columns, resample=resample, min_samples=min_samples, rtol=rtol,
                           sample_rate=sample_rate)
     if len(runs) > 1:
-        raise HesspipeError(f"{path}: the columns mapped with '{RUN_NUMBER}' find {len(runs)} runs "
-                            f"({runs[0].id} to {runs[-1].id}); expected one here: map one run's "
-                            "columns (x:2 for x:*), or read the file's runs together")
+        how, one = ((f"the columns mapped with '{RUN_NUMBER}'", "map one run's columns (x:2 for x:*)")
+                    if not set(KEY_COLUMNS) & set(_parse_columns(columns)) else
+                    ("the key columns", "keep one run's rows (run=COLUMN=VALUE)"))
+        raise HesspipeError(f"{path}: {how} find {len(runs)} runs ({runs[0].id} to {runs[-1].id}); expected "
+                            f"one here: {one}, or read the file's runs together")
     return runs[0]
 
 
