@@ -118,3 +118,23 @@ def test_a_folder_of_mat_files_is_a_set_of_pilots(tmp_path):
         savemat(tmp_path / f"{pid}.mat", s)
     (tmp_path / "notes.txt").write_text("not a run\n")
     assert [p.name for p in list_runs(tmp_path)] == ["p1.mat", "p2.mat"]
+
+
+def test_a_numpy_archive_is_read_as_a_workspace(tmp_path):
+    # numpy.savez of the same variables: the same columns as the MATLAB file's; pickled
+    # objects are never loaded (they could run code) and a bare array is no archive.
+    s = _signals()
+    ws = {"t": s["time"], "fd": s["disturbance"], "x": s["output"], "u": s["control"], "ft": s["reference"],
+          "fs": 100.0, "note": "synthetic trial"}
+    savemat(tmp_path / "s01.mat", ws)
+    np.savez(tmp_path / "s01.npz", **ws, blob=np.array([{"a": 1}], dtype=object))
+    cols = "time=t,disturbance=fd,output=x,control=u,reference=ft"
+    a, b = read_run(tmp_path / "s01.mat", columns=cols), read_run(tmp_path / "s01.npz", columns=cols)
+    for role in ("time", "disturbance", "output", "control", "reference"):
+        np.testing.assert_array_equal(getattr(a, role), getattr(b, role))
+    assert b.synthetic and any(n.startswith("NumPy archive: 5 variable column(s) of 400 samples") for n in b.notes)
+    assert [p.name for p in list_runs(tmp_path)] == ["s01.mat", "s01.npz"]
+    np.save(tmp_path / "bare.npy", s["time"])
+    (tmp_path / "bare.npz").write_bytes((tmp_path / "bare.npy").read_bytes())
+    refused(tmp_path / "bare.npz", None, r"bare.npz: a single NumPy array, not an archive")
+    refused(tmp_path / "junk.npz", b"not an archive", r"junk.npz: not a readable NumPy archive")

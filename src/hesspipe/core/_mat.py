@@ -30,7 +30,7 @@ from .io import read_bytes
 
 
 def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str], list[str]]:
-    """The columns of a MAT file.
+    """The columns of a MAT file (or a NumPy archive, ``.npz``: its named arrays alike).
 
     Parameters
     ----------
@@ -55,14 +55,18 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
         Naming the file: missing, not a MAT file, no numeric vector in it.
     """
     path = Path(path)
-    raw = read_bytes(path, "a MATLAB file")
-    try:
-        content = _sio.loadmat(_io.BytesIO(raw), squeeze_me=True, simplify_cells=True)
-    except NotImplementedError:   # version 7.3: HDF5
-        content = hdf5_content(raw, path)
-    except (_sio.matlab.MatReadError, ValueError, TypeError, OSError, EOFError) as exc:
-        raise HesspipeError(f"{path}: not a readable MATLAB file ({str(exc).splitlines()[0][:80]}); "
-                            "expected a MAT file of versions 4 to 7") from None
+    kind = "NumPy archive" if path.suffix.lower() == ".npz" else "MATLAB file"
+    raw = read_bytes(path, f"a {kind}")
+    if kind == "NumPy archive":
+        content = _npz_content(raw, path)
+    else:
+        try:
+            content = _sio.loadmat(_io.BytesIO(raw), squeeze_me=True, simplify_cells=True)
+        except NotImplementedError:   # version 7.3: HDF5
+            content = hdf5_content(raw, path)
+        except (_sio.matlab.MatReadError, ValueError, TypeError, OSError, EOFError) as exc:
+            raise HesspipeError(f"{path}: not a readable MATLAB file ({str(exc).splitlines()[0][:80]}); "
+                                "expected a MAT file of versions 4 to 7.3") from None
     columns: dict[str, np.ndarray] = {}
     header = content.get("__header__", b"")
     header = header.decode("latin-1") if isinstance(header, bytes) else str(header)
@@ -80,18 +84,40 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
             named += 1
             columns.update({n_: columns[c] for n_, c in zip(names, cols)})
     if not columns:
-        raise HesspipeError(f"{path}: no numeric vector or matrix in the MATLAB file; expected a "
+        raise HesspipeError(f"{path}: no numeric vector or matrix in the {kind}; expected a "
                             "variable per signal, or a matrix of columns")
     frame, others = record_columns(columns)
     n = len(frame)
-    notes = [f"MATLAB file: {frame.shape[1]} variable column(s) of {n} samples read, values as written "
-             "unless a signal's label states its unit (a MAT file holds none of its own)"]
+    notes = [f"{kind}: {frame.shape[1]} variable column(s) of {n} samples read, values as written "
+             f"unless a signal's label states its unit (a {'MAT' if kind == 'MATLAB file' else 'NumPy'} file "
+             "holds none of its own)"]
     if named:
-        notes.append(f"MATLAB file: {named} labelled signal(s) also named by their labels")
+        notes.append(f"{kind}: {named} labelled signal(s) also named by their labels")
     if others:
-        notes.append(f"MATLAB file: left out {len(others)} variable(s) of another length: {', '.join(others[:6])}"
+        notes.append(f"{kind}: left out {len(others)} variable(s) of another length: {', '.join(others[:6])}"
                      + (", ..." if len(others) > 6 else ""))
     return frame, tuple(comments), notes, others
+
+
+def _npz_content(raw: bytes, path) -> dict:
+    """The arrays of a NumPy archive (``numpy.savez``), as loadmat's variables: numbers as
+    arrays, text as str; pickled objects are not loaded (they could run code) and left out."""
+    try:
+        archive = np.load(_io.BytesIO(raw), allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise HesspipeError(f"{path}: not a readable NumPy archive ({str(exc).splitlines()[0][:80]}); "
+                            "expected a .npz file written by numpy.savez") from None
+    if not hasattr(archive, "files"):
+        raise HesspipeError(f"{path}: a single NumPy array, not an archive; expected a .npz file of named "
+                            "arrays (numpy.savez(path, t=t, u=u, ...))")
+    content = {}
+    for name in archive.files:
+        try:
+            value = archive[name]
+        except ValueError:   # an object array: would need pickle
+            continue
+        content[name] = str(value) if value.dtype.kind in "US" else value
+    return content
 
 
 def record_columns(columns: dict, skip=()) -> tuple[pd.DataFrame, list[str]]:

@@ -124,7 +124,8 @@ class Frame:
 
 
 def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
-    """Read a run file's columns as written: text, a MATLAB file, a TDMS file or a workbook.
+    """Read a run file's columns as written: text, a MATLAB file (or NumPy archive), a TDMS file
+    or a workbook.
 
     Parameters
     ----------
@@ -142,8 +143,8 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
         Naming the file and the problem.
     """
     path = Path(path)
-    if path.suffix.lower() in (".mat", ".tdms"):
-        df, comments, notes, others = (mat_frame if path.suffix.lower() == ".mat" else tdms_frame)(path)
+    if path.suffix.lower() in (".mat", ".npz", ".tdms"):
+        df, comments, notes, others = (tdms_frame if path.suffix.lower() == ".tdms" else mat_frame)(path)
         return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others))
     excel = path.suffix.lower() in EXCEL_SUFFIXES
     if excel:

@@ -47,9 +47,10 @@ from .paper import WELCH_SEGMENT
 
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
 #: File endings of measured runs when a folder is a set of pilots (tab-separated files and
-#: LabVIEW's measurement files are the same table, MATLAB files its columns as variables, a
-#: workbook's first sheet of numbers, LabVIEW's TDMS files channels; :func:`read_run` reads each).
-RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".xlsx", ".xlsm", ".tdms")
+#: LabVIEW's measurement files are the same table, MATLAB files and NumPy archives its columns
+#: as variables, a workbook's first sheet of numbers, LabVIEW's TDMS files channels;
+#: :func:`read_run` reads each).
+RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".npz", ".xlsx", ".xlsm", ".tdms")
 #: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
 TEXT_SUFFIXES = (".txt", ".dat")
 #: Columns a run may have: the target, and the displayed error e = reference - output (the
