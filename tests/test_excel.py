@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from hesspipe.core.errors import HesspipeError
-from hesspipe.core.formats import read_run
+from hesspipe.core.formats import read_file_runs, read_run
 from hesspipe.pilots.compare import list_runs
 from known_signals import DT, refused
 from known_signals import check as _check
@@ -85,3 +85,34 @@ def test_a_folder_of_workbooks_is_a_set_of_pilots(tmp_path):
     (tmp_path / "readme.txt").write_text("not a run\n")
     assert [p.name for p in list_runs(tmp_path)] == ["p1.xlsx", "p2.xlsx"]
     _check(read_run(tmp_path / "p1.xlsx"))
+
+
+def test_a_sheet_per_run(tmp_path):
+    # A person's workbook: a sheet per run (metadata above each header), a longer raw sheet
+    # and a sheet of text beside them. The first sheet alone still reads as the file's run.
+    path = tmp_path / "s02_motion.xlsx"
+    names = {"time": "Time [s]", "reference": "Target [deg]", "disturbance": "Disturbance [deg]",
+             "output": "Yaw [deg]", "control": "Stick [deg]"}
+    base = _frame(names, degrees=True)
+    with pd.ExcelWriter(path) as w:
+        for k in (1, 2, 3):
+            df = base.copy()
+            df[["Yaw [deg]", "Stick [deg]"]] *= k
+            pd.DataFrame([[f"Run: {k}"]]).to_excel(w, sheet_name=f"Run {k}", header=False, index=False)
+            (df if k != 3 else df.iloc[:-5]).to_excel(w, sheet_name=f"Run {k}", startrow=2, index=False)
+        pd.concat([base, base]).to_excel(w, sheet_name="raw", index=False)
+        pd.DataFrame({"remark": ["ok"]}).to_excel(w, sheet_name="notes", index=False)
+    cols = "reference=Run */Target,disturbance=Run */Disturbance,output=Run */Yaw,control=Run */Stick,time=Run */Time"
+    runs = read_file_runs(path, columns=cols)
+    assert [r.id for r in runs] == ["s02_motion#1", "s02_motion#2", "s02_motion#3"]
+    s = _signals()
+    for k, run in enumerate(runs, 1):
+        n = len(s["time"]) - (5 if k == 3 else 0)
+        assert len(run) == n
+        np.testing.assert_allclose(run.control, k * s["control"][:n], rtol=1e-12)
+        np.testing.assert_allclose(run.time, s["time"][:n], atol=1e-12)
+    assert any("3 sheets of numbers" in n_ and "left out, more rows than the first: 'raw'" in n_
+               for n_ in runs[0].notes), runs[0].notes
+    assert any("left out: 'notes'" in n_ for n_ in runs[0].notes)
+    one = read_run(path, columns="reference=Target,disturbance=Disturbance,output=Yaw,control=Stick")
+    np.testing.assert_array_equal(one.control, runs[0].control)

@@ -1,10 +1,11 @@
 """Reading Excel workbooks (``.xlsx``, ``.xlsm``): a run kept in a spreadsheet.
 
-A laboratory that passes its trials around as workbooks keeps one run per file, a header
-row (perhaps with units, perhaps a units row under it, perhaps lines of metadata above it)
-on the first sheet. The sheet is turned into the tab-separated text the CSV reader takes
-(:mod:`hesspipe.core._csv`), so a workbook is read exactly as the same table saved as text
-would be: its header, units, metadata and clock times alike. Numbers keep their full
+A laboratory that passes its trials around as workbooks keeps a run on a sheet, a header
+row (perhaps with units, perhaps a units row under it, perhaps lines of metadata above it),
+one run per file or a sheet per run. Each sheet of numbers is turned into the
+tab-separated text the CSV reader takes (:mod:`hesspipe.core._csv`), so a sheet is read
+exactly as the same table saved as text would be: its header, units, metadata and clock
+times alike. Numbers keep their full
 precision (written as the shortest text that reads back as the same float).
 """
 
@@ -25,8 +26,8 @@ EXCEL_SUFFIXES = (".xlsx", ".xlsm")
 """Workbook file endings read (Office Open XML; the binary ``.xls`` of Excel 97-2003 is not)."""
 
 
-def excel_text(path: str | Path) -> tuple[str, list[str]]:
-    """The first sheet holding numbers, as tab-separated text, and what reading did.
+def excel_sheets(path: str | Path) -> tuple[list[tuple[str, str]], list[str]]:
+    """The sheets holding numbers, each as tab-separated text, and what reading did.
 
     Parameters
     ----------
@@ -35,10 +36,11 @@ def excel_text(path: str | Path) -> tuple[str, list[str]]:
 
     Returns
     -------
-    text : str
-        One line per row, cells separated by tabs, empty cells empty.
+    sheets : list of (str, str)
+        Per sheet of numbers, in the workbook's order: its name and its text, one line per
+        row, cells separated by tabs, empty cells empty.
     notes : list of str
-        The sheet read (and the others, when there are several).
+        The sheets read (and the others left out).
 
     Raises
     ------
@@ -61,13 +63,15 @@ def excel_text(path: str | Path) -> tuple[str, list[str]]:
     if not numeric:
         raise HesspipeError(f"{path}: no sheet of the workbook holds a table of numbers; expected a run's "
                             "columns on its first sheet")
-    name = numeric[0]
-    notes = [f"Excel workbook: read sheet '{name}'"
-             + (f" (left out: {', '.join(repr(str(n)) for n in sheets if n != name)})" if len(sheets) > 1 else "")]
+    left = [repr(str(n)) for n in sheets if n not in numeric]
+    notes = [f"Excel workbook: read sheet{'s' if len(numeric) > 1 else ''} "
+             f"{', '.join(repr(str(n)) for n in numeric)}" + (f" (left out: {', '.join(left)})" if left else "")]
     # Each row as far as its last filled cell: the sheet's width padded a metadata line
     # ("Subject: s02") into as many cells as the header has, and it passed for the header.
-    rows = ["\t".join(_cell(v) for v in row).rstrip("\t") for row in sheets[name].itertuples(index=False)]
-    return "\n".join(rows) + "\n", notes
+    texts = [(str(name), "\n".join("\t".join(_cell(v) for v in row).rstrip("\t")
+                                  for row in sheets[name].itertuples(index=False)) + "\n")
+             for name in numeric]
+    return texts, notes
 
 
 def _numbers(df: pd.DataFrame) -> int:

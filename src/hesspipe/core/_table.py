@@ -13,7 +13,7 @@ import functools
 import io as _io
 import re
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Mapping
 
@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ._csv import _DIMENSIONLESS, _TIME_OF_DAY, UNIT_FACTORS, _long_row, _prepare, _split_unit, decode
-from ._excel import EXCEL_SUFFIXES, excel_text
+from ._excel import EXCEL_SUFFIXES, excel_sheets
 from ._mat import mat_frame
 from ._tdms import tdms_frame
 from .errors import HesspipeError
@@ -146,14 +146,18 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
     if path.suffix.lower() in (".mat", ".npz", ".tdms"):
         df, comments, notes, others = (tdms_frame if path.suffix.lower() == ".tdms" else mat_frame)(path)
         return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others))
-    excel = path.suffix.lower() in EXCEL_SUFFIXES
-    if excel:
-        text, notes = excel_text(path)   # the sheet as the text it would be saved as
-    else:
-        text, encoding = decode(path, what)
-        notes = [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"]
-    # A workbook's tabs are ours: not said.
-    text, sep, decimal, positional = _prepare(text, notes, separator_said=not excel)
+    if path.suffix.lower() in EXCEL_SUFFIXES:
+        sheets, notes = excel_sheets(path)   # each sheet as the text it would be saved as
+        frames = [_text_frame(path, text, list(notes), separator_said=False) for _, text in sheets]
+        return frames[0] if len(frames) == 1 else _sheets_frame([name for name, _ in sheets], frames)
+    text, encoding = decode(path, what)
+    return _text_frame(path, text, [] if encoding in ("utf-8-sig",) else [f"read as {encoding} text"])
+
+
+def _text_frame(path: Path, text: str, notes: list, separator_said: bool = True) -> Frame:
+    """The :class:`Frame` of a table's text (a text file's, or a workbook sheet's)."""
+    # A workbook's tabs are ours: not said (separator_said False).
+    text, sep, decimal, positional = _prepare(text, notes, separator_said=separator_said)
     comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
                      if line.lstrip().startswith("#"))
     engine = "python" if sep == r"\s+" else "c"
@@ -183,6 +187,34 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
                            usecols=[col], dtype=str, engine=engine)[col].to_numpy()
 
     return Frame(path, df, comments, tuple(notes), decimal, written, None, positional)
+
+
+def _sheets_frame(names: list[str], frames: list[Frame]) -> Frame:
+    """A workbook of several sheets of numbers as one frame: the first sheet's columns as
+    they are (a run per file), and every sheet's as ``SHEET/COLUMN`` (a sheet per run, read
+    with a star: ``Run */Yaw``); sheets of fewer rows padded with empty cells at the end,
+    sheets of more rows than the first left out (the first sheet's run stays as it was)."""
+    first = frames[0]
+    longer = [name for name, fr in zip(names, frames) if len(fr.df) > len(first.df)]
+    names, frames = zip(*[(name, fr) for name, fr in zip(names, frames) if name not in longer])
+    if len(frames) == 1:
+        return replace(first, notes=first.notes + (f"Excel workbook: left out sheet(s) with more rows than "
+                                                   f"the first: {', '.join(map(repr, longer))}",))
+    parts = [first.df] + [fr.df.add_prefix(f"{name}/") for name, fr in zip(names, frames)]
+    df = pd.concat([p.reset_index(drop=True) for p in parts], axis=1)
+    n = len(df)
+    where = {f"{name}/{col}": (fr, col) for name, fr in zip(names, frames) for col in fr.df.columns}
+
+    def written(col: str) -> np.ndarray:
+        fr, own = where.get(col, (first, col))
+        cells = fr.written(own)
+        return np.concatenate([cells, np.full(n - cells.size, "", dtype=object)]) if cells.size < n else cells
+
+    notes = first.notes + (f"Excel workbook: {len(frames)} sheets of numbers, each sheet's columns also read "
+                           "as SHEET/COLUMN (a sheet per run: map them with a star, Run */Yaw)"
+                           + (f"; left out, more rows than the first: {', '.join(map(repr, longer))}"
+                              if longer else ""),)
+    return replace(first, df=df, notes=notes, written=written)
 
 
 def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(), what: str = "a CSV",
