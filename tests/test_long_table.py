@@ -49,7 +49,8 @@ def test_a_long_tables_runs_are_read_by_their_keys(tmp_path):
     # One run: its rows picked by their key values, or an error saying how.
     one = read_run(tmp_path / "static.csv", columns=KEYED.replace("Subject", "Subject=s02").replace("Trial", "Trial=2"))
     assert one.id == "static#s02#2" and one.notes[-1].endswith("run 'Trial' = '2'; 6144 other row(s) left out")
-    with pytest.raises(HesspipeError, match=r"static.csv: the key columns find 4 runs \(static#s01#1 to static#s02#2\); "
+    with pytest.raises(HesspipeError, match=r"static.csv: the key columns find 4 runs \(static#s01#1 to "
+                                            r"static#s02#2\); "
                                             r"expected one here: keep one run's rows \(run=COLUMN=VALUE\)"):
         read_run(tmp_path / "static.csv", columns=KEYED)
     # A file of one person's runs keyed by trial alone: the file is the person.
@@ -72,7 +73,8 @@ def test_a_key_that_does_not_tell_runs_apart_and_other_mistakes(tmp_path):
     with pytest.raises(HesspipeError, match=r"all.csv: column 'Session' missing \(role run\); found columns: "
                                             r"Subject, Trial, t"):
         read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("run=Trial", "run=Session"))
-    with pytest.raises(HesspipeError, match=r"^columns: person, run with '\*': expected runs side by side \('\*'\) or one after another \(condition, person, run\)"):
+    with pytest.raises(HesspipeError, match=r"^columns: person, run with '\*': expected runs side by side "
+                                            r"\('\*'\) or one after another \(condition, person, run\)"):
         read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("output=x", "output=x:*"))
     with pytest.raises(HesspipeError, match=r"^columns: role 'run': 'Trial\*': expected the name of the column"):
         read_file_runs(tmp_path / "all.csv", columns=KEYED.replace("run=Trial", "run=Trial*"))

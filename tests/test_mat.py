@@ -138,3 +138,16 @@ def test_a_numpy_archive_is_read_as_a_workspace(tmp_path):
     (tmp_path / "bare.npz").write_bytes((tmp_path / "bare.npy").read_bytes())
     refused(tmp_path / "bare.npz", None, r"bare.npz: a single NumPy array, not an archive")
     refused(tmp_path / "junk.npz", b"not an archive", r"junk.npz: not a readable NumPy archive")
+
+
+def test_scalars_never_outvote_the_signals_and_a_cell_of_numbers_is_a_matrix(tmp_path):
+    # A workspace with more scalar settings than signals, and num2cell's cell of numbers.
+    s = _signals()
+    ws = {"t": s["time"], "fd": s["disturbance"], "x": s["output"], "u": s["control"],
+          **{f"K{i}": float(i) for i in range(12)}}
+    cells = np.empty((2, len(s["time"])), dtype=object)
+    cells[0, :], cells[1, :] = list(s["output"]), list(2 * s["output"])
+    savemat(tmp_path / "w.mat", {**ws, "c": cells})
+    run = read_run(tmp_path / "w.mat", columns="time=t,disturbance=fd,output=c:2,control=u")
+    np.testing.assert_array_equal(run.output, 2 * s["output"])
+    assert any("left out 12 variable(s) of another length: K0 (1 value)" in n for n in run.notes)

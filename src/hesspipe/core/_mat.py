@@ -134,11 +134,13 @@ def record_columns(columns: dict, skip=()) -> tuple[pd.DataFrame, list[str]]:
     Returns
     -------
     frame : pandas.DataFrame
-        The columns of the length most share (the longest on a tie), in `columns`' order.
+        The columns of the length most share (the longest on a tie; scalars only where
+        nothing is longer), in `columns`' order.
     others : list of str
         ``NAME (k values)`` of the rest: a sample rate, a forcing's frequencies.
     """
-    lengths = Counter(v.size for v in columns.values())
+    # Scalars (a sample rate, a gain, a cell of settings) are no record, however many.
+    lengths = Counter(v.size for v in columns.values() if v.size > 1) or Counter(v.size for v in columns.values())
     n = max(lengths, key=lambda k: (lengths[k], k))
     frame = pd.DataFrame({k: v for k, v in columns.items() if v.size == n})
     others = [f"{k} ({v.size} value{'s' if v.size != 1 else ''})" for k, v in columns.items()
@@ -171,7 +173,9 @@ def _collect(name: str, value, columns: dict, comments: list, labels: dict) -> N
             labels[alias] = None if alias in labels else f"{name}.{data}"
         return
     if isinstance(value, np.ndarray) and value.dtype == object:
-        value = list(value.ravel(order="F"))   # a cell array scipy left as objects
+        # A cell array scipy left as objects: of numbers, a matrix (num2cell's); else its cells.
+        numbers = all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool) for v in value.flat)
+        value = value.astype(float) if numbers and value.size else list(value.ravel(order="F"))
     if isinstance(value, list):   # a struct array or a cell array: NAME(1), NAME(2), ...
         for i, sub in enumerate(value, 1):
             _collect(f"{name}({i})", sub, columns, comments, labels)

@@ -12,7 +12,7 @@ simplify_cells=True)`` gives for a version 7 file:
 - a struct is a group, its fields its members: a dict;
 - a struct array is a group whose fields are arrays of references, one per element (in
   MATLAB's column-major order): a list of dicts; a cell array is an array of references:
-  a list;
+  a list (of numbers only: the matrix they make, as scipy's objects are read);
 - a logical is its 0s and 1s, as scipy reads it; empty arrays (``MATLAB_empty``), complex
   numbers, function handles and objects (``string``, ``table``, ``timeseries``) are no
   signal and are left out (None).
@@ -93,7 +93,11 @@ def _value(h5, item):
     if item.attrs.get("MATLAB_empty", 0) or "MATLAB_object_decode" in item.attrs:
         return None
     if cls == "cell":
-        return [_value(h5, h5[ref]) for ref in np.asarray(item[()]).T.ravel(order="F")]
+        refs = np.asarray(item[()]).T
+        cells = [_value(h5, h5[ref]) for ref in refs.ravel(order="F")]
+        if cells and all(isinstance(c, float) for c in cells):   # a cell of numbers: a matrix, as scipy's
+            return np.array(cells).reshape(refs.shape, order="F")
+        return cells
     if cls == "char":
         codes = np.asarray(item[()]).T.ravel(order="F")
         return "".join(chr(int(c)) for c in codes)

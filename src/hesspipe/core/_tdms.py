@@ -63,8 +63,8 @@ def tdms_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[st
     try:
         tdms = TdmsFile.read(_io.BytesIO(raw))
     except (ValueError, KeyError, IndexError, struct.error, OSError, EOFError) as exc:
-        raise HesspipeError(f"{path}: not a readable TDMS file ({str(exc).splitlines()[0][:80] if str(exc) else type(exc).__name__}); "
-                            "expected a LabVIEW TDMS file") from None
+        why = str(exc).splitlines()[0][:80] if str(exc) else type(exc).__name__
+        raise HesspipeError(f"{path}: not a readable TDMS file ({why}); expected a LabVIEW TDMS file") from None
     comments = [f"{k}: {v}" for k, v in tdms.properties.items() if isinstance(v, str) and v.strip()]
     columns: dict[str, np.ndarray] = {}
     named: dict[str, list[str]] = {}
