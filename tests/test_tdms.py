@@ -77,5 +77,14 @@ def test_time_stamps_and_files_it_cannot_read(tmp_path):
     run = read_run(tmp_path / "stamped.tdms", columns="time=Time," + ",".join(f"{r}={n}" for r, n in LAB.items()))
     np.testing.assert_allclose(run.time - run.time[0], s["time"], atol=1e-9)
     assert any("time stamps read as seconds from the first" in n for n in run.notes)
+    # An empty time-stamp channel beside the signals is no clock (and no crash).
+    with TdmsWriter(str(tmp_path / "empty_stamps.tdms")) as writer:
+        writer.write_segment([RootObject(), GroupObject("Data"),
+                              ChannelObject("Data", "Stamp", np.array([], dtype="datetime64[ns]")),
+                              ChannelObject("Data", "Yaw", s["output"], properties={"wf_increment": 0.01})])
+    from hesspipe.core._tdms import tdms_frame
+
+    frame = tdms_frame(tmp_path / "empty_stamps.tdms")[0]
+    assert list(frame.columns) == ["time", "Data/Yaw", "Yaw"]
     refused(tmp_path / "bad.tdms", b"TDSm not really" + b"\x00" * 40, r"bad.tdms: not a readable TDMS file")
     refused(tmp_path / "missing.tdms", None, r"missing.tdms: file not found; expected a LabVIEW TDMS file")

@@ -76,8 +76,9 @@ def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, .
     label = pd.Series(["\x1f".join(parts) for parts in zip(*text.values())])
     label[~keyed] = ""
     groups = []
-    for value in pd.unique(label[keyed]):
-        rows = np.flatnonzero(label.to_numpy() == value)
+    # The rows of each key value at once, in the order the values first appear.
+    for value, rows in label[keyed].groupby(label[keyed], sort=False).indices.items():
+        rows = label[keyed].index.to_numpy()[rows]
         if rows[-1] - rows[0] + 1 != rows.size:
             gap = int(rows[np.argmax(np.diff(rows) > 1)])
             names = ", ".join(f"{role} '{cols[role]}'" for role in cols)
@@ -102,13 +103,13 @@ def _labels(column: pd.Series) -> np.ndarray:
     """A key column's values as text for ids: ``3.0`` as ``3``, blanks as ``""``; ``#``, path
     separators and spaces as ``_``."""
     def one(value) -> str:
-        if pd.isna(value):
-            return ""
         if isinstance(value, float) and value.is_integer():
             return str(int(value))
         return re.sub(r"[#/\\\s]+", "_", str(value).strip().strip('"'))
 
-    return np.array([one(v) for v in column], dtype=object)
+    codes, uniques = pd.factorize(column)   # each distinct value once: a table has millions of rows
+    text = np.array([one(v) for v in uniques] + [""], dtype=object)
+    return text[codes]   # code -1 (a blank cell) is the last, ""
 
 
 def _rows(frame: Frame, rows: np.ndarray) -> Frame:

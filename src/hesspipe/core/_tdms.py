@@ -74,6 +74,8 @@ def tdms_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[st
         for channel in group.channels():
             values = channel[:]
             if np.issubdtype(values.dtype, np.datetime64):
+                if not values.size or np.isnat(values).any():
+                    continue   # no stamps, or a stamp missing: no clock to read
                 stamps = values.astype("datetime64[ns]").astype(np.int64)
                 values = (stamps - stamps[0]) * 1e-9
                 notes.append(f"TDMS file: channel '{group.name}/{channel.name}': time stamps read as seconds from "
