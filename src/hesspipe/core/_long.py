@@ -77,8 +77,10 @@ def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, .
     label[~keyed] = ""
     groups = []
     # The rows of each key value at once, in the order the values first appear.
-    for value, rows in label[keyed].groupby(label[keyed], sort=False).indices.items():
-        rows = label[keyed].index.to_numpy()[rows]
+    kept = label[keyed]
+    where = kept.index.to_numpy()
+    for value, rows in kept.groupby(kept, sort=False).indices.items():
+        rows = where[rows]
         if rows[-1] - rows[0] + 1 != rows.size:
             gap = int(rows[np.argmax(np.diff(rows) > 1)])
             names = ", ".join(f"{role} '{cols[role]}'" for role in cols)
