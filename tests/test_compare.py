@@ -178,10 +178,24 @@ def test_cli_bad_file_exit_status_and_message(tmp_path, capsys, monkeypatch):
     captured = capsys.readouterr()
     assert code == 1
     assert f"hesspipe: error: {folder / 'bad.csv'}: column 'control'" in captured.err
-    assert "1 of 3 run(s) failed" in captured.err
+    assert captured.err.strip().splitlines()[-1] == ("hesspipe: error: 1 file(s) could not be read; the others "
+                                                     "are in the table")
     assert "p0" in captured.out and "p1" in captured.out
     d = json.loads(out_json.read_text())
     assert [p["id"] for p in d["pilots"]] == ["p0", "p1"] and d["failures"][0]["id"] == "bad"
+
+
+def test_cli_counts_a_file_it_cannot_read_as_a_file_not_a_run(tmp_path, capsys, monkeypatch):
+    # A run that fails its identification is a run; a file that cannot be read is a file,
+    # however many runs it holds.
+    folder = _write_runs(tmp_path / "runs", n=3)
+    (folder / "p1.csv").rename(folder / "boom.csv")
+    (folder / "bad.csv").write_text("time,disturbance,output,control\n0,1,2,x\n")
+    plants = write_plants(tmp_path / "plants.json", paper_plants())
+    monkeypatch.setattr(compare_mod, "compare_run", lambda run, plants, settings: fake_job(run))
+    assert main(["pilots", str(folder), "--plants", str(plants), "--workers", "1"]) == 1
+    assert capsys.readouterr().err.strip().splitlines()[-1] == (
+        "hesspipe: error: 1 of 3 run(s) failed, and 1 file(s) could not be read; the others are in the table")
 
 
 def test_cli_all_runs_failed_is_an_error_without_a_verdict_or_file(tmp_path, capsys):
@@ -202,7 +216,7 @@ def test_cli_all_runs_failed_is_an_error_without_a_verdict_or_file(tmp_path, cap
     err = captured.err.strip().splitlines()
     assert len(err) == 3 and all(line.startswith("hesspipe: error:") for line in err)
     assert "column 'Tgt' missing (role reference)" in err[0] and "--columns reference=NAME" in err[0]
-    assert err[-1] == "hesspipe: error: all 2 run(s) failed; nothing to compare"
+    assert err[-1] == "hesspipe: error: 2 file(s) could not be read; nothing to compare"
 
 
 def test_verdict_without_pilots_says_none_was_identified():

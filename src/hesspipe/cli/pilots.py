@@ -97,11 +97,17 @@ def _run(args) -> int:
                 draw_pilots(stage, result.pilots)
     for f in result.failures:
         print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
+    # A file that could not be read is counted as a file: how many runs it holds is unknown.
+    files = sum(f.unread for f in result.failures)
+    runs = len(result.failures) - files
+    unread = f"{files} file(s) could not be read" if files else ""
     if not result.pilots:
-        print(f"hesspipe: error: all {len(result.failures)} run(s) failed; nothing to compare", file=sys.stderr)
+        what = f"all {runs} run(s) failed" + (f", and {unread}" if runs and files else "") if runs else unread
+        print(f"hesspipe: error: {what}; nothing to compare", file=sys.stderr)
         return 1
     if result.failures:
-        print(f"hesspipe: error: {len(result.failures)} of {len(result.failures) + len(result.pilots)} "
-              "run(s) failed; the others are in the table", file=sys.stderr)
+        what = (f"{runs} of {runs + len(result.pilots)} run(s) failed" + (f", and {unread}" if files else "")
+                if runs else unread)
+        print(f"hesspipe: error: {what}; the others are in the table", file=sys.stderr)
         return 1
     return 0

@@ -364,7 +364,7 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
             found = read_file_runs(path, columns=columns, resample=resample, min_samples=min_samples,
                                    sample_rate=sample_rate)
         except HesspipeError as exc:
-            failures.append(PilotFailure(Path(path).stem, str(path), str(exc)))
+            failures.append(PilotFailure(Path(path).stem, str(path), str(exc), unread=True))
             continue
         for run in found:
             if run.id in seen:

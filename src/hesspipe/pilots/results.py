@@ -92,11 +92,14 @@ class PilotFailure:
     ----------
     id, source, error : str
         Pilot id (file stem), the file, and why it failed (one line).
+    unread : bool
+        The whole file could not be read (however many runs it holds).
     """
 
     id: str
     source: str
     error: str
+    unread: bool = False
 
     def to_dict(self) -> dict:
         """The failure as a JSON-ready dict."""
