@@ -100,14 +100,13 @@ def _run(args) -> int:
     # A file that could not be read is counted as a file: how many runs it holds is unknown.
     files = sum(f.unread for f in result.failures)
     runs = len(result.failures) - files
-    unread = f"{files} file(s) could not be read" if files else ""
+    failed = f"all {runs}" if not result.pilots else f"{runs} of {runs + len(result.pilots)}"
+    what = ", and ".join([f"{failed} run(s) failed"] * bool(runs)
+                         + [f"{files} file(s) could not be read"] * bool(files))
     if not result.pilots:
-        what = f"all {runs} run(s) failed" + (f", and {unread}" if runs and files else "") if runs else unread
         print(f"hesspipe: error: {what}; nothing to compare", file=sys.stderr)
         return 1
     if result.failures:
-        what = (f"{runs} of {runs + len(result.pilots)} run(s) failed" + (f", and {unread}" if files else "")
-                if runs else unread)
         print(f"hesspipe: error: {what}; the others are in the table", file=sys.stderr)
         return 1
     return 0

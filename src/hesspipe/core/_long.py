@@ -38,10 +38,10 @@ def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, .
     Returns
     -------
     list of (labels, Frame, note)
-        In the order the runs start in the file: the run's labels (the condition's, the
-        person's, then the run's values, as written, ``#`` and path separators replaced; a
-        run key not mapped is ``1``), its rows as a frame of their own, and a note of what
-        was read.
+        In the order the runs start in the file: the run's labels, key role → value (the
+        condition's, the person's, then the run's, as written, ``#`` and path separators
+        replaced; a run key not mapped is ``1``), its rows as a frame of their own, and a
+        note of what was read.
 
     Raises
     ------
@@ -89,8 +89,8 @@ def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, .
                                 f"{int(rows[rows > gap + 1][0]) + 1}; expected each run's rows in one "
                                 f"block (map the column that tells its runs apart too: columns "
                                 f"{'run' if 'run' not in cols else 'person'}=NAME)")
-        parts = tuple(value.split("\x1f")) + (() if "run" in cols else ("1",))
-        groups.append((parts, _rows(frame, rows)))
+        labels = {"run": "1", **dict(zip(cols, value.split("\x1f")))}
+        groups.append(({role: labels[role] for role in KEY_COLUMNS if role in labels}, _rows(frame, rows)))
     if not groups:
         raise HesspipeError(f"{path}: no row has a value in {', '.join(repr(c) for c in cols.values())}; "
                             "expected the key columns filled on every row of a run")
@@ -98,7 +98,7 @@ def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, .
                      for role, col in cols.items())
     note = (f"{len(groups)} run(s) in the file, one after another, told apart by {said}"
             + (f"; {left} other row(s) left out" if left else ""))
-    return [(parts, sub, note) for parts, sub in groups]
+    return [(labels, sub, note) for labels, sub in groups]
 
 
 def _labels(column: pd.Series) -> np.ndarray:

@@ -106,6 +106,8 @@ class Frame:
         A MAT file's variables (a TDMS file's channels) of another length; None for text.
     positional : bool
         The file has no header row.
+    item : str
+        What a binary file's columns are called in messages ("variable", "channel").
     """
 
     path: Path
@@ -116,6 +118,7 @@ class Frame:
     written: object = None
     others: tuple | None = None
     positional: bool = False
+    item: str = "variable"
 
     @property
     def headers(self) -> list[str]:
@@ -144,8 +147,10 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
     """
     path = Path(path)
     if path.suffix.lower() in (".mat", ".npz", ".tdms"):
-        df, comments, notes, others = (tdms_frame if path.suffix.lower() == ".tdms" else mat_frame)(path)
-        return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others))
+        tdms = path.suffix.lower() == ".tdms"
+        df, comments, notes, others = (tdms_frame if tdms else mat_frame)(path)
+        return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others),
+                     item="channel" if tdms else "variable")
     if path.suffix.lower() in EXCEL_SUFFIXES:
         sheets, notes = excel_sheets(path)   # each sheet as the text it would be saved as
         frames = [_text_frame(path, text, list(notes), separator_said=False) for _, text in sheets]
@@ -289,8 +294,7 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
                 + also.get(role, "")
             if others is not None:
                 left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
-                item = "channel" if path.suffix.lower() == ".tdms" else "variable"
-                raise HesspipeError(f"{path}: {item} '{name}' missing{label}; found {item}s: "
+                raise HesspipeError(f"{path}: {frame.item} '{name}' missing{label}; found {frame.item}s: "
                                     f"{', '.join(headers)}{left}{tail}")
             if positional:
                 raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "

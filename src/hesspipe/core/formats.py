@@ -337,6 +337,14 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
         optional += ("time",)
     also = {"time": ", or give the sample rate (sample_rate) of a file without times"}
     frame = read_frame(path, "a measured-run CSV")
+
+    def one(source, run_names: Mapping[str, str], where: Path) -> Run:
+        # One run's columns from the file (or a long table's rows), checked, named after `where`.
+        table = read_table(source, run_names, optional=optional, hint="columns", also=also, gaps=resample,
+                           gaps_hint="; set resample to interpolate over a missing sample")
+        return _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
+                               sample_rate=fs)
+
     keys = {role: mapping[role] for role in KEY_COLUMNS if role in mapping}
     if keys:   # a long table: runs one after another, told apart by their key columns
         if any(RUN_NUMBER in name for name in names.values()):
@@ -344,23 +352,15 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
                                 f"('{RUN_NUMBER}') or one after another ({', '.join(KEY_COLUMNS)}), not both")
         runs = []
         for n, (labels, rows, note) in enumerate(row_groups(frame, keys), 1):
-            table = read_table(rows, names, optional=optional, hint="columns", also=also, gaps=resample,
-                               gaps_hint="; set resample to interpolate over a missing sample")
-            tag = "#".join(labels)
-            run = _run_from_table(Path(f"{path}#{tag}"), table, resample=resample, min_samples=min_samples,
-                                  rtol=rtol, sample_rate=fs)
+            tag = "#".join(labels.values())
+            run = one(rows, names, Path(f"{path}#{tag}"))
             runs.append(replace(run, id=f"{path.stem}#{tag}", number=n, notes=run.notes + (note,),
-                                person=labels[[k for k in KEY_COLUMNS if k in keys].index("person")]
-                                if "person" in keys else ""))
+                                person=labels.get("person", "")))
         return runs
     each = run_columns(frame, names, optional=optional, hint="columns")
     runs = []
     for k, run_names in each:
-        table = read_table(frame, run_names, optional=optional, hint="columns", also=also, gaps=resample,
-                           gaps_hint="; set resample to interpolate over a missing sample")
-        where = Path(f"{path}#{k}") if len(each) > 1 else path
-        run = _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
-                              sample_rate=fs)
+        run = one(frame, run_names, Path(f"{path}#{k}") if len(each) > 1 else path)
         if len(each) > 1:
             starred = [role for role in RUN_COLUMNS + OPTIONAL_COLUMNS if RUN_NUMBER in names[role]]
             once = [role for role in starred if len({m[role] for _, m in each}) == 1]
