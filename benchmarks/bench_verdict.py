@@ -11,7 +11,7 @@ describing-function misfit that motion feedback removes with its p-value, and, f
 contrast, the PSD-fitness improvement 1 - expanded/original of the paper's criterion.
 
     python benchmarks/bench_verdict.py [--n 8] [--seeds 1,2,3] [--plants roll,1/s]
-                                       [--task disturbance] [--T 45] [--fs 60]
+                                       [--task disturbance|tracking|both] [--T 45] [--fs 60]
                                        [--output rate|angle] [--km-ratio 0.2,1.0]
                                        [--pilot precision] [--tau-m 0.15]
                                        [--remnant-at error] [--gain-drift 0.15] [--runs 3]
@@ -117,7 +117,7 @@ def main(argv=None) -> None:
         draw["remnant_at"] = args.remnant_at
     if args.km_ratio:
         draw["km_ratio"] = tuple(float(x) for x in args.km_ratio.split(","))
-    tally = {"motion": [0, 0], "none": [0, 0]}
+    tally = {"motion": {"yes": 0, "no": 0, "undetermined": 0}, "none": {"yes": 0, "no": 0, "undetermined": 0}}
     for plant in args.plants.split(","):
         for seed in seeds:
             for label, effects in (("motion", ("motion_feedback",)), ("none", ())):
@@ -131,8 +131,7 @@ def main(argv=None) -> None:
                                           pilot_id=r"^(pilot\d+)_r" if args.runs > 1 else None)
                     dt = time.perf_counter() - t0
                 v = comp.verdict()
-                tally[label][0] += v["answer"] == ("yes" if label == "motion" else "no")
-                tally[label][1] += 1
+                tally[label][v["answer"]] += 1
                 print(f"\nplant {plant} seed {seed} cohort {label}: {v['sentence']}")
                 print(f"  median-pilot p {v.get('majority_p', float('nan')):.3g} (the verdict's test), "
                       f"binomial p {v.get('binomial_p', float('nan')):.3g}, Fisher p "
@@ -150,8 +149,12 @@ def main(argv=None) -> None:
                 print(f"  PSD-fitness improvement (paper's criterion): mean {100 * np.nanmean(imp):.1f} %")
                 for f in comp.failures:
                     print(f"  FAILED {f.id}: {f.error}")
-    print(f"\nright verdicts: motion cohorts {tally['motion'][0]}/{tally['motion'][1]} said yes; "
-          f"no-motion cohorts {tally['none'][0]}/{tally['none'][1]} said no")
+    # With one forcing function a cohort that is not "yes" is "undetermined" (cannot tell):
+    # right for neither kind of cohort, wrong for neither.
+    said = {k: ", ".join(f"{n} {a}" for a, n in v.items()) for k, v in tally.items()}
+    print(f"\nright verdicts: motion cohorts {tally['motion']['yes']}/{sum(tally['motion'].values())} said yes; "
+          f"no-motion cohorts {tally['none']['no']}/{sum(tally['none'].values())} said no "
+          f"(motion cohorts: {said['motion']}; no-motion cohorts: {said['none']})")
 
 
 if __name__ == "__main__":

@@ -59,7 +59,7 @@ def test_cohort_rule_rates_use_the_verdict():
     # the verdict (at least half of the pilots) never.
     m = _load("bench_cohort_rule")
     t = lambda p: {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": 1.0,  # noqa: E731
-                   "Km_se": 0.1, "significant": p < 0.01}
+                   "Km_se": 0.1, "significant": p < 0.01, "forcing": "disturbance and target"}
     strong, plain = [t(1e-12)], [t(p) for p in np.linspace(0.2, 1.0, 9)]
     r = m.rates(strong, plain, 1, 8, 40, np.random.default_rng(0))
     assert r == {"verdict": 0.0, "fisher": 1.0, "binomial": 0.0}

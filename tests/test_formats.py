@@ -387,3 +387,48 @@ def test_a_logged_error_gives_the_reference_or_is_checked_against_it(tmp_path):
         assert (notes == []) if said is None else (said in notes[0] and "the reference is used" in notes[0])
     with pytest.raises(HesspipeError, match=r"column 'err' missing \(role error\)"):
         read_run(tmp_path / "e.csv", columns="disturbance=wind,output=yaw,control=stick,error=err")
+
+
+def test_a_target_tracking_file_without_a_disturbance_column(tmp_path):
+    # A tracking task has no disturbance, and its laboratory logs none: the file reads as the
+    # same run as with a column of zeros, and says so. Without any forcing it stays refused.
+    t = 0.01 * np.arange(300)
+    r, y, u = 0.2 * np.sin(0.9 * t), 0.15 * np.sin(0.9 * t - 0.4), np.cos(1.7 * t)
+
+    def rows(*cols):
+        return [tuple(f"{v:.12g}" for v in row) for row in zip(t, *cols)]
+
+    zero = read_run(_csv(tmp_path / "z.csv", ("time", "disturbance", "output", "control", "reference"),
+                         rows(0 * t, y, u, r)))
+    run = read_run(_csv(tmp_path / "n.csv", ("time", "Target", "output", "control"), rows(r, y, u)),
+                   columns="reference=Target")
+    for role in ("time", "disturbance", "output", "control", "reference"):
+        np.testing.assert_array_equal(getattr(run, role), getattr(zero, role))
+    assert any(n.startswith("no disturbance column: a task without a disturbance") for n in run.notes)
+    assert not any("disturbance" in n for n in zero.notes)
+    # The displayed error alone gives the target too.
+    run = read_run(_csv(tmp_path / "e.csv", ("time", "output", "control", "E"), rows(y, u, r - y)),
+                   columns="error=E")
+    np.testing.assert_allclose(run.reference, r, atol=1e-10)
+    assert not run.disturbance.any()
+    # No forcing at all: neither a disturbance nor a target column (the old message, and how
+    # to give either) ...
+    path = _csv(tmp_path / "o.csv", ("time", "output", "control"), rows(y, u))
+    with pytest.raises(HesspipeError, match=r"o\.csv: column 'disturbance' missing; found columns: time, "
+                                            r"output, control; map other names with columns disturbance=NAME, "
+                                            r"or give the target \(reference or error\) of a task without a "
+                                            r"disturbance$"):
+        read_run(path)
+    # ... an error that is minus the output (a disturbance task's, its disturbance not logged) ...
+    path = _csv(tmp_path / "m.csv", ("time", "output", "control", "error"), rows(y, u, -y))
+    with pytest.raises(HesspipeError, match=r"m\.csv: no disturbance column, and no target \(column 'error' "
+                                            r"\(error\) is minus the output\); expected a disturbance column"):
+        read_run(path)
+    # ... or a target of zeros.
+    path = _csv(tmp_path / "r.csv", ("time", "output", "control", "reference"), rows(y, u, 0 * t))
+    with pytest.raises(HesspipeError, match=r"column 'reference' \(reference\) is 0 throughout"):
+        read_run(path)
+    # A disturbance mapped by name must be there: a misspelt one is not "no disturbance".
+    path = _csv(tmp_path / "w.csv", ("time", "Target", "output", "control", "Wind"), rows(r, y, u, 0 * t))
+    with pytest.raises(HesspipeError, match=r"column 'Wnd' missing \(role disturbance\)"):
+        read_run(path, columns="reference=Target,disturbance=Wnd")

@@ -30,6 +30,8 @@ def test_forcing_sets_are_read_per_signal(tmp_path, task, expected):
 def test_words_say_when_the_data_cannot_tell():
     assert motion_words(False, "disturbance only").startswith("cannot tell")
     assert motion_words(False, "target only").startswith("cannot tell")
+    assert motion_words(False, "target only").endswith("a disturbance on lines of its own would)")
+    assert motion_words(False, "disturbance only").endswith("a target on lines of its own would)")
     assert motion_words(False, "disturbance and target").startswith("no evidence")
     assert "shapes of the two paths alone" in motion_words(True, "disturbance only")
     assert motion_words(True, "disturbance and target").startswith("motion feedback named")

@@ -32,10 +32,13 @@ def _tests(folder, effects, n, seed, **kw):
 
 def test_verdict_yes_for_motion_cohort_no_without(tmp_path):
     yes, _, _ = _tests(tmp_path / "m", ("motion_feedback",), 3, 1, km_ratio=(0.6, 1.0))
-    no, _, _ = _tests(tmp_path / "n", (), 3, 1)
+    no, _, _ = _tests(tmp_path / "n", (), 3, 1, task="both")
     v_yes, v_no = cohort_verdict(yes), cohort_verdict(no)
+    assert {t["forcing"] for t in yes.values()} == {"disturbance only"}
+    assert {t["forcing"] for t in no.values()} == {"disturbance and target"}
     assert all(t["available"] and t["n_lines"] >= 10 for t in {**yes, **no}.values())
     assert v_yes["answer"] == "yes" and v_yes["sentence"].startswith("yes: motion feedback")
+    assert "on the model's shapes of the two paths alone for the 3 pilot(s)" in v_yes["sentence"]
     assert v_no["answer"] == "no" and v_no["sentence"].startswith("no: ")
     assert v_yes["majority_p"] < 0.01 < v_no["majority_p"]
     assert v_yes["n_significant"] >= 2 and v_no["n_significant"] <= 1
@@ -55,9 +58,61 @@ def test_random_forcing_has_no_lines_and_an_undetermined_verdict(tmp_path):
     assert v["answer"] == "undetermined" and "no pilot" in v["sentence"]
 
 
-def _t(p):
+def _t(p, forcing="disturbance and target"):
     return {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": 1.0, "Km_se": 0.1,
-            "significant": p < 0.01}
+            "significant": p < 0.01, "forcing": forcing}
+
+
+@pytest.mark.parametrize("task", ["disturbance", "tracking"])
+def test_one_forcing_function_cannot_rule_motion_out(tmp_path, task):
+    """A cohort whose records have one line set is "cannot tell" unless the test finds motion,
+    as diagnose says run by run: one describing function, the two paths on one signal."""
+    no, _, _ = _tests(tmp_path / "n", (), 3, 2, task=task)
+    kind = {"disturbance": "disturbance only", "tracking": "target only"}[task]
+    assert {t["forcing"] for t in no.values()} == {kind}
+    v = cohort_verdict(no)
+    assert v["answer"] == "undetermined" and v["n_separable"] == 0, v["sentence"]
+    assert v["sentence"].startswith(f"undetermined: cannot tell whether the pilots use motion: 3 of 3 "
+                                    f"pilots' records have one forcing function ({kind})")
+    assert v["per_pilot"][next(iter(no))]["forcing"] == kind
+
+
+def test_a_tracking_cohort_logged_without_a_disturbance_through_the_command_line(tmp_path, capsys):
+    """Files of a target-tracking task with no disturbance column (as its laboratory logs
+    them) go through ``hesspipe pilots``: read as a task without a disturbance, and the
+    verdict on one forcing function is "cannot tell"."""
+    folder = tmp_path / "trk"
+    paths = make_trials(folder, "roll", 3, 4, pilot="hess", task="tracking", **FAST)
+    for path in paths:
+        lines = path.read_text().splitlines()
+        head = [line for line in lines if line.startswith("#")]
+        rows = [line.split(",") for line in lines[len(head):]]
+        keep = [i for i, name in enumerate(rows[0]) if name != "disturbance"]
+        assert len(keep) == len(rows[0]) - 1
+        path.write_text("\r\n".join(head + [",".join(r[i] for i in keep) for r in rows]) + "\r\n")
+    out = tmp_path / "c.json"
+    code = main(["pilots", str(folder), "--plants", str(folder / "plants.json"), "--workers", "1",
+                 "--json", str(out)])
+    text = capsys.readouterr()
+    assert code == 0, text.err
+    note = [line for line in text.err.splitlines() if "no disturbance column: a task without a disturbance" in line]
+    assert len(note) == 1 and note[0].startswith("hesspipe: note: 3 files (")    # said once for the folder
+    v = json.loads(out.read_text())["motion_verdict"]
+    assert v["answer"] == "undetermined" and "(target only)" in v["sentence"]
+    assert "MOTION VERDICT: undetermined: cannot tell" in text.out
+
+
+def test_no_needs_half_of_the_pilots_to_have_both_line_sets():
+    one, two = "disturbance only", "disturbance and target"
+    assert cohort_verdict({"a": _t(0.5, one), "b": _t(0.7, two)})["answer"] == "no"       # r = 1 of 2
+    assert cohort_verdict({"a": _t(0.5, one), "b": _t(0.7, one), "c": _t(0.9, two)})["answer"] == "undetermined"
+    assert cohort_verdict({"a": _t(0.5, one), "b": _t(0.7, two), "c": _t(0.9, two)})["answer"] == "no"
+    # "Yes" stands on one line set too, and says what it rests on.
+    v = cohort_verdict({"a": _t(1e-6, one), "b": _t(1e-5, one), "c": _t(0.9, two)})
+    assert v["answer"] == "yes" and "alone for the 2 pilot(s) with one forcing function" in v["sentence"]
+    # A pilot's runs of different forcing count as one line set: not separable.
+    g = cohort_verdict({"a1": _t(0.5, one), "a2": _t(0.6, two)}, groups={"a1": "a", "a2": "a"})
+    assert g["answer"] == "undetermined" and g["per_pilot"]["a"]["forcing"] == f"{two} / {one}"
 
 
 def test_cohort_counts_and_binomial():
@@ -142,8 +197,7 @@ def test_identify_uses_the_reference_of_a_tracking_trial(tmp_path):
 def test_report_carries_the_verdict_at_the_top(tmp_path):
     from hesspipe.pipeline.report import build_report
 
-    v = cohort_verdict({"a": {"available": True, "p_value": 0.001, "lr": 9.0, "gain": 0.6,
-                              "Km": 1.0, "Km_se": 0.1, "significant": True}})
+    v = cohort_verdict({"a": _t(0.001)})
     (tmp_path / "pilots").mkdir()
     (tmp_path / "pilots" / "comparison.json").write_text(json.dumps(
         {"motion_verdict": v, "synthetic": True, "pilots": [], "failures": []}))
@@ -184,8 +238,7 @@ def test_pilot_groups_find_the_pilot_in_each_run_id():
 
 
 def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
-    t = lambda p, km=1.0: {"available": True, "p_value": p, "lr": 1.0, "gain": 0.5, "Km": km,  # noqa: E731
-                           "Km_se": 0.1, "Km_per_Ke": km / 10, "significant": p < 0.01}
+    t = lambda p, km=1.0: {**_t(p), "Km": km, "Km_per_Ke": km / 10}  # noqa: E731
     tests = {"a1": t(0.02, 1.0), "a2": t(0.03, 3.0), "b1": t(0.6), "b2": t(0.7), "b3": {"available": False}}
     groups = {"a1": "a", "a2": "a", "b1": "b", "b2": "b", "b3": "b"}
     v = cohort_verdict(tests, groups=groups)

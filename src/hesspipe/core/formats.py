@@ -335,13 +335,19 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     fs = check_sample_rate(sample_rate)
     if fs is not None and "time" not in mapping:
         optional += ("time",)
-    also = {"time": ", or give the sample rate (sample_rate) of a file without times"}
+    # A target-tracking task has no disturbance, and a laboratory logs none: without a
+    # disturbance column (not mapped) a file holding the target reads as such a task.
+    untracked = () if "disturbance" in mapping else ("disturbance",)
+    also = {"time": ", or give the sample rate (sample_rate) of a file without times",
+            "disturbance": ", or give the target (reference or error) of a task without a disturbance"}
     frame = read_frame(path, "a measured-run CSV")
 
     def one(source, run_names: Mapping[str, str], where: Path) -> Run:
         # One run's columns from the file (or a long table's rows), checked, named after `where`.
-        table = read_table(source, run_names, optional=optional, hint="columns", also=also, gaps=resample,
-                           gaps_hint="; set resample to interpolate over a missing sample")
+        kw = dict(hint="columns", also=also, gaps=resample, gaps_hint="; set resample to interpolate over a missing sample")
+        table = read_table(source, run_names, optional=optional + untracked, **kw)
+        if "disturbance" not in table.data and not {"reference", "error"} & set(table.data):
+            read_table(source, run_names, optional=optional, **kw)   # raises: no forcing at all
         return _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
                                sample_rate=fs)
 
@@ -357,7 +363,7 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
             runs.append(replace(run, id=f"{path.stem}#{tag}", number=n, notes=run.notes + (note,),
                                 person=labels.get("person", "")))
         return runs
-    each = run_columns(frame, names, optional=optional, hint="columns")
+    each = run_columns(frame, names, optional=optional + untracked, hint="columns")
     runs = []
     for k, run_names in each:
         run = one(frame, run_names, Path(f"{path}#{k}") if len(each) > 1 else path)
@@ -392,6 +398,15 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
                                 f"power spectrum; expected magnitudes below {MAX_MAGNITUDE:g} "
                                 "(check the column's units)")
     notes = notes + _unwrapped(data, table.columns) + _with_error(data, table.columns)
+    if "disturbance" not in data:
+        if not np.any(data["reference"]):   # no forcing at all
+            why = (f"column '{table.columns['error']}' (error) is minus the output" if "error" in table.columns
+                   else f"column '{table.columns['reference']}' (reference) is 0 throughout")
+            raise HesspipeError(f"{path}: no disturbance column, and no target ({why}); expected a "
+                                "disturbance column (map it with columns disturbance=NAME)")
+        data["disturbance"] = np.zeros(n)
+        notes += ("no disturbance column: a task without a disturbance (target tracking), the disturbance "
+                  "read as 0 (a disturbance that was flown but not logged shows as the plants' mismatch)",)
     if "time" not in data:   # a file without times, read at the sample rate given
         data["time"] = np.arange(n, dtype=float) / sample_rate
         notes += (f"no time column: sample k at k / {sample_rate:g} Hz",)

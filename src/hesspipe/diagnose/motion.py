@@ -28,7 +28,6 @@ power between the lines (:func:`remnant_share`).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -36,6 +35,7 @@ import numpy as np
 import scipy.stats
 
 from ..core.errors import HesspipeError
+from ..identification.lines import SEPARABLE, forcing_sets
 from ..identification.motion_test import forcing_lines, safe_motion_test, windowed
 from ..identification.paired_delay import paired_delay
 from .results import Step
@@ -141,27 +141,6 @@ class DFEvidence:
     remnant: dict
 
 
-def forcing_sets(run) -> str:
-    """Which multisine line sets a record has: "disturbance and target", "disturbance
-    only", "target only" or "none".
-
-    Parameters
-    ----------
-    run : hesspipe.core.formats.Run
-        The measured run (disturbance and reference are the forcing signals).
-    """
-    run = windowed(run)
-    length = len(run.control)
-    has = []
-    for name in ("disturbance", "reference"):
-        sig = np.asarray(getattr(run, name), dtype=float)
-        one = dataclasses.replace(run, disturbance=sig if name == "disturbance" else np.zeros(length),
-                                  reference=sig if name == "reference" else np.zeros(length))
-        has.append(forcing_lines(one).size > 0)
-    return {(True, True): "disturbance and target", (True, False): "disturbance only",
-            (False, True): "target only", (False, False): "none"}[tuple(has)]
-
-
 def motion_words(named: bool, forcing: str) -> str:
     """The motion verdict in words, saying what the record's forcing lets it rest on.
 
@@ -172,7 +151,7 @@ def motion_words(named: bool, forcing: str) -> str:
     forcing : str
         :func:`forcing_sets` of the record.
     """
-    if forcing == "disturbance and target":
+    if forcing == SEPARABLE:
         return ("motion feedback named: the target and disturbance lines disagree as a vestibular "
                 "path predicts" if named else
                 "no evidence of motion feedback: the target and disturbance lines agree without it")
@@ -180,8 +159,9 @@ def motion_words(named: bool, forcing: str) -> str:
            "vestibular paths act on the same signal" % forcing)
     if named:
         return f"motion feedback named on the model's shapes of the two paths alone ({why})"
+    other = "a disturbance" if forcing == "target only" else "a target"
     return (f"cannot tell whether the pilot uses motion: {why}, so the data cannot separate them "
-            "(neither named nor ruled out; a target on its own lines would)")
+            f"(neither named nor ruled out; {other} on lines of its own would)")
 
 
 def delay_test(delay_s: float, se_s: float, max_pilot_delay_s: float, alpha: float) -> dict:
@@ -387,7 +367,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
     # pooled, the pilot's run-to-run scatter of the shared dynamics (K1 5-15 %, wn 2-8 %)
     # became a misfit the vestibular path took: motion named on 2 of 20 baseline sets with a
     # target (bench_diagnose.py --paired --repeats 3, report seeds), 0 of 40 without.
-    pool = bool(repeat_runs) and forcing != "disturbance and target"
+    pool = bool(repeat_runs) and forcing != SEPARABLE
     t = safe_motion_test([run, *repeat_runs] if pool else run, plants, start, k=k,
                          max_delay=cfg.max_pilot_delay if baseline_run is None else None,
                          display=cfg.display)
@@ -399,7 +379,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
     named = bool(t["p_value"] < cfg.motion_alpha)
     mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
-                       separable=forcing == "disturbance and target",
+                       separable=forcing == SEPARABLE,
                        verdict=motion_words(named, forcing), runs=1 + len(repeat_runs) if pool else 1,
                        Km_per_Ke=float(t.get("Km_per_Ke", math.nan)))
     pars, se = _df_delay(t, mv.named)

@@ -98,6 +98,37 @@ def forcing_lines(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> np.ndarray:
     return lines[inband]
 
 
+SEPARABLE = "disturbance and target"
+""":func:`forcing_sets` of a record whose two line sets separate the visual from the
+vestibular path: at disturbance lines e = -y, at target lines y = Yc u, so the sets'
+disagreement is the vestibular path's. With one set there is one describing function, in
+which the two paths act on one signal; only the model's shapes of the paths tell them apart
+(multiloop identification needs as many forcing functions as loops)."""
+
+
+def forcing_sets(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> str:
+    """Which multisine line sets a record has: "disturbance and target" (:data:`SEPARABLE`),
+    "disturbance only", "target only" or "none".
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        The measured run (disturbance and reference are the forcing signals), read over its
+        analysis window (:func:`windowed`).
+    band_hz : (float, float)
+        Lines count in this band, Hz (DC excluded), as :func:`forcing_lines`'.
+
+    Returns
+    -------
+    str
+    """
+    run = windowed(run)
+    f = np.fft.rfftfreq(len(run.control), run.dt)
+    has = tuple(bool(np.any((f[s] > max(band_hz[0], 0.0)) & (f[s] <= band_hz[1]))) for s in _line_sets(run))
+    return {(True, True): SEPARABLE, (True, False): "disturbance only",
+            (False, True): "target only", (False, False): "none"}[has]
+
+
 def _line_sets(run) -> tuple[np.ndarray, np.ndarray]:
     """Bins of the disturbance's and of the reference's multisine lines (all frequencies)."""
     found = []

@@ -90,11 +90,13 @@ from .lines import (  # noqa: F401
     MAX_EXTRAPOLATED_RISE,
     MIN_LINE_SNR,
     MIN_LINES,
+    SEPARABLE,
     SMOOTH_ORDER,
     LineData,
     _line_sets,
     analysis_window,
     forcing_lines,
+    forcing_sets,
     line_data,
     line_snr,
     line_variances,
@@ -391,15 +393,18 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         (the fitted ``Kff`` and ``T_ff``; None unless a pursuit display with target
         lines); with display "either" also ``display_p`` (display → p-value; "pursuit"
         only on records with target lines where the compensatory p is below
-        :data:`EITHER_EXACT`).
+        :data:`EITHER_EXACT`); ``forcing`` (:func:`~.lines.forcing_sets` of the first run:
+        with one forcing function the test rests on the model's shapes of the two paths
+        alone, and no motion found is "cannot tell", not "no").
     """
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
     runs = as_runs(run)
     ld = line_data(runs[0], band_hz) if len(runs) == 1 else pooled_line_data(runs, band_hz)
     kw = dict(k=k, max_delay=max_delay)
+    forcing = {"forcing": forcing_sets(runs[0], band_hz)}
     if display != "either":
-        return _with_interval(*_one_display(ld, plants, start, display=display, **kw), interval)
+        return {**_with_interval(*_one_display(ld, plants, start, display=display, **kw), interval), **forcing}
     # An intersection-union test (Berger 1982): significant only if significant with the
     # display's feedforward and without it. Under "no motion" with either display the
     # matching test rejects with probability <= alpha, so the pair does too, whichever
@@ -414,7 +419,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         out["display_p"]["pursuit"] = purs[0].get("p_value")
         if purs[0].get("available") and purs[0]["p_value"] >= comp[0]["p_value"]:
             comp = purs
-    return {**_with_interval(*comp, interval), **out}
+    return {**_with_interval(*comp, interval), **out, **forcing}
 
 
 def _with_interval(result: dict, profile, interval: float | None) -> dict:

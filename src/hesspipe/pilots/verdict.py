@@ -28,7 +28,15 @@ count and the cohort test are over pilots, not over runs of the same person.
 
 A pilot whose record has no separated multisine lines (gusts, as in the JSBSim
 pipeline's cohort) has no test ("not available", see the motion test), and the
-verdict says so instead of guessing from spectra.
+verdict says so instead of guessing from spectra. A record with one forcing function
+(a target or a disturbance alone) has one describing function, in which the visual and
+vestibular paths act on the same signal: its test rests on the model's shapes of the two
+paths alone, and finding nothing there does not rule motion out. So "no" needs at least
+half of the pilots' records to have both line sets; otherwise a cohort that is not "yes" is
+"undetermined: cannot tell", as diagnose says run by run. (Before, such a cohort was "no":
+on the independent generator's precision pilots flying a target alone, yaw angle, single
+integrator, six pilots with motion feedback, every pilot's p was 0.5-1 and the verdict
+said "no".)
 """
 
 from __future__ import annotations
@@ -43,7 +51,14 @@ from scipy import stats
 from ..core.errors import HesspipeError
 
 # The per-pilot test lives with identification so that diagnose uses the very same one.
-from ..identification.motion_test import ALPHA, analysis_window, forcing_lines, motion_test, safe_motion_test  # noqa: F401
+from ..identification.motion_test import (  # noqa: F401
+    ALPHA,
+    SEPARABLE,
+    analysis_window,
+    forcing_lines,
+    motion_test,
+    safe_motion_test,
+)
 
 
 def pilot_groups(run_ids: Sequence[str], pattern: str | None,
@@ -107,8 +122,10 @@ def _per_pilot(done: Mapping[str, Mapping], groups: Mapping[str, str]) -> dict[s
     for pid, ts in by.items():
         ps = [t["p_value"] for t in ts]
         p = ps[0] if len(ps) == 1 else float(stats.combine_pvalues(ps, method="fisher").pvalue)
+        forcing = sorted({t["forcing"] for t in ts})
         out[pid] = {"p_value": p, "gain": float(np.median([t["gain"] for t in ts])),
-                    "lr": float(np.median([t["lr"] for t in ts])), "runs": len(ts)}
+                    "lr": float(np.median([t["lr"] for t in ts])), "runs": len(ts),
+                    "forcing": forcing[0] if len(forcing) == 1 else " / ".join(forcing)}
         for key in ("Km", "Km_per_Ke"):
             v = np.array([t.get(key, math.nan) for t in ts], dtype=float)
             out[pid][key] = float(np.mean(v))
@@ -127,7 +144,8 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     Parameters
     ----------
     tests : mapping
-        Run id → :func:`motion_test` dict (one run per pilot unless `groups`).
+        Run id → :func:`motion_test` dict (one run per pilot unless `groups`); its
+        ``forcing`` says which line sets the record has.
     alpha : float
         Significance level of the per-pilot tests and of the cohort test.
     groups : mapping, optional
@@ -139,8 +157,10 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     Returns
     -------
     dict
-        ``answer`` ("yes", "no" or "undetermined"), ``sentence`` (the verdict in
-        words), ``majority_p`` (:func:`median_pilot_p`: the cohort test), ``majority_r``,
+        ``answer`` ("yes", "no" or "undetermined": no pilot tested, or not "yes" while fewer
+        than half of the pilots' records have both line sets, :data:`SEPARABLE`),
+        ``sentence`` (the verdict in words), ``n_separable`` (pilots whose records have both
+        line sets), ``majority_p`` (:func:`median_pilot_p`: the cohort test), ``majority_r``,
         ``fisher_p`` (Fisher's combination of the per-pilot p-values: "at least one
         pilot", reported), ``n_tested``, ``n_significant``, ``binomial_p`` (P[X ≥
         n_significant] for X ~ Binomial(n_tested, alpha)), ``median_gain``, ``per_pilot``
@@ -178,12 +198,27 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     claim = "improves" if yes else "does not significantly improve"
     some = (" (evidence that some pilot's fit improves, not the typical pilot's)"
             if not yes and fisher_p < alpha else "")
-    sentence = (f"{'yes' if yes else 'no'}: motion feedback {claim} the describing-function "
-                f"fit for at least half of the {n} pilots{of_runs} ({first}median-pilot test p = "
+    # "No" claims that the typical pilot does not use the motion; only records whose two line
+    # sets separate the paths can show that (diagnose says "cannot tell" run by run alike).
+    one = {pid: t["forcing"] for pid, t in pilots.items() if t["forcing"] != SEPARABLE}
+    n_sep = n - len(one)
+    answer = "yes" if yes else "no" if n_sep >= r else "undetermined"
+    kinds = " / ".join(sorted(set(one.values())))
+    opening = {"yes": f"yes: motion feedback {claim}", "no": f"no: motion feedback {claim}",
+               "undetermined": f"undetermined: cannot tell whether the pilots use motion: {len(one)} of {n} "
+                               f"pilots' records have one forcing function ({kinds}), one describing "
+                               "function in which the visual and vestibular paths act on the same "
+                               "signal, so they can neither show nor rule out motion feedback (a target "
+                               "and a disturbance on lines of their own would); motion feedback "
+                               f"{claim}"}[answer]
+    shapes = (f" (on the model's shapes of the two paths alone for the {len(one)} pilot(s) with one "
+              f"forcing function, {kinds})" if yes and one else "")
+    sentence = (f"{opening} the describing-function "
+                f"fit for at least half of the {n} pilots{of_runs}{shapes} ({first}median-pilot test p = "
                 f"{majority_p:.2g}); individually significant for {sig} of {n} pilots (p < {alpha:g}; "
                 f"binomial p = {binom_p:.2g}); Fisher's combined p = {fisher_p:.2g}{some}; "
                 f"median share of the misfit removed {100 * float(np.median(gains)):.0f} %{tail}")
-    return {"answer": "yes" if yes else "no", "sentence": sentence, "n_tested": n,
+    return {"answer": answer, "sentence": sentence, "n_tested": n, "n_separable": n_sep,
             "n_significant": sig, "binomial_p": binom_p, "majority_p": majority_p, "majority_r": r,
             "fisher_p": fisher_p, "median_gain": float(np.median(gains)), "alpha": alpha,
             "method": method + (", a pilot's runs first combined by Fisher's rule (Km/|Ke| and Km: "
@@ -220,7 +255,8 @@ def _per_pilot_out(tests, pilots, groups, alpha) -> dict:
         return {pid: ({"gain": t["gain"], "p_value": t["p_value"], "lr": t["lr"],
                        "Km": t["Km"], "Km_se": t["Km_se"], "Km_interval": t.get("Km_interval"),
                        "Km_per_Ke": t.get("Km_per_Ke"), "Km_per_Ke_interval": t.get("Km_per_Ke_interval"),
-                       "interval_level": t.get("interval_level"), "significant": t["significant"]}
+                       "interval_level": t.get("interval_level"), "significant": t["significant"],
+                       "forcing": t["forcing"]}
                       if t.get("available") else {"available": False, "reason": t.get("reason", "")})
                 for pid, t in tests.items()}
     out = {pid: {**t, "significant": t["p_value"] < alpha,
