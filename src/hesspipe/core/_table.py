@@ -22,6 +22,7 @@ import pandas as pd
 
 from ._csv import _DIMENSIONLESS, _TIME_OF_DAY, UNIT_FACTORS, _long_row, _prepare, _split_unit, decode
 from ._excel import EXCEL_SUFFIXES, excel_sheets
+from ._h5 import h5_frame
 from ._mat import mat_frame
 from ._tdms import tdms_frame
 from .errors import HesspipeError
@@ -127,8 +128,8 @@ class Frame:
 
 
 def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
-    """Read a run file's columns as written: text, a MATLAB file (or NumPy archive), a TDMS file
-    or a workbook.
+    """Read a run file's columns as written: text, a MATLAB file (or NumPy archive), a TDMS file,
+    an HDF5 file or a workbook.
 
     Parameters
     ----------
@@ -146,11 +147,12 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
         Naming the file and the problem.
     """
     path = Path(path)
-    if path.suffix.lower() in (".mat", ".npz", ".tdms"):
-        tdms = path.suffix.lower() == ".tdms"
-        df, comments, notes, others = (tdms_frame if tdms else mat_frame)(path)
-        return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others),
-                     item="channel" if tdms else "variable")
+    binary = {".mat": (mat_frame, "variable"), ".npz": (mat_frame, "variable"), ".tdms": (tdms_frame, "channel"),
+              ".h5": (h5_frame, "dataset"), ".hdf5": (h5_frame, "dataset")}
+    if path.suffix.lower() in binary:
+        reader, item = binary[path.suffix.lower()]
+        df, comments, notes, others = reader(path)
+        return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others), item=item)
     if path.suffix.lower() in EXCEL_SUFFIXES:
         sheets, notes = excel_sheets(path)   # each sheet as the text it would be saved as
         frames = [_text_frame(path, text, list(notes), separator_said=False) for _, text in sheets]

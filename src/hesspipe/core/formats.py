@@ -48,9 +48,10 @@ from .paper import WELCH_SEGMENT
 RUN_COLUMNS = ("time", "disturbance", "output", "control")
 #: File endings of measured runs when a folder is a set of pilots (tab-separated files and
 #: LabVIEW's measurement files are the same table, MATLAB files and NumPy archives its columns
-#: as variables, a workbook's first sheet of numbers, LabVIEW's TDMS files channels;
+#: as variables, a workbook's first sheet of numbers, LabVIEW's TDMS files channels, HDF5
+#: files datasets;
 #: :func:`read_run` reads each).
-RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".npz", ".xlsx", ".xlsm", ".tdms")
+RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".npz", ".xlsx", ".xlsm", ".tdms", ".h5", ".hdf5")
 #: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
 TEXT_SUFFIXES = (".txt", ".dat")
 #: Columns a run may have: the target, and the displayed error e = reference - output (the
@@ -249,6 +250,8 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
         ``STRUCT.FIELD``, a labelled signal under its label too, values as written unless
         a label states a unit (:mod:`hesspipe.core._mat`). Or a LabVIEW TDMS file
         (``.tdms``): each channel a column ``GROUP/CHANNEL [unit]`` (:mod:`hesspipe.core._tdms`).
+        Or an HDF5 file (``.h5``, ``.hdf5``): each numeric dataset a column ``GROUP/NAME [unit]``
+        (:mod:`hesspipe.core._h5`).
         Or an Excel workbook (``.xlsx``): its first sheet of numbers, read as the same table
         saved as text (:mod:`hesspipe.core._excel`). What reading did is in :attr:`Run.notes`.
     columns : str or mapping, optional
