@@ -430,5 +430,7 @@ def test_a_target_tracking_file_without_a_disturbance_column(tmp_path):
         read_run(path)
     # A disturbance mapped by name must be there: a misspelt one is not "no disturbance".
     path = _csv(tmp_path / "w.csv", ("time", "Target", "output", "control", "Wind"), rows(r, y, u, 0 * t))
-    with pytest.raises(HesspipeError, match=r"column 'Wnd' missing \(role disturbance\)"):
+    with pytest.raises(HesspipeError, match=r"column 'Wnd' missing \(role disturbance\); found columns: time, "
+                                            r"Target, output, control, Wind; map other names with columns "
+                                            r"disturbance=NAME$"):
         read_run(path, columns="reference=Target,disturbance=Wnd")

@@ -98,3 +98,13 @@ def test_compound_datasets_and_files_it_cannot_read(tmp_path):
     with h5py.File(tmp_path / "text.h5", "w") as f:
         f["notes"] = "no numbers here"
     refused(tmp_path / "text.h5", None, r"text.h5: no numeric dataset in the HDF5 file; expected a dataset per signal")
+
+
+def test_an_unreadable_files_reason_is_one_line_even_without_a_message():
+    # The readers name what the library said; an exception without a message was an
+    # IndexError (a traceback) in five copies of this line before it was one function.
+    from hesspipe.core.errors import reason
+
+    assert reason(ValueError("")) == "ValueError"
+    assert reason(OSError("bad magic\nsecond line")) == "bad magic"
+    assert reason(KeyError("x" * 200)) == "'" + "x" * 79

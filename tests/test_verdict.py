@@ -75,6 +75,7 @@ def test_one_forcing_function_cannot_rule_motion_out(tmp_path, task):
     assert v["sentence"].startswith(f"undetermined: cannot tell whether the pilots use motion: 3 of 3 "
                                     f"pilots' records have one forcing function ({kind})")
     assert v["per_pilot"][next(iter(no))]["forcing"] == kind
+    assert all(f"(one forcing function, {kind})" in line for line in verdict_lines(v)[1:-1])
 
 
 def test_a_tracking_cohort_logged_without_a_disturbance_through_the_command_line(tmp_path, capsys):

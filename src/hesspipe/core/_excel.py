@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from .errors import HesspipeError
+from .errors import HesspipeError, reason
 from .io import read_bytes
 
 EXCEL_SUFFIXES = (".xlsx", ".xlsm")
@@ -57,7 +57,7 @@ def excel_sheets(path: str | Path) -> tuple[list[tuple[str, str]], list[str]]:
     try:
         sheets = pd.read_excel(_io.BytesIO(raw), sheet_name=None, header=None, engine="openpyxl")
     except (ValueError, KeyError, OSError, zipfile.BadZipFile) as exc:
-        raise HesspipeError(f"{path}: not a readable Excel workbook ({str(exc).splitlines()[0][:80]}); "
+        raise HesspipeError(f"{path}: not a readable Excel workbook ({reason(exc)}); "
                             "expected an .xlsx file") from None
     numeric = [name for name, df in sheets.items() if _numbers(df) >= 2]
     if not numeric:

@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ._mat import record_columns
-from .errors import HesspipeError
+from .errors import HesspipeError, reason
 from .io import read_bytes
 
 #: Attributes that give a dataset's unit.
@@ -89,8 +89,7 @@ def h5_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str]
     try:
         h5 = h5py.File(_io.BytesIO(raw), "r")
     except OSError as exc:
-        why = str(exc).splitlines()[0][:80] if str(exc) else type(exc).__name__
-        raise HesspipeError(f"{path}: not a readable HDF5 file ({why}); expected an HDF5 file") from None
+        raise HesspipeError(f"{path}: not a readable HDF5 file ({reason(exc)}); expected an HDF5 file") from None
     comments, columns, named, skipped = [], {}, {}, []
     with h5:
         comments += [f"{k}: {t}" for k, v in h5.attrs.items() if (t := _text(v))]
@@ -123,12 +122,8 @@ def h5_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str]
         h5.visititems(visit)
     if not columns:
         raise HesspipeError(f"{path}: no numeric dataset in the HDF5 file; expected a dataset per signal")
-    n_columns = len(columns)
-    for alias, sources in named.items():
-        if len(sources) == 1 and alias not in columns:
-            columns[alias] = columns[sources[0]]
-    frame, others = record_columns(columns, skip=named)
-    notes = [f"HDF5 file: {n_columns} column(s) from its datasets, {len(frame)} samples read"]
+    frame, others = record_columns(columns, named)
+    notes = [f"HDF5 file: {len(columns)} column(s) from its datasets, {len(frame)} samples read"]
     others += skipped
     if others:
         notes.append(f"HDF5 file: left out {len(others)} dataset(s) of another length or shape: "

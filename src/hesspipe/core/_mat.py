@@ -25,7 +25,7 @@ import pandas as pd
 from scipy import io as _sio
 
 from ._mat73 import hdf5_content
-from .errors import HesspipeError
+from .errors import HesspipeError, reason
 from .io import read_bytes
 
 
@@ -65,7 +65,7 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
         except NotImplementedError:   # version 7.3: HDF5
             content = hdf5_content(raw, path)
         except (_sio.matlab.MatReadError, ValueError, TypeError, OSError, EOFError) as exc:
-            raise HesspipeError(f"{path}: not a readable MATLAB file ({str(exc).splitlines()[0][:80]}); "
+            raise HesspipeError(f"{path}: not a readable MATLAB file ({reason(exc)}); "
                                 "expected a MAT file of versions 4 to 7.3") from None
     columns: dict[str, np.ndarray] = {}
     header = content.get("__header__", b"")
@@ -105,7 +105,7 @@ def _npz_content(raw: bytes, path) -> dict:
     try:
         archive = np.load(_io.BytesIO(raw), allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
-        raise HesspipeError(f"{path}: not a readable NumPy archive ({str(exc).splitlines()[0][:80]}); "
+        raise HesspipeError(f"{path}: not a readable NumPy archive ({reason(exc)}); "
                             "expected a .npz file written by numpy.savez") from None
     if not hasattr(archive, "files"):
         raise HesspipeError(f"{path}: a single NumPy array, not an archive; expected a .npz file of named "
@@ -120,7 +120,7 @@ def _npz_content(raw: bytes, path) -> dict:
     return content
 
 
-def record_columns(columns: dict, skip=()) -> tuple[pd.DataFrame, list[str]]:
+def record_columns(columns: dict, aliases=None) -> tuple[pd.DataFrame, list[str]]:
     """The columns of the record's length, and the others named with their lengths.
 
     Parameters
@@ -128,8 +128,10 @@ def record_columns(columns: dict, skip=()) -> tuple[pd.DataFrame, list[str]]:
     columns : dict of str to ndarray
         Name → values of a file's signals, of any lengths (a MAT file's variables, a TDMS
         file's channels).
-    skip : collection of str
-        Names not to list among the others (aliases of a column listed under its own name).
+    aliases : mapping of str to list of str, optional
+        A short name (a channel's or dataset's own name) → the columns it names (in their
+        groups): a column too where it names one and is no column's name already; never
+        listed among the others (their columns are).
 
     Returns
     -------
@@ -139,12 +141,15 @@ def record_columns(columns: dict, skip=()) -> tuple[pd.DataFrame, list[str]]:
     others : list of str
         ``NAME (k values)`` of the rest: a sample rate, a forcing's frequencies.
     """
+    aliases = aliases or {}
+    columns = {**columns, **{alias: columns[sources[0]] for alias, sources in aliases.items()
+                             if len(sources) == 1 and alias not in columns}}
     # Scalars (a sample rate, a gain, a cell of settings) are no record, however many.
     lengths = Counter(v.size for v in columns.values() if v.size > 1) or Counter(v.size for v in columns.values())
     n = max(lengths, key=lambda k: (lengths[k], k))
     frame = pd.DataFrame({k: v for k, v in columns.items() if v.size == n})
     others = [f"{k} ({v.size} value{'s' if v.size != 1 else ''})" for k, v in columns.items()
-              if v.size != n and k not in skip]
+              if v.size != n and k not in aliases]
     return frame, others
 
 

@@ -24,7 +24,7 @@ import io as _io
 
 import numpy as np
 
-from .errors import HesspipeError
+from .errors import HesspipeError, reason
 
 #: MATLAB classes read as numbers (a logical as 0 and 1, as scipy reads it from version 7).
 _NUMERIC = frozenset({"double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32",
@@ -57,7 +57,7 @@ def hdf5_content(raw: bytes, path) -> dict:
     try:
         h5 = h5py.File(_io.BytesIO(raw), "r")
     except OSError as exc:
-        raise HesspipeError(f"{path}: not a readable MATLAB 7.3 (HDF5) file ({str(exc).splitlines()[0][:80]})") \
+        raise HesspipeError(f"{path}: not a readable MATLAB 7.3 (HDF5) file ({reason(exc)})") \
             from None
     with h5:
         content = {"__header__": raw[:116].rstrip(b" \x00")}

@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ._mat import record_columns
-from .errors import HesspipeError
+from .errors import HesspipeError, reason
 from .io import read_bytes
 
 
@@ -63,8 +63,7 @@ def tdms_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[st
     try:
         tdms = TdmsFile.read(_io.BytesIO(raw))
     except (ValueError, KeyError, IndexError, struct.error, OSError, EOFError) as exc:
-        why = str(exc).splitlines()[0][:80] if str(exc) else type(exc).__name__
-        raise HesspipeError(f"{path}: not a readable TDMS file ({why}); expected a LabVIEW TDMS file") from None
+        raise HesspipeError(f"{path}: not a readable TDMS file ({reason(exc)}); expected a LabVIEW TDMS file") from None
     comments = [f"{k}: {v}" for k, v in tdms.properties.items() if isinstance(v, str) and v.strip()]
     columns: dict[str, np.ndarray] = {}
     named: dict[str, list[str]] = {}
@@ -91,10 +90,7 @@ def tdms_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[st
                 steps[name] = (float(dt), float(channel.properties.get("wf_start_offset", 0.0) or 0.0))
     if not columns:
         raise HesspipeError(f"{path}: no numeric channel in the TDMS file; expected a channel per signal")
-    for alias, sources in named.items():
-        if len(sources) == 1 and alias not in columns:
-            columns[alias] = columns[sources[0]]
-    frame, others = record_columns(columns, skip=named)
+    frame, others = record_columns(columns, named)
     n = len(frame)
     waves = {steps[k] for k in frame.columns if k in steps}
     has_time = any(c.split("/")[-1].split(" [")[0].strip().lower() == "time" for c in frame.columns)

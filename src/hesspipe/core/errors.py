@@ -33,3 +33,20 @@ def where(path, field=None) -> str:
     if field:
         out += f": field '{field}'"
     return out
+
+
+def reason(exc: BaseException) -> str:
+    """The first line of a library's exception, for a one-line message about an unreadable file.
+
+    Parameters
+    ----------
+    exc : BaseException
+        What the reading library raised.
+
+    Returns
+    -------
+    str
+        Its message's first line, at most 80 characters; its type's name where it has no message.
+    """
+    lines = str(exc).strip().splitlines()
+    return lines[0][:80] if lines else type(exc).__name__

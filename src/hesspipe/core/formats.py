@@ -341,8 +341,9 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     # A target-tracking task has no disturbance, and a laboratory logs none: without a
     # disturbance column (not mapped) a file holding the target reads as such a task.
     untracked = () if "disturbance" in mapping else ("disturbance",)
-    also = {"time": ", or give the sample rate (sample_rate) of a file without times",
-            "disturbance": ", or give the target (reference or error) of a task without a disturbance"}
+    also = {"time": ", or give the sample rate (sample_rate) of a file without times"}
+    if untracked:
+        also["disturbance"] = ", or give the target (reference or error) of a task without a disturbance"
     frame = read_frame(path, "a measured-run CSV")
 
     def one(source, run_names: Mapping[str, str], where: Path) -> Run:

@@ -305,7 +305,8 @@ def verdict_lines(verdict: Mapping) -> list[str]:
         gains = [g for g in gains if g]
         km = ", ".join(gains)
         runs = f" ({t['runs']} runs)" if t.get("runs", 1) > 1 else ""
+        one = f" (one forcing function, {t['forcing']})" if t.get("forcing", SEPARABLE) != SEPARABLE else ""
         out.append(f"  {pid}{runs}: misfit removed {100 * t['gain']:.1f} %, F = {t['lr']:.3g}, "
-                   f"p = {t['p_value']:.2g}{' *' if t['significant'] else ''}, {km}")
+                   f"p = {t['p_value']:.2g}{' *' if t['significant'] else ''}{one}, {km}")
     out.append(f"  ({verdict['method']})")
     return out
