@@ -434,3 +434,25 @@ def test_a_target_tracking_file_without_a_disturbance_column(tmp_path):
                                             r"Target, output, control, Wind; map other names with columns "
                                             r"disturbance=NAME$"):
         read_run(path, columns="reference=Target,disturbance=Wnd")
+
+
+def test_a_target_left_unread_is_named(tmp_path):
+    # A target under a name the mapping missed reads as "no target" (its lines then pass for
+    # remnant): the note names the columns left unread; without such columns nothing is said.
+    t = 0.01 * np.arange(300)
+    rows = [tuple(f"{v:.9g}" for v in row) for row in zip(t, np.sin(t), np.cos(t), np.sin(2 * t), np.cos(3 * t))]
+    path = _csv(tmp_path / "t.csv", ("time", "disturbance", "output", "control", "Target [deg]"), rows)
+    run = read_run(path)
+    assert not run.reference.any()
+    assert ("no target column (reference): the target read as 0; not read: Target [deg] (map reference=NAME if "
+            "one of them is the target)") in run.notes
+    assert not any("no target column" in n for n in read_run(path, columns="reference=Target").notes)
+    plain = _csv(tmp_path / "p.csv", ("time", "disturbance", "output", "control"), [r[:4] for r in rows])
+    assert not any("no target column" in n for n in read_run(plain).notes)
+    # A long table's key columns are read (as keys), not left unread.
+    from hesspipe.core.formats import read_file_runs
+
+    long = _csv(tmp_path / "l.csv", ("Subject", "time", "disturbance", "output", "control", "Target"),
+                [("s01",) + r[:4] + (r[4],) for r in rows])
+    note = [n for n in read_file_runs(long, columns="person=Subject")[0].notes if "no target" in n]
+    assert note and "not read: Target (map" in note[0]

@@ -346,16 +346,28 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
         also["disturbance"] = ", or give the target (reference or error) of a task without a disturbance"
     frame = read_frame(path, "a measured-run CSV")
 
+    keys = {role: mapping[role] for role in KEY_COLUMNS if role in mapping}
+
     def one(source, run_names: Mapping[str, str], where: Path) -> Run:
         # One run's columns from the file (or a long table's rows), checked, named after `where`.
         kw = dict(hint="columns", also=also, gaps=resample, gaps_hint="; set resample to interpolate over a missing sample")
         table = read_table(source, run_names, optional=optional + untracked, **kw)
         if "disturbance" not in table.data and not {"reference", "error"} & set(table.data):
             read_table(source, run_names, optional=optional, **kw)   # raises: no forcing at all
-        return _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
-                               sample_rate=fs)
+        run = _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
+                              sample_rate=fs)
+        if {"reference", "error"} & set(table.columns):
+            return run
+        # A target the file holds under a name the mapping missed reads as "no target" and
+        # changes the answer (its lines taken for remnant): name what was left unread.
+        key_names = {k.partition("=")[0].strip().lower() for k in keys.values()}
+        unread = [h for h in source.headers if h not in table.columns.values()
+                  and str(h).strip() and str(h).strip().lower() not in key_names]
+        return replace(run, notes=run.notes + (
+            f"no target column (reference): the target read as 0; not read: {', '.join(map(str, unread[:6]))}"
+            + (", ..." if len(unread) > 6 else "") + " (map reference=NAME if one of them is the target)",)) \
+            if unread else run
 
-    keys = {role: mapping[role] for role in KEY_COLUMNS if role in mapping}
     if keys:   # a long table: runs one after another, told apart by their key columns
         if any(RUN_NUMBER in name for name in names.values()):
             raise HesspipeError(f"columns: {', '.join(keys)} with '{RUN_NUMBER}': expected runs side by side "
