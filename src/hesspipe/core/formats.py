@@ -26,9 +26,9 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from ._csv import unwrap_turns
 from ._long import KEY_COLUMNS, row_groups
 from ._plants import Plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
+from ._roles import ERROR_AGREES, target_unread, unwrapped, with_error, without_disturbance  # noqa: F401
 from ._table import RUN_NUMBER, read_frame, read_table, run_columns
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
 from ._tf import tf_coefficients as tf_coefficients  # re-exported: the plants report and the flight use it
@@ -57,8 +57,6 @@ TEXT_SUFFIXES = (".txt", ".dat")
 #: Columns a run may have: the target, and the displayed error e = reference - output (the
 #: reference where a laboratory logged the error and not the target).
 OPTIONAL_COLUMNS = ("reference", "error")
-#: The displayed error agrees with reference - output within this fraction of its RMS.
-ERROR_AGREES = 0.05
 
 #: Largest magnitude of a signal whose power spectrum is finite in float64 with room to spare.
 MAX_MAGNITUDE = 1e100
@@ -356,17 +354,7 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
             read_table(source, run_names, optional=optional, **kw)   # raises: no forcing at all
         run = _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
                               sample_rate=fs)
-        if {"reference", "error"} & set(table.columns):
-            return run
-        # A target the file holds under a name the mapping missed reads as "no target" and
-        # changes the answer (its lines taken for remnant): name what was left unread.
-        key_names = {k.partition("=")[0].strip().lower() for k in keys.values()}
-        unread = [h for h in source.headers if h not in table.columns.values()
-                  and str(h).strip() and str(h).strip().lower() not in key_names]
-        return replace(run, notes=run.notes + (
-            f"no target column (reference): the target read as 0; not read: {', '.join(map(str, unread[:6]))}"
-            + (", ..." if len(unread) > 6 else "") + " (map reference=NAME if one of them is the target)",)) \
-            if unread else run
+        return replace(run, notes=run.notes + target_unread(source.headers, table.columns, keys))
 
     if keys:   # a long table: runs one after another, told apart by their key columns
         if any(RUN_NUMBER in name for name in names.values()):
@@ -413,16 +401,8 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
             raise HesspipeError(f"{path}: column '{table.columns[role]}': values up to {big:.3g} overflow a "
                                 f"power spectrum; expected magnitudes below {MAX_MAGNITUDE:g} "
                                 "(check the column's units)")
-    notes = notes + _unwrapped(data, table.columns) + _with_error(data, table.columns)
-    if "disturbance" not in data:
-        if not np.any(data["reference"]):   # no forcing at all
-            why = (f"column '{table.columns['error']}' (error) is minus the output" if "error" in table.columns
-                   else f"column '{table.columns['reference']}' (reference) is 0 throughout")
-            raise HesspipeError(f"{path}: no disturbance column, and no target ({why}); expected a "
-                                "disturbance column (map it with columns disturbance=NAME)")
-        data["disturbance"] = np.zeros(n)
-        notes += ("no disturbance column: a task without a disturbance (target tracking), the disturbance "
-                  "read as 0 (a disturbance that was flown but not logged shows as the plants' mismatch)",)
+    notes = notes + unwrapped(data, table.columns) + with_error(data, table.columns) \
+        + without_disturbance(path, data, table.columns)
     if "time" not in data:   # a file without times, read at the sample rate given
         data["time"] = np.arange(n, dtype=float) / sample_rate
         notes += (f"no time column: sample k at k / {sample_rate:g} Hz",)
@@ -491,51 +471,6 @@ def check_sample_rate(sample_rate) -> float | None:
         raise HesspipeError(f"sample_rate: expected a number of Hz from {1.0 / MAX_INTERVAL_S:g} to "
                             f"{1.0 / MIN_INTERVAL_S:g}, got {sample_rate!r}")
     return float(sample_rate)
-
-
-def _with_error(data: dict, columns: Mapping[str, str]) -> tuple[str, ...]:
-    """Take the displayed error out of `data`, in place: where no reference is logged it gives
-    the reference (``r = e + y``); beside a logged one it is checked against it and said where
-    it disagrees (the reference is used)."""
-    if "error" not in data:
-        return ()
-    e, col = data.pop("error"), columns["error"]
-    size = float(np.sqrt(np.mean(e ** 2)))
-    if "reference" not in data:
-        r = e + data["output"]
-        if float(np.sqrt(np.mean(r ** 2))) <= ERROR_AGREES * size:
-            # A disturbance task: what is left is rounding, or the output's step between the
-            # frames the logger took the two from, not a target's lines.
-            data["reference"] = np.zeros_like(r)
-            return (f"column '{col}' (error): minus the output within {ERROR_AGREES:.0%} of its RMS: "
-                    "no target (reference 0)",)
-        data["reference"] = r
-        return (f"column '{col}' (error): the reference taken as error + output (the error as "
-                "displayed, e = r - y; logged as y - r it maps as error=-NAME)",)
-    gap, flipped = (float(np.sqrt(np.mean((data["reference"] - data["output"] - sign * e) ** 2)))
-                    for sign in (1.0, -1.0))
-    if size == 0.0 or gap <= ERROR_AGREES * size:
-        return ()
-    what = ("it is output - reference, the opposite sign" if flipped <= ERROR_AGREES * size else
-            f"they differ by {gap / size:.0%} of its RMS (a display delay, another scale or another signal?)")
-    return (f"column '{col}' (error): not reference - output: {what}; the reference is used",)
-
-
-def _unwrapped(data: dict, columns: Mapping[str, str]) -> tuple[str, ...]:
-    """Unwrap, in place, an output or reference angle logged within one turn (a heading), and
-    keep the two within half a turn of each other so that the error stays the error."""
-    notes, turn = [], None
-    for role in ("output", "reference"):
-        if role in data:
-            data[role], period, jumps = unwrap_turns(data[role])
-            if period:
-                turn = period
-                notes.append(f"column '{columns[role]}' ({role}): {jumps} step(s) of one turn "
-                             f"({period:.6g}) unwrapped (an angle logged within one turn)")
-    if turn and "reference" in data:
-        gap = float(np.median(data["reference"] - data["output"]))
-        data["output"] = data["output"] + turn * round(gap / turn)
-    return tuple(notes)
 
 
 def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = WELCH_SEGMENT,
