@@ -44,3 +44,17 @@ def test_disturbance_only_baseline_is_undetermined_not_denied(tmp_path):
     assert mv["forcing"] == "disturbance only" and mv["separable"] is False
     assert not mv["named"] and mv["verdict"].startswith("cannot tell"), mv
     assert mv["verdict"] in format_report(d)
+
+
+def test_every_run_diagnosed_counts_the_runs_that_cannot_tell(tmp_path):
+    from hesspipe.diagnose import diagnose_each
+
+    one, plants = _run(tmp_path, "disturbance")
+    both, _ = _run(tmp_path, "both")
+    each = diagnose_each([one, both], plants, candidates=("motion_feedback",))
+    verdicts = [d.motion_verdict for d in each.diagnoses]
+    assert [v["separable"] for v in verdicts] == [False, True] and not any(v["named"] for v in verdicts)
+    lines = each.lines()
+    assert lines[0 if not each.synthetic else 1].endswith("; cannot tell: one forcing function)")
+    assert "cannot tell" not in lines[-2]
+    assert each.summary().endswith("; motion cannot be told on 1 of 2 runs (one forcing function)")

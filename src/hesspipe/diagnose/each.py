@@ -62,6 +62,9 @@ class RunDiagnoses:
         named = "; ".join(f"{name} named on {k} of {n} runs" for name, k in self.tally().items())
         none = sum(not d.named_effects for d in self.diagnoses)
         out = (named or f"nothing named on {n} runs") + (f"; nothing named on {none}" if named and none else "")
+        # Not named is not "no" where the record has one forcing function (MotionVerdict.separable).
+        undecided = sum(_cannot_tell(d) for d in self.diagnoses)
+        out += f"; motion cannot be told on {undecided} of {n} runs (one forcing function)" if undecided else ""
         return out + (f" ({len(self.failures)} run(s) failed)" if self.failures else "")
 
     def lines(self, failures: bool = True) -> list[str]:
@@ -80,7 +83,8 @@ class RunDiagnoses:
         for d in self.diagnoses:
             motion = d.motion_verdict or {}
             p = motion.get("p_value")
-            tail = f" (motion test p = {p:.2g})" if isinstance(p, float) else ""
+            tail = (f" (motion test p = {p:.2g}{'; cannot tell: one forcing function' if _cannot_tell(d) else ''})"
+                    if isinstance(p, float) else "")
             out.append(f"{d.run_id}: {', '.join(d.named_effects) or 'nothing'} named{tail}")
         out += [f"FAILED {where}: {message}" for where, message in self.failures if failures]
         out.append(f"SUMMARY: {self.summary()}")
@@ -96,6 +100,13 @@ class RunDiagnoses:
         return {"synthetic": self.synthetic, "runs": len(self.diagnoses), "named": self.tally(),
                 "summary": self.summary(), "diagnoses": [d.to_dict() for d in self.diagnoses],
                 "failures": [{"source": w, "error": m} for w, m in self.failures]}
+
+
+def _cannot_tell(d: Diagnosis) -> bool:
+    """Whether the run's motion test found nothing on one forcing function (neither named nor
+    ruled out, :func:`hesspipe.diagnose.motion.motion_words`)."""
+    motion = d.motion_verdict or {}
+    return bool(motion) and not motion.get("named") and motion.get("separable") is False
 
 
 def diagnose_each(runs: Run | Sequence[Run], plants: Plants, *, mapper: Callable | None = None,
