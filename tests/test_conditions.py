@@ -71,6 +71,28 @@ def test_the_cabs_lead_raises_every_persons_phase_margin(cohort, capsys):
             assert len(m["runs"]) == 1 and m["error_variance"] > 0 and 0 < m["remnant_share"] < 1
 
 
+def test_a_target_alone_says_whose_loop_the_crossover_is(cohort, tmp_path):
+    # The same persons flying a target alone: the crossover is measured at the target's lines,
+    # the loop the target sees, and the comparison says so; with disturbance lines it does not.
+    from hesspipe.core.formats import read_plants, read_run
+
+    runs = {}
+    for cond, effects in (("static", ()), ("motion", ("motion_feedback",))):
+        for i, person in enumerate(PERSONS):
+            pilot = {"structure": "precision", "tau": person["tau_v"], "tau_m": 0.15, **person}
+            pilot = pilot if effects else {k: v for k, v in pilot.items() if k not in ("Km", "tau_m")}
+            spec = draw_trial("1/s", derive_seed(7, cond, str(i)), effects=effects, pilot_params=pilot,
+                              name=f"p{i + 1}", **{**KW, "task": "tracking"})
+            runs.setdefault(cond, []).append(read_run(write_trial(tmp_path / cond, simulate_trial(spec))))
+    plants = read_plants(tmp_path / "static" / "plants.json")
+    said = "no run has disturbance lines: the crossover and phase margin of this comparison are the target loop's"
+    result = compare_conditions(runs["static"], runs["motion"], plants, labels=("static", "motion"))
+    assert any(n.startswith(said) for n in result.notes), result.notes
+    both = [read_run(p) for p in sorted((cohort / "static").glob("p*.csv"))]
+    other = [read_run(p) for p in sorted((cohort / "motion").glob("p*.csv"))]
+    assert not any(n.startswith(said) for n in compare_conditions(both, other, plants).notes)
+
+
 def test_paired_tests_are_scipys_t_test_holm_adjusted_over_the_primary_metrics():
     rng = np.random.default_rng(3)
     persons = {}

@@ -46,7 +46,7 @@ from ..core.provenance import SYNTHETIC_BANNER
 from ..core.seeds import derive_seed
 from ..identification.frf import estimate_frf
 from ..identification.frf_average import average_frf, check_repeats
-from ..identification.lines import windowed
+from ..identification.lines import SEPARABLE, forcing_sets, windowed
 from .verdict import pilot_groups
 
 ALPHA = 0.05
@@ -371,6 +371,11 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
                   for label, v in c.items() if not math.isfinite(v["crossover_rad_s"])]
         notes += [f"{p} ({label}): {len(v['runs'])} runs averaged {v['averaged']}"
                   for label, v in c.items() if v["averaged"] != "line by line" and len(v["runs"]) > 1]
+    # The crossover is the disturbance loop's, measured at its lines; runs without them (a
+    # target alone) give the loop the target sees, which a vestibular path changes otherwise.
+    if not any(forcing_sets(r) in (SEPARABLE, "disturbance only") for r in [*runs_a, *runs_b]):
+        notes.append("no run has disturbance lines: the crossover and phase margin of this comparison are the target "
+                     "loop's (measured at the target's lines), not the disturbance loop's")
     tests = paired_tests(persons, labels)
     return ConditionComparison(labels=labels, persons=persons, tests=tests,
                                verdict=conditions_verdict(tests, labels, len(both)), synthetic=synthetic,
