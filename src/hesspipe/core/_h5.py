@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ._mat import record_columns
+from ._mat import array_columns, left_out, record_columns
 from .errors import HesspipeError, reason
 from .io import read_bytes
 
@@ -41,20 +41,6 @@ def _text(value) -> str | None:
     if isinstance(value, np.ndarray) and value.dtype.kind in "SUO" and value.size == 1:
         return _text(value.reshape(-1)[0])
     return value.strip() if isinstance(value, str) and value.strip() else None
-
-
-def _columns(name: str, values: np.ndarray) -> dict[str, np.ndarray]:
-    """A numeric array's columns under `name`: a vector as itself, a matrix's columns
-    ``name:1`` to ``name:k`` along its longer side; nothing for more dimensions."""
-    values = np.asarray(values)
-    if values.ndim == 2 and 1 in values.shape:
-        values = values.reshape(-1)
-    if values.ndim <= 1:
-        return {name: np.atleast_1d(values).astype(float)}
-    if values.ndim == 2:
-        cols = values if values.shape[0] >= values.shape[1] else values.T
-        return {f"{name}:{k}": cols[:, k - 1].astype(float) for k in range(1, cols.shape[1] + 1)}
-    return {}
 
 
 def h5_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str], list[str]]:
@@ -111,7 +97,7 @@ def h5_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str]
                 return   # text, references, opaque data: not a signal
             found = {}
             for key, vals in parts.items():
-                found.update(_columns(key, vals))
+                found.update(array_columns(key, vals))
             if not found:
                 skipped.append(f"{name} ({item.ndim} dimensions)")
             for key, vals in found.items():
@@ -125,7 +111,5 @@ def h5_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str]
     frame, others = record_columns(columns, named)
     notes = [f"HDF5 file: {len(columns)} column(s) from its datasets, {len(frame)} samples read"]
     others += skipped
-    if others:
-        notes.append(f"HDF5 file: left out {len(others)} dataset(s) of another length or shape: "
-                     f"{', '.join(others[:6])}" + (", ..." if len(others) > 6 else ""))
-    return frame, tuple(comments), notes, others
+    return frame, tuple(comments), notes + left_out("HDF5 file", "dataset", others, "of another length or shape"), \
+        others

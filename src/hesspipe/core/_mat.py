@@ -93,10 +93,7 @@ def mat_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[str
              "holds none of its own)"]
     if named:
         notes.append(f"{kind}: {named} labelled signal(s) also named by their labels")
-    if others:
-        notes.append(f"{kind}: left out {len(others)} variable(s) of another length: {', '.join(others[:6])}"
-                     + (", ..." if len(others) > 6 else ""))
-    return frame, tuple(comments), notes, others
+    return frame, tuple(comments), notes + left_out(kind, "variable", others), others
 
 
 def _npz_content(raw: bytes, path) -> dict:
@@ -194,11 +191,55 @@ def _collect(name: str, value, columns: dict, comments: list, labels: dict) -> N
         return
     if not isinstance(value, np.ndarray) or value.dtype.kind not in "iuf":
         return   # cells, logicals, complex, objects: not a signal
-    a = np.squeeze(value).astype(float)
+    columns.update(array_columns(name, value))
+
+
+def array_columns(name: str, values: np.ndarray) -> dict[str, np.ndarray]:
+    """A numeric array's columns under `name`: a vector (a matrix of one row or column too) as
+    itself, a matrix's columns ``name:1`` to ``name:k`` with the samples along its longer side
+    (a row per signal is MATLAB's other habit); nothing for more dimensions.
+
+    Parameters
+    ----------
+    name : str
+        The variable's (or dataset's) name.
+    values : ndarray
+        Its numbers.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Column name → float values.
+    """
+    a = np.squeeze(np.asarray(values)).astype(float)
     if a.ndim <= 1:
-        columns[name] = np.atleast_1d(a)
-    elif a.ndim == 2:
-        if a.shape[0] < a.shape[1]:
-            a = a.T   # samples along the longer side: a row per signal is MATLAB's other habit
-        for j in range(a.shape[1]):
-            columns[f"{name}:{j + 1}"] = a[:, j]
+        return {name: np.atleast_1d(a)}
+    if a.ndim > 2:
+        return {}
+    a = a.T if a.shape[0] < a.shape[1] else a
+    return {f"{name}:{j}": a[:, j - 1] for j in range(1, a.shape[1] + 1)}
+
+
+def left_out(kind: str, item: str, others, why: str = "of another length") -> list[str]:
+    """The note of a binary file's columns left out of the record, if any.
+
+    Parameters
+    ----------
+    kind : str
+        The file's kind, the note's head ("TDMS file").
+    item : str
+        What its columns are ("channel").
+    others : sequence of str
+        :func:`record_columns`' others.
+    why : str
+        Why they were left out.
+
+    Returns
+    -------
+    list of str
+        No note or one.
+    """
+    if not others:
+        return []
+    return [f"{kind}: left out {len(others)} {item}(s) {why}: {', '.join(others[:6])}"
+            + (", ..." if len(others) > 6 else "")]

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ._mat import record_columns
+from ._mat import left_out, record_columns
 from .errors import HesspipeError, reason
 from .io import read_bytes
 
@@ -100,7 +100,4 @@ def tdms_frame(path: str | Path) -> tuple[pd.DataFrame, tuple[str, ...], list[st
         notes.append(f"TDMS file: no time channel: 'time' from the waveforms' interval (wf_increment {dt:g} s)")
     notes.insert(0, f"TDMS file: {len(named)} channel name(s) in {len(tdms.groups())} group(s), {n} samples read, "
                     "units from the channels' unit_string")
-    if others:
-        notes.append(f"TDMS file: left out {len(others)} channel(s) of another length: {', '.join(others[:6])}"
-                     + (", ..." if len(others) > 6 else ""))
-    return frame, tuple(comments), notes, others
+    return frame, tuple(comments), notes + left_out("TDMS file", "channel", others), others
