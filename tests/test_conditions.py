@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from scipy import stats
 
 from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import read_run, write_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.humanlike.pilots import loop_metrics, parts
@@ -231,3 +233,17 @@ def test_one_folder_for_both_conditions_is_an_error_naming_the_record(cohort, ca
                      str(cohort / "static" / "plants.json")])
         err = capsys.readouterr().err.strip().splitlines()
         assert code != 0 and len(err) == 1 and "p1.csv: the same record as" in err[0]
+
+
+def test_a_stick_in_another_unit_is_refused_as_pilots_refuses_it(cohort, capsys, tmp_path):
+    # The crossover is of L = H Yc: a control 5.7 times the plants' unit moved every person's
+    # crossover and phase margin (to -175 deg) without a word, where `pilots` refused it.
+    for cond in ("static", "motion"):
+        (tmp_path / cond).mkdir()
+        for f in sorted((cohort / cond).glob("p*.csv")):
+            run = read_run(f)
+            write_run(tmp_path / cond / f.name, replace(run, control=run.control * 5.73))
+    code = main(["conditions", str(tmp_path / "static"), str(tmp_path / "motion"), "--plants",
+                 str(cohort / "static" / "plants.json")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code != 0 and len(err) == 1 and "control's units differ from the plants'" in err[0]

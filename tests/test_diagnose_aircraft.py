@@ -7,10 +7,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from hesspipe.core.formats import read_plants, read_run
-from hesspipe.diagnose.aircraft import plant_finding
+from hesspipe.diagnose.aircraft import corrected, plant_finding
 from hesspipe.diagnose.checks import plant_check
 from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.diagnose.workflow import diagnose
@@ -64,6 +65,42 @@ def test_wrong_columns_are_a_finding_with_evidence(clean, how):
     else:
         assert q["columns"] == ["disturbance", "control", "output"] and q["gain_control"] > 0
     assert "WRONG PLANTS FILE" in f.message and f.fit_percent < 50
+
+
+@pytest.mark.parametrize("how", ["stick", "output"])
+def test_a_column_in_another_unit_is_a_wrong_file_finding(clean, how):
+    # A stick in per cent where the plants take degrees, an output in radians beside inputs in
+    # degrees: a Dutch-roll pair with a free numerator fitted either a little better than the
+    # scaled file, unsupported, and the verdict was "unexplained".
+    run, plants = clean
+    bad = (replace(run, control=run.control * 5.73) if how == "stick"
+           else replace(run, output=np.radians(run.output)))
+    f = plant_finding(bad, plants, plant_check(bad, plants))
+    assert f.verdict == "wrong_file", f.message
+    words = ("control path's scale off by 0.17" if how == "stick"
+             else "output's scale off by 0.0175 against both inputs' (radians against degrees")
+    assert words in f.message
+    assert "output_scale" not in f.parameters   # no target: the plants are rescaled instead
+
+
+def test_an_output_in_another_unit_than_the_target_is_rescaled(tmp_path_factory):
+    # The logger's header said 'Yaw [deg]' (converted to radians) and nothing for the target,
+    # the disturbance and the stick (read in degrees): the describing function of r - y was
+    # nonsense and the motion test found nothing (F 0.5 against 37.9 as logged).
+    folder = tmp_path_factory.mktemp("mixed")
+    spec = draw_trial("1/s", 3, task="both", pilot="precision", effects=("motion_feedback",),
+                      output="angle", tau_m=0.15)
+    run = read_run(write_trial(folder, simulate_trial(spec)))
+    plants = read_plants(folder / "plants.json")
+    bad = replace(run, control=np.degrees(run.control), disturbance=np.degrees(run.disturbance),
+                  reference=np.degrees(run.reference))
+    f = plant_finding(bad, plants, plant_check(bad, plants))
+    assert f.verdict == "wrong_file" and "output is rescaled" in f.message, f.message
+    fixed, fixed_plants = corrected(bad, plants, f)
+    np.testing.assert_allclose(fixed.output, np.degrees(run.output), rtol=0.01)   # a fitted factor
+    for path in ("control_to_output", "disturbance_to_output"):
+        gain = abs(getattr(fixed_plants, path)(1j) / getattr(plants, path)(1j))
+        assert gain == pytest.approx(1.0, rel=0.05)
 
 
 def test_clean_plants_match_and_baseline_names_no_pilot_effect(clean):

@@ -47,6 +47,17 @@ def test_roundtrip_keeps_values_id_and_synthetic_flag(tmp_path):
     np.testing.assert_allclose(back.error, -back.output)
 
 
+def test_a_run_on_a_loggers_clock_is_written_back_with_its_times(tmp_path):
+    # Seconds since 1970 at 60 Hz: nine significant digits (the signals' precision) kept
+    # whole seconds only, and the file written back could not be read.
+    run = _run()
+    run = Run(time=1_697_697_865.181 + np.arange(len(run)) / 60.0, disturbance=run.disturbance,
+              output=run.output, control=run.control, reference=run.reference, id="clock")
+    back = read_run(write_run(tmp_path / "clock.csv", run))
+    np.testing.assert_allclose(back.time, run.time, rtol=0, atol=1e-4)
+    assert back.dt == pytest.approx(1 / 60.0)
+
+
 def test_measured_run_is_not_synthetic_and_reference_defaults_to_zero(tmp_path):
     path = _csv(tmp_path / "a.csv", ("time", "disturbance", "output", "control"), _rows(),
                 comments=("VMS session 3",))

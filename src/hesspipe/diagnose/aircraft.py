@@ -45,6 +45,7 @@ import scipy.stats
 
 from ..pilot.blocks import tf
 from ..pilot.effects import actuator_lag_factor, roll_mode_factor
+from ..plants.consistency import radians_hint
 from ._refit import (  # noqa: F401 (DRIFT_HZ, EVIDENCE_BAND_HZ: re-exported, named by the README and tests)
     DRIFT_HZ,
     EVIDENCE_BAND_HZ,
@@ -296,14 +297,36 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
         if swapped:
             what.append("columns read as control='%s', disturbance='%s', output='%s'" % perm)
         what += [f"the {r} path's sign flipped" for r in bad_sign]
-        what += [f"the {r} path's scale off by {abs(v):.3g}" for r, v in zip(("control", "disturbance"), g)
-                 if r in bad_scale]
+        if len(bad_scale) == 2 and abs(math.log(abs(g[0] / g[1]))) < 0.1:
+            # Both paths off alike: the output's unit is the odd one (or both inputs').
+            what.append(f"the output's scale off by {abs(g[0]):.3g} against both inputs'{radians_hint(abs(g[0]))}")
+        else:
+            what += [f"the {r} path's scale off by {abs(v):.3g}{radians_hint(abs(v))}"
+                     for r, v in zip(("control", "disturbance"), g) if r in bad_scale]
         out.append(Explanation("+".join(["swapped"] * swapped + ["sign"] * bool(bad_sign)
                                         + ["scale"] * bool(bad_scale)) or "gains", "file", fit,
                                {"columns": list(perm), "gain_control": float(g[0]),
                                 "gain_disturbance": float(g[1]), "swapped": swapped},
                                "; ".join(what) or f"path gains refitted ({g[0]:.3g}, {g[1]:.3g})"))
     return out
+
+
+def _output_is_odd(run, q: dict) -> bool:
+    """Whether a wrong-file verdict's units-size factor common to both paths is the output's
+    own: the target (logged in the output's unit) then stands apart from the output by that
+    factor at its lines, where a tracking loop has the output follow it."""
+    g_c, g_d = q["gain_control"], q["gain_disturbance"]
+    if q["swapped"] or g_c <= 0 or g_d <= 0 or 1 / SCALE_RATIO <= g_c <= SCALE_RATIO \
+            or abs(math.log(g_c / g_d)) >= 0.1:
+        return False
+    r = np.asarray(run.reference, dtype=float)
+    if not np.any(r != r[0]):
+        return False   # no target: the output or the plants may be rescaled alike
+    R = np.fft.rfft(r - r.mean())[1:]
+    Y = np.fft.rfft(run.output - np.mean(run.output))[1:]
+    lines = np.argsort(np.abs(R))[::-1][:10]
+    ratio = float(np.median(np.abs(Y[lines]) / np.abs(R[lines])))
+    return abs(math.log(ratio / g_c)) < abs(math.log(ratio))
 
 
 def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: float = CLOSE_SHARE,
@@ -396,11 +419,22 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
     best_file = max(evidence, key=lambda e: e.fit_percent) if evidence else None
     head = (f"plant check fails: fit {f0:.1f} % of the output from the measured control and disturbance "
             f"({ref.fit_percent:.1f} % with the disturbance gain and initial state refitted)")
-    if best_file is not None and best_file.fit_percent > best_air.fit_percent + 5.0:
+    # Only a supported aircraft candidate rivals a file error: an unsupported one (a Dutch-roll
+    # pair whose free numerator took up a units-size factor) fitted better by its extra
+    # parameters alone, and a radians-against-degrees output was "unexplained".
+    rival = best_air if best_air in supported else None
+    if best_file is not None and (rival is None or best_file.fit_percent > rival.fit_percent + 5.0):
         msg = (f"{head}; WRONG PLANTS FILE OR COLUMNS: {best_file.how} gives fit {best_file.fit_percent:.1f} % "
                f"(decided by refitting the path gains for every assignment of the columns; best "
-               f"aircraft-side candidate {best_air.id}: {best_air.fit_percent:.1f} %)")
-        return PlantFinding("wrong_file", f0, best_file.id, dict(best_file.parameters), expl, msg)
+               f"aircraft-side candidate {best_air.id}: {best_air.fit_percent:.1f} %"
+               f"{'' if rival else ', not supported'})")
+        q = dict(best_file.parameters)
+        if _output_is_odd(run, q):
+            # Scaling the plants would leave the target and the output in different units,
+            # and the describing function of e = r - y nonsense.
+            q["output_scale"] = 1.0 / q["gain_control"]
+            msg += "; the target is in the inputs' unit, so the output is rescaled to it"
+        return PlantFinding("wrong_file", f0, best_file.id, q, expl, msg)
     if best_air in supported and _residual_share(best_air, ref) <= 1.0 - close_share:
         msg = (f"{head}; {best_air.id} closes the gap: fit {best_air.fit_percent:.1f} % "
                f"(improvement p = {best_air.p_value:.2g} < {level:.2g}) " + _terms(best_air))
@@ -428,7 +462,9 @@ def corrected(run, plants, finding: PlantFinding):
     plants : hesspipe.core.formats.Plants
         The plants the finding was made against.
     finding : PlantFinding
-        The verdict; "match" and "unexplained" leave `run` and `plants` unchanged.
+        The verdict; "match" and "unexplained" leave `run` and `plants` unchanged. A
+        wrong-file verdict's ``output_scale`` (an output in another unit than the inputs
+        and the target) rescales the output and the path gains alike.
 
     Returns
     -------
@@ -457,7 +493,8 @@ def corrected(run, plants, finding: PlantFinding):
         return run, replace(plants, control_to_output=yc, disturbance_to_output=yd)
     if finding.verdict == "wrong_file":
         u_k, w_k, y_k = q["columns"]
-        run = replace(run, control=getattr(run, u_k), disturbance=getattr(run, w_k), output=getattr(run, y_k))
-        plants = replace(plants, control_to_output=q["gain_control"] * plants.control_to_output,
-                         disturbance_to_output=q["gain_disturbance"] * plants.disturbance_to_output)
+        k = q.get("output_scale", 1.0)
+        run = replace(run, control=getattr(run, u_k), disturbance=getattr(run, w_k), output=k * getattr(run, y_k))
+        plants = replace(plants, control_to_output=k * q["gain_control"] * plants.control_to_output,
+                         disturbance_to_output=k * q["gain_disturbance"] * plants.disturbance_to_output)
     return run, plants

@@ -47,6 +47,7 @@ from ..core.seeds import derive_seed
 from ..identification.frf import estimate_frf
 from ..identification.frf_average import average_frf, check_repeats
 from ..identification.lines import SEPARABLE, forcing_sets, windowed
+from ..plants.consistency import check_consistent
 from .verdict import pilot_groups
 
 ALPHA = 0.05
@@ -161,12 +162,18 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
     Raises
     ------
     HesspipeError
-        A record given twice; what a run's describing function raises.
+        A record given twice; a run whose column signs or units are at odds with the plants
+        (:func:`hesspipe.plants.consistency.check_consistent`); what a run's describing
+        function raises.
     """
     runs = list(runs)
     if not runs:
         raise HesspipeError("person_metrics: expected at least one run, got none")
     check_repeats([], runs)   # a record given twice is an error, not a repeat
+    for run in runs:
+        # The crossover and phase margin are of L = H Yc: a column in another unit than the
+        # plants' scales L and moves both, where pilots refused the same files.
+        check_consistent(run, plants)
     frf, averaged = None, "line by line"
     try:
         frf = average_frf(runs, plants, seed=seed)

@@ -28,6 +28,10 @@ CONVINCING = 0.1
 """Share a flipped or rescaled reading must leave at most to be named."""
 UNITS_SIZE = 3.0
 """A scale beyond this factor (either way) is a units mistake, not a gain the plants missed."""
+PATH_SHARE = 1e-9
+"""Share of the predicted power at the strong bins a path needs for its own scale to be
+judged: a column of zeros (a task without a disturbance) has no path to scale, while a
+column in a unit 57.3 times too small still carries 3e-4 of it."""
 
 
 @dataclass(frozen=True)
@@ -48,6 +52,12 @@ class Consistency:
         The share left with that factor.
     n_bins : int
         Bins compared.
+    path_scales : (float, float)
+        Least-squares factors of the control's and the disturbance's predictions, each
+        path its own (a column logged in another unit than the plants assume); NaN for a
+        path that carries under :data:`PATH_SHARE` of the predicted power (not judged).
+    paths_scaled : float
+        The share left with those two factors.
     """
 
     unexplained: float
@@ -55,6 +65,8 @@ class Consistency:
     scale: float
     scaled: float
     n_bins: int
+    path_scales: tuple = (1.0, 1.0)
+    paths_scaled: float = math.inf
 
     def problem(self) -> str | None:
         """The columns' sign or units mistake the evidence names, or None."""
@@ -70,15 +82,45 @@ class Consistency:
                     f"map it with columns {which}=-NAME")
         g = abs(self.scale)
         if self.scaled <= CONVINCING and not 1 / UNITS_SIZE <= g <= UNITS_SIZE:
-            hint = (" (degrees against radians: 57.3)" if abs(math.log(g / (180 / math.pi))) < 0.1
-                    else " (radians against degrees: 1/57.3)" if abs(math.log(g * 180 / math.pi)) < 0.1
-                    else "")
             return (f"the output is {g:.3g} times what the plants predict from the control and "
-                    f"disturbance{hint}: the columns' units differ from the plants' (scaled, the plants "
+                    f"disturbance{radians_hint(g)}: the columns' units differ from the plants' (scaled, the plants "
                     f"leave {100 * self.scaled:.0f} % of the output's power at the forcing unexplained, "
-                    f"as written {100 * self.unexplained:.0f} %); write the unit in the header (e.g. "
-                    f"'output [deg/s]') or rescale the plants")
+                    f"as written {100 * self.unexplained:.0f} %); write every column's unit in the "
+                    f"header (e.g. 'Yaw [deg]'; a column without one is read as written) or rescale "
+                    f"the plants")
+        # One column in another unit (a stick in per cent, one angle left in degrees): the
+        # joint factor above cannot show it, since the other path's prediction is right.
+        off = [(r, g) for r, g in zip(("control", "disturbance"), self.path_scales)
+               if math.isfinite(g) and not 1 / UNITS_SIZE <= abs(g) <= UNITS_SIZE]
+        if off and self.paths_scaled <= CONVINCING and self.paths_scaled <= self.unexplained / 5:
+            role, g = off[0] if len(off) == 1 else max(off, key=lambda rg: abs(math.log(abs(rg[1]))))
+            path = {"control": "control_to_output", "disturbance": "disturbance_to_output"}[role]
+            return (f"the {role}'s units differ from the plants': the plants explain the output with "
+                    f"the {role} times {abs(g):.3g}{radians_hint(abs(g))} (so scaled they leave "
+                    f"{100 * self.paths_scaled:.0f} % of the output's power at the forcing "
+                    f"unexplained, as written {100 * self.unexplained:.0f} %); write the {role}'s "
+                    f"unit in the header or rescale the plants' {path}")
         return None
+
+
+def radians_hint(g: float) -> str:
+    """The degrees/radians reading of a units-size factor.
+
+    Parameters
+    ----------
+    g : float
+        A factor between what the plants predict and what the columns hold (positive).
+
+    Returns
+    -------
+    str
+        " (degrees against radians: 57.3)", " (radians against degrees: 1/57.3)" or "".
+    """
+    if abs(math.log(g / (180 / math.pi))) < 0.1:
+        return " (degrees against radians: 57.3)"
+    if abs(math.log(g * 180 / math.pi)) < 0.1:
+        return " (radians against degrees: 1/57.3)"
+    return ""
 
 
 def consistency(run: Run, plants: Plants, *, band_hz: tuple[float, float] = (0.02, 2.0),
@@ -141,9 +183,18 @@ def consistency(run: Run, plants: Plants, *, band_hz: tuple[float, float] = (0.0
     pred = pc + pd
     den = float(np.sum(np.abs(pred) ** 2))
     g = float(np.real(np.vdot(pred, y)) / den) if den > 0 else 1.0
+    # Each path its own real factor: closed-loop control and disturbance share bins, but
+    # not in a fixed ratio, so the two are told apart (a target's lines carry no disturbance).
+    basis = np.stack([pc, pd], axis=1)
+    basis = np.concatenate([basis.real, basis.imag])
+    gains = np.linalg.lstsq(basis, np.concatenate([y.real, y.imag]), rcond=None)[0]
+    shares = np.array([np.sum(np.abs(pc) ** 2), np.sum(np.abs(pd) ** 2)]) / max(float(np.sum(power[keep])), 1e-300)
+    gc, gd = (float(v) if share >= PATH_SHARE else math.nan for v, share in zip(gains, shares))
     return Consistency(unexplained=left(pred),
                        flipped={"control": left(-pc + pd), "disturbance": left(pc - pd), "output": left(-pred)},
-                       scale=g, scaled=left(g * pred), n_bins=int(keep.size))
+                       scale=g, scaled=left(g * pred), n_bins=int(keep.size),
+                       path_scales=(gc, gd),
+                       paths_scaled=left(gains[0] * pc + gains[1] * pd))
 
 
 def check_consistent(run: Run, plants: Plants) -> Consistency:
