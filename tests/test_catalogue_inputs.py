@@ -89,6 +89,9 @@ def _files(d: Path) -> None:
     (d / "unstable_plant.json").write_text(json.dumps(
         {"control_to_output": {"num": [1.0], "den": [1.0, -2.0, 0.0, 0.0]},
          "disturbance_to_output": plants["disturbance_to_output"]}))
+    for name, control in (("plants_zero_num.json", {"num": [0.0, 0.0], "den": [1.0, 0.0]}),
+                          ("plants_huge.json", {"num": [1e300], "den": [1e-300, 0.0]})):
+        (d / name).write_text(json.dumps({**plants, "control_to_output": control}))
     (d / "seed_neg.toml").write_text("seed = -1\n")
     (d / "seed_big.toml").write_text(f"seed = {2 ** 63}\n")
     (d / "resample_bad.toml").write_text("[pilots]\nresample = \"yes\"\n")
@@ -170,6 +173,10 @@ CASES = [
      r"argument --fix: Ke: expected a finite number", None),
     ("discrete plants", ID + ["{d}/run.csv", "--plants", "{d}/plants_discrete.json"], REFUSED,
      r"plants_discrete\.json: field 'control_to_output\.dt': 0\.05 makes it a discrete-time", None),
+    ("plants: zero control plant", ID + ["{d}/run.csv", "--plants", "{d}/plants_zero_num.json"] + FAST, REFUSED,
+     r"plants_zero_num\.json: field 'control_to_output\.num': expected a non-zero polynomial$", None),
+    ("plants: coefficients overflow", ID + ["{d}/run.csv", "--plants", "{d}/plants_huge.json"] + FAST, REFUSED,
+     r"plants_huge\.json: field 'control_to_output': .*\(1e-300\) overflow; expected a gain and poles", None),
     # -- items 6 and 8: seeds and record lengths ----------------------------------------------
     ("identify --seed -1", ID + ["{d}/run.csv", "--plants", "{d}/plants.json", "--seed", "-1"], USAGE,
      r"argument --seed: expected an integer 0 <= seed < 2\*\*63, got '-1'", None),
@@ -233,6 +240,25 @@ def test_catalogue(inputs, capsys, monkeypatch, name, argv, status, pattern, out
         assert (d / output).exists() == (status == OK), output  # nothing half-written
     assert _snapshot(d) == before  # no user file changed or lost, nothing written beside them
     assert not list(d.rglob("*.tmp*")) and not list(d.rglob(".staging-*"))
+
+
+def test_only_a_zero_control_plant_is_refused(inputs, tmp_path):
+    """Yc = 0 leaves the pilot nothing to control; Yd = 0 (a target-only task) and a zero motion
+    path (a fixed-base cab) are plants of their own, read without a warning."""
+    import warnings
+
+    from hesspipe.core.errors import HesspipeError
+    from hesspipe.core.formats import read_plants
+
+    with pytest.raises(HesspipeError, match=r"field 'control_to_output\.num': expected a non-zero polynomial"):
+        read_plants(inputs / "plants_zero_num.json")
+    plants = json.loads((inputs / "plants.json").read_text())
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps({**plants, "disturbance_to_output": {"num": [0.0], "den": [1.0, 0.0]},
+                                "motion_path": {"num": [0.0], "den": [1.0]}}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_plants(path).motion_path is not None
 
 
 def test_unstable_optimum_json_is_finite(inputs, capsys):

@@ -110,6 +110,20 @@ def command_names() -> list[str]:
     return names
 
 
+def test_every_command_with_an_output_file_declares_its_inputs():
+    """An output file must not be an input (cli._outputs.check_outputs_apart): a command with
+    --json, --figure or --df-figure that does not say which options are its inputs fails here."""
+    from hesspipe.cli._outputs import OUTPUT_FILES
+
+    sub = next(a for a in build_parser()._actions if a.__class__.__name__ == "_SubParsersAction")
+    for name in command_names():
+        parser = sub.choices[name]
+        dests = {a.dest for a in parser._actions}
+        if dests & set(OUTPUT_FILES):
+            declared = parser.get_default("_inputs")
+            assert declared and set(declared) <= dests, name
+
+
 def test_every_command_has_an_argument_builder():
     missing = sorted(set(command_names()) - set(BUILDERS))
     assert not missing, f"add an argument builder for {missing} to BUILDERS in {__file__}"
@@ -227,6 +241,7 @@ OTHER_OUTPUTS = {
     "diagnose --figure": lambda i, ro: BUILDERS["diagnose"](i, ro)[:-2] + ["--figure", str(ro / "x.png")],
     "pilots --figures": lambda i, ro: BUILDERS["pilots"](i, ro)[:-2] + ["--figures", str(ro)],
     "plants --analytic": lambda i, ro: ["plants", "--analytic", "roskam", "--out", str(ro / "a")],
+    "identify --df-figure": lambda i, ro: BUILDERS["identify"](i, ro)[:-2] + ["--df-figure", str(ro / "x.png")],
 }
 
 
@@ -267,6 +282,12 @@ def _config(tmp: Path, text: str | bytes) -> Path:
 def _flight_copy(tmp: Path, inputs: Path) -> Path:
     shutil.copytree(inputs / "flight", tmp / "flight")
     return tmp / "flight"
+
+
+def _copy(path: Path, tmp: Path) -> Path:
+    """A copy of an input file or folder in `tmp` (the row's own files)."""
+    (shutil.copytree if path.is_dir() else shutil.copy)(path, tmp / path.name)
+    return tmp / path.name
 
 
 def _user_folder(tmp: Path) -> Path:
@@ -312,6 +333,24 @@ CASES = [
     Case("identify --figure x.xyz",
          lambda t, i: BUILDERS["identify"](i, t)[:-2] + ["--figure", str(t / "x.xyz")], 1,
          r"x.xyz: unknown image format"),
+    Case("identify --df-figure x.xyz: before the fit and the JSON",
+         lambda t, i: BUILDERS["identify"](i, t) + ["--df-figure", str(t / "x.xyz")], 1,
+         r"x.xyz: unknown image format '.xyz'; expected one of .*\.png"),
+    Case("identify --df-figure <folder>: before the fit and the JSON",
+         lambda t, i: BUILDERS["identify"](i, t) + ["--df-figure", str(t)], 1, r": is a folder; expected a file name"),
+    # an output file that is one of the command's inputs
+    Case("frf --json its own run",
+         lambda t, i: ["frf", str(_copy(i / "runs" / "p0.csv", t)), "--plants", str(i / "plants.json"),
+                       "--json", str(t / "p0.csv")], 1,
+         r"p0.csv: is an input of this command; expected another path for the JSON output$"),
+    Case("identify --figure its plants file",
+         lambda t, i: ["identify", str(i / "runs" / "p0.csv"), "--plants", str(_copy(i / "plants.json", t)),
+                       "--figure", str(t / "plants.json")], 1,
+         r"plants.json: is an input of this command; expected another path for the figure$"),
+    Case("pilots --json a run of its folder",
+         lambda t, i: ["pilots", str(_copy(i / "runs", t)), "--plants", str(i / "plants.json"),
+                       "--json", str(t / "runs" / "p1.csv")], 1,
+         r"p1.csv: is an input of this command; expected another path for the JSON output$"),
     Case("[flight] aircraft = 5",
          lambda t, i: ["run", "--config", str(_config(t, "[flight]\naircraft = 5\n")), "--out", str(t / "o")], 1,
          r"c.toml: field 'flight.aircraft': expected a string, got 5"),

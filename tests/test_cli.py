@@ -41,3 +41,16 @@ def test_cli_import_stays_light():
             "print(sorted(heavy & set(sys.modules)))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+@pytest.mark.parametrize("command", ["run", "status"])
+def test_an_unknown_aircraft_flag_is_blamed_on_the_flag(command, tmp_path, capsys):
+    """The value came from the command line, not from pipeline/default.toml (nor from --config)."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[flight]\naircraft = "B747"\n')
+    for extra in ([], ["--config", str(cfg)]):
+        out = tmp_path / "o"
+        assert main([command, "--aircraft", "7377", "--out", str(out), *extra]) == 1
+        err = capsys.readouterr().err
+        assert err.startswith("hesspipe: error: --aircraft: unknown aircraft '7377'; expected one of: 737"), err
+        assert err.count("\n") == 1 and ".toml" not in err and not out.exists()

@@ -3,6 +3,8 @@
 import json
 import math
 import os
+import shutil
+from argparse import Namespace
 from pathlib import Path
 
 import numpy as np
@@ -10,12 +12,15 @@ import pandas as pd
 import pytest
 
 from hesspipe.cli import main
+from hesspipe.core.config import data_dir
 from hesspipe.core.errors import HesspipeError
+from hesspipe.core.formats import write_plants
 from hesspipe.flight import approach as flight
 from hesspipe.flight.aircraft import AircraftConfig, Approach, known_aircraft, load_aircraft
 from hesspipe.flight.approach import COLUMNS, FlightConfig, fly, fly_records
 from hesspipe.flight.wind import heading_to_ned
 from hesspipe.viz.flight import draw_flight
+from pilot_data import plants as paper_plants
 
 OUTPUTS = {"trim.json", "wind.csv", "aileron.csv", "manifest.json", "flight_wind.png",
            "flight_aileron.png"}
@@ -259,6 +264,41 @@ def test_unsupported_aircraft_say_why(name, why, tmp_path, capsys):
 def test_bad_config_values(text, needles, tmp_path, capsys):
     out = tmp_path / "out"
     _fails(capsys, ["flight", "--out", str(out), "--config", str(_config(tmp_path, text))], *needles)
+    assert not out.exists()
+
+
+def test_a_copy_of_the_default_configuration_is_accepted(tmp_path, capsys):
+    """What `run --config` takes, `flight --config` takes: its [flight] aircraft among the rest."""
+    copy = tmp_path / "mine.toml"
+    shutil.copy(data_dir("pipeline") / "default.toml", copy)
+    out = tmp_path / "out"
+    assert main(["flight", "--out", str(out), "--config", str(copy)]) == 0, capsys.readouterr().err
+    assert json.loads((out / "trim.json").read_text())["aircraft"] == "737"
+
+
+def test_the_configurations_aircraft_is_flown_unless_the_flag_names_one(tmp_path):
+    from hesspipe.cli._options import read_cli_flight
+
+    cfg = _config(tmp_path, '[flight]\naircraft = "B747"\nduration_s = 30.0\n')
+    assert read_cli_flight(Namespace(config=cfg, aircraft=None)) == ("B747", FlightConfig(duration_s=30.0))
+    assert read_cli_flight(Namespace(config=cfg, aircraft="MD11"))[0] == "MD11"
+    assert read_cli_flight(Namespace(config=None, aircraft=None)) == ("737", FlightConfig())
+
+
+@pytest.mark.parametrize("command", ["flight", "fly-pilot", "plants"])
+@pytest.mark.parametrize("text", ["[flihgt]\nduration_s = 30.0\n", "seed = -1\n", "seed = 1.5\n"],
+                         ids=["section", "seed -1", "seed 1.5"])
+def test_a_configuration_is_checked_as_run_checks_it(command, text, tmp_path, capsys):
+    """A misspelt section or a bad seed is refused by every command that takes --config, in
+    `run`'s words, before any work."""
+    cfg = _config(tmp_path, text)
+    expected = _fails(capsys, ["run", "--config", str(cfg), "--out", str(tmp_path / "run")], str(cfg))
+    plants = tmp_path / "plants.json"
+    write_plants(plants, paper_plants())
+    argv = {"flight": ["flight"], "fly-pilot": ["fly-pilot", "--plants", str(plants)],
+            "plants": ["plants", "--analytic", "roskam"]}[command]
+    out = tmp_path / "out"
+    assert _fails(capsys, argv + ["--out", str(out), "--config", str(cfg)]) == expected
     assert not out.exists()
 
 

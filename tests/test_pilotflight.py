@@ -1,12 +1,14 @@
 """The Hess pilot model flying JSBSim in closed loop (hesspipe.flight.closed_loop, hesspipe.pilot.discrete)."""
 
 import json
+import shutil
 
 import control as ct
 import numpy as np
 import pytest
 
 from hesspipe.cli import main
+from hesspipe.core.config import data_dir
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Plants, plants_coefficients, read_run, write_plants
 from hesspipe.core.io import MARKER
@@ -239,6 +241,46 @@ def test_bad_params_file_is_one_line(tmp_path, plants_file, capsys):
                  "--params", str(params)])
     err = capsys.readouterr().err
     assert code == 1 and "'Ke'" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("params, words", [
+    ({"tau0": -0.1}, "field 'tau0': expected a number >= 0, got -0.1"),
+    ({"wn": 0}, "field 'wn': expected a number > 0, got 0"),
+    ({"Kx": 1}, "field 'Kx': unknown parameter for model expanded+remnant; expected one of Ke, K1"),
+], ids=["tau0 < 0", "wn = 0", "unknown"])
+def test_params_out_of_the_models_range_are_one_line_naming_file_and_field(params, words, tmp_path,
+                                                                          plants_file, capsys):
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps(params))
+    out = tmp_path / "o"
+    code = main(["fly-pilot", "--plants", str(plants_file), "--out", str(out), "--params", str(path)])
+    err = capsys.readouterr().err
+    assert code == 1 and err.startswith(f"hesspipe: error: {path}: {words}"), err
+    assert err.count("\n") == 1 and not out.exists()
+
+
+def test_a_truth_files_parameters_fly_again():
+    """The boxes' high ends do not bound a pilot: a drawn pilot's Kn lies far above its box."""
+    truth = {"Ke": 23.1, "Km": 3.7, "Kn": 49.9, "k": 1.0, "wn": 10.0}
+    assert PilotModel(("motion_feedback", "remnant")).check_values(truth, "t.json") == truth
+    assert PilotModel().check_values(truth, "t.json") == {"Ke": 23.1, "k": 1.0, "wn": 10.0}
+
+
+def test_an_empty_id_is_refused(tmp_path, plants_file, capsys):
+    out = tmp_path / "o"
+    assert main(["fly-pilot", "--plants", str(plants_file), "--out", str(out), "--id", ""]) == 1
+    assert capsys.readouterr().err == "hesspipe: error: --id: expected a non-empty name for the run's files, got ''\n"
+    assert not out.exists()
+
+
+def test_a_copy_of_the_default_configuration_flies(tmp_path, plants_file, capsys):
+    """What `run --config` takes, `fly-pilot --config` takes ([flight] aircraft among the rest)."""
+    copy = tmp_path / "mine.toml"
+    shutil.copy(data_dir("pipeline") / "default.toml", copy)
+    out = tmp_path / "o"
+    code = main(["fly-pilot", "--plants", str(plants_file), "--out", str(out), "--config", str(copy)])
+    assert code == 0, capsys.readouterr().err
+    assert json.loads((out / "pilot.truth.json").read_text())["aircraft"] == "737"
 
 
 def test_cohort_is_the_synthetic_cohorts_draw_flown_in_jsbsim(tmp_path):

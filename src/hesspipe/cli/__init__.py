@@ -17,6 +17,7 @@ import threading
 
 from .. import __version__
 from ..core.errors import HesspipeError
+from ._outputs import check_outputs_apart
 from .commands import COMMANDS
 
 
@@ -53,6 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     in_main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
     try:
+        check_outputs_apart(args)  # before any work, for every command
         return int(args.func(args) or 0)
     except HesspipeError as exc:
         from ._options import cli_message  # library setting names -> this command's options

@@ -122,6 +122,39 @@ def read_cli_runs(paths, args: argparse.Namespace, **kwargs) -> list:
     return runs
 
 
+def check_aircraft(name: str | None) -> None:
+    """``--aircraft NAME`` (None: not given) checked before a configuration takes it over, so
+    that a bad one is blamed on the flag, not on the configuration's file."""
+    if name is None:
+        return
+    from ..flight.aircraft import load_aircraft
+
+    try:
+        load_aircraft(name)
+    except HesspipeError as exc:
+        raise HesspipeError(f"--aircraft: {exc}") from None
+
+
+def read_cli_flight(args: argparse.Namespace) -> tuple:
+    """The aircraft and :class:`~hesspipe.flight.approach.FlightConfig` of ``--aircraft`` and
+    ``--config FILE``.
+
+    The file is read as ``hesspipe run --config`` reads it
+    (:func:`hesspipe.pipeline.stages.load_config` and :func:`~hesspipe.pipeline.stages.flight_settings`:
+    its sections, seed and ``[flight]`` table checked), so that a copy of the default
+    configuration serves every command; ``--aircraft`` wins over its ``[flight] aircraft``.
+    """
+    from ..flight.aircraft import DEFAULT_AIRCRAFT
+    from ..flight.approach import FlightConfig
+
+    if args.config is None:
+        return (DEFAULT_AIRCRAFT if args.aircraft is None else args.aircraft), FlightConfig()
+    from ..pipeline.stages import flight_settings, load_config
+
+    aircraft, settings = flight_settings(*load_config(args.config))
+    return (aircraft if args.aircraft is None else args.aircraft), settings
+
+
 def seed_arg(text: str) -> int:
     """argparse type of every ``--seed``: the one rule of :func:`hesspipe.core.seeds.check_seed`."""
     try:

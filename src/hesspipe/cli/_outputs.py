@@ -6,6 +6,51 @@ from __future__ import annotations
 # (tests/test_api.py), and each command loads only its own stage.
 
 
+#: The commands' output files, option → what it holds. (An output folder is refused already
+#: when it holds anything hesspipe did not write there, an input among them.)
+OUTPUT_FILES = {"json": "the JSON output", "figure": "the figure", "df_figure": "the describing-function figure"}
+
+
+def add_inputs(parser, *dests: str) -> None:
+    """Declare the options (argparse dests) of `parser` that name its input files or folders,
+    which :func:`check_outputs_apart` keeps its output files off."""
+    parser.set_defaults(_inputs=dests)
+
+
+def check_outputs_apart(args) -> None:
+    """Raise HesspipeError where an output file of the command (:data:`OUTPUT_FILES`) is one of
+    its input files (of an input folder, one of its runs), which writing it would destroy."""
+    from pathlib import Path
+
+    from ..core.errors import HesspipeError
+
+    outputs = [(getattr(args, dest), what) for dest, what in OUTPUT_FILES.items() if getattr(args, dest, None)]
+    if not outputs:
+        return
+    inputs = []
+    for dest in getattr(args, "_inputs", ()):
+        value = getattr(args, dest, None)
+        inputs.extend(Path(v) for v in (value if isinstance(value, (list, tuple)) else [value]) if v)
+    for path in [p for p in inputs if p.is_dir()]:
+        from ..pilots.compare import list_runs
+
+        try:
+            inputs.extend(list_runs(path))
+        except HesspipeError:   # no runs: the command says so itself
+            pass
+    for out, what in outputs:
+        if any(_same(Path(out), path) for path in inputs):
+            raise HesspipeError(f"{out}: is an input of this command; expected another path for {what}")
+
+
+def _same(a, b) -> bool:
+    try:
+        # samefile: also a hard link, or another spelling on a case-insensitive file system
+        return a.resolve() == b.resolve() or (a.exists() and b.exists() and a.samefile(b))
+    except OSError:
+        return False
+
+
 def check_file_outputs(*, json: str | None = None, figure: str | None = None) -> None:
     """Raise HesspipeError unless `json` (a file) and `figure` (an image file) can be written."""
     from ..core.io import check_output_file

@@ -23,12 +23,14 @@ def register(subparsers) -> None:
                         "else its first group), e.g. '^(s[0-9]+)_' (default: the file name, the same in both "
                         "folders)")
     from ._options import add_run_options, add_seed, add_terms
+    from ._outputs import add_inputs
 
     add_run_options(p)
     add_seed(p, 0, "seed of the crossovers' uncertainty draws")
     p.add_argument("--json", metavar="OUT.json", help="write the comparison as JSON")
     p.add_argument("--figure", metavar="OUT.png", help="write a figure: each person's metrics in both conditions")
     add_terms(p, {r"pilot_id( pattern)?": "--pilot-id", r"(^|: )labels: ": r"\1--labels: "})
+    add_inputs(p, "first", "second", "plants")
     p.set_defaults(func=run)
 
 

@@ -53,12 +53,14 @@ def register(sub) -> None:
                                                       "run's and the tally, in one file)")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
     from ._options import add_run_options, add_seed, add_terms, field_terms
+    from ._outputs import add_inputs
 
     add_run_options(p)
     add_terms(p, field_terms("DiagnoseConfig", {"alpha": "--alpha", "max_effects": "--max-effects",
                                                   "max_pilot_delay": "--max-pilot-delay"}))
     add_terms(p, {r"(^|: )workers: ": r"\1--workers: "})
     add_seed(p, 0, "seed of the remnant draws")
+    add_inputs(p, "run", "plants", "baseline_run")
     p.set_defaults(func=_diagnose)
 
 

@@ -14,11 +14,13 @@ def register(subparsers) -> None:
                     "records (side wind + excitation; aileron excitation in calm air) into DIR.")
     from ..flight.aircraft import DEFAULT_AIRCRAFT
 
-    p.add_argument("--aircraft", default=DEFAULT_AIRCRAFT,
-                   help=f"aircraft file in aircraft/ (default: {DEFAULT_AIRCRAFT})")
+    p.add_argument("--aircraft",
+                   help=f"aircraft file in aircraft/ (default: --config's [flight] aircraft, else "
+                        f"{DEFAULT_AIRCRAFT})")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder")
     p.add_argument("--config", type=Path, metavar="FILE",
-                   help="TOML file whose [flight] table overrides the defaults")
+                   help="TOML configuration (as 'hesspipe run --config' takes) whose [flight] table "
+                        "overrides the defaults")
     from ._options import add_seed
 
     add_seed(p, 0, "seed of the excitation signals")
@@ -26,17 +28,14 @@ def register(subparsers) -> None:
 
 
 def _run(args) -> int:
-    from ..core.config import load_toml
     from ..core.io import check_output_dir
-    from ..flight.approach import FlightConfig, fly
+    from ..flight.approach import fly
     from ..viz.flight import draw_flight
+    from ._options import read_cli_flight
 
     check_output_dir(args.out, "flight")  # before any work: a bad folder loses nothing
-    if args.config is not None:
-        config = FlightConfig.from_table(load_toml(args.config).get("flight", {}), args.config)
-    else:
-        config = FlightConfig()
-    result = fly(args.aircraft, config, args.out, seed=args.seed, draw=draw_flight)
+    aircraft, config = read_cli_flight(args)
+    result = fly(aircraft, config, args.out, seed=args.seed, draw=draw_flight)
     tr = result.trim
     print(f"{result.aircraft}: trimmed at {tr['vc_kts']:.2f} KCAS, gamma {tr['gamma_deg']:.2f} deg, "
           f"heading {tr['psi_deg']:.1f} deg, alpha {tr['alpha_deg']:.2f} deg, throttle {tr['throttle']:.3f}")

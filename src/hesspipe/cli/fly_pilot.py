@@ -16,9 +16,9 @@ def register(sub) -> None:
                     "(measured-run format, marked synthetic), DIR/ID.truth.json and DIR/ID.png.")
     from ..flight.aircraft import DEFAULT_AIRCRAFT
 
-    p.add_argument("--aircraft", default=DEFAULT_AIRCRAFT,
+    p.add_argument("--aircraft",
                    help=f"aircraft file in aircraft/ to fly; may differ from the plants' aircraft "
-                        f"(default: {DEFAULT_AIRCRAFT})")
+                        f"(default: --config's [flight] aircraft, else {DEFAULT_AIRCRAFT})")
     p.add_argument("--plants", required=True, metavar="PLANTS.json",
                    help="plants JSON: sets the pilot's gain scale and optional motion_path")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder")
@@ -48,13 +48,16 @@ def register(sub) -> None:
                         "wind and roll-rate target multisines on interleaved lines, flown for a 15 s "
                         "run-in plus the duration, no paper's side wind (default: %(default)s)")
     p.add_argument("--config", type=Path, metavar="FILE",
-                   help="TOML file whose [flight] table sets step, duration, limits and the wind")
+                   help="TOML configuration (as 'hesspipe run --config' takes) whose [flight] table "
+                        "sets step, duration, limits and the wind")
+    from ._options import add_terms
+
+    add_terms(p, {r"(^|: )run_id: ": r"\1--id: "})
     p.set_defaults(func=_run)
 
 
-def _params(path: Path) -> dict:
+def _params(path: Path, model) -> dict:
     import json
-    import math
 
     from ..core.errors import HesspipeError
 
@@ -68,21 +71,17 @@ def _params(path: Path) -> dict:
         obj = obj["parameters"]
     if not isinstance(obj, dict):
         raise HesspipeError(f"{path}: expected a JSON object of parameter values")
-    for name, value in obj.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise HesspipeError(f"{path}: field '{name}': expected a finite number, got {value!r}")
-    return {k: float(v) for k, v in obj.items()}
+    return model.check_values(obj, str(path))
 
 
 def _run(args) -> int:
-    from ..core.config import load_toml
     from ..core.errors import HesspipeError
     from ..core.formats import read_plants
-    from ..flight.approach import FlightConfig
     from ..flight.closed_loop import AircraftEffects, fly_pilot
     from ..flight.target import named_forcing
     from ..pilot.hess import model_from_name
     from ..viz.pilotflight import draw_pilot_flight
+    from ._options import read_cli_flight
 
     for flag, value, ok, want in (
             ("--actuator-lag", args.actuator_lag, lambda v: v >= 0, "a time constant >= 0 s"),
@@ -92,15 +91,14 @@ def _run(args) -> int:
         if value is not None and not (value == value and ok(value)):
             raise HesspipeError(f"{flag}: expected {want}, got {value:g}")
     plants = read_plants(args.plants)
-    config = (FlightConfig.from_table(load_toml(args.config).get("flight", {}), args.config)
-              if args.config is not None else FlightConfig())
+    aircraft, config = read_cli_flight(args)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()]
     model = model_from_name("+".join([args.model] + [e for e in effects if not (
         e == "motion_feedback" and args.model == "expanded")]))
     act = AircraftEffects(actuator_lag_s=args.actuator_lag, rate_limit_per_s=args.rate_limit,
                           yaw_damper=args.yaw_damper == "on")
-    params = _params(args.params) if args.params is not None else {}
-    flight = fly_pilot(args.aircraft, plants, args.out, model=model, params=params, seed=args.seed,
+    params = _params(args.params, model) if args.params is not None else {}
+    flight = fly_pilot(aircraft, plants, args.out, model=model, params=params, seed=args.seed,
                        config=config, aircraft_effects=act, remnant_share=args.remnant_share,
                        max_bank_deg=args.max_bank, run_id=args.id, draw=draw_pilot_flight,
                        target=named_forcing(args.forcing))

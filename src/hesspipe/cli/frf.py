@@ -23,6 +23,7 @@ def register(subparsers) -> None:
                         "in one condition (one multisine forcing) are averaged line by line")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants (Yc is used)")
     from ._options import add_run_options, add_seed
+    from ._outputs import add_inputs
 
     add_run_options(p)
     add_seed(p, 0, "seed of the crossover's uncertainty draws")
@@ -31,6 +32,7 @@ def register(subparsers) -> None:
     p.add_argument("--model", metavar="IDENT.json",
                    help="an identify --json result: its model's describing function is drawn over "
                         "the points")
+    add_inputs(p, "run", "plants", "model")
     p.set_defaults(func=run)
 
 

@@ -10,6 +10,7 @@ import math
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.errors import HesspipeError
 from ._options import add_run_options, add_seed, add_terms, read_cli_plants, read_cli_runs
+from ._outputs import add_inputs
 
 #: The library's names of identify's settings → this command's options.
 TERMS = {r"(^|: )free: ": r"\1--free: ", r"(^|: )fixed: ": r"\1--fix: ",
@@ -100,6 +101,7 @@ def register(subparsers) -> None:
                         "(criteria df/output), a Fig. 8-style PSD figure (criterion paper)")
     p.add_argument("--df-figure", metavar="OUT.png",
                    help="write the describing-function figure whatever the criterion")
+    add_inputs(p, "run", "plants")
     p.set_defaults(func=run)
 
 
@@ -173,6 +175,7 @@ def run(args) -> int:
     from ._outputs import check_file_outputs, write_result_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
+    check_file_outputs(figure=args.df_figure)
     # The motion path's note only where the model feels the cab (vestibular or otolith path).
     cab = {"motion_feedback", "otoliths"} & set(model_from_name(args.model).effects)
     plants = read_cli_plants(args.plants) if cab else read_plants(args.plants)

@@ -30,6 +30,7 @@ def register(sub) -> None:
                         "the motion verdict then combines each pilot's runs and counts pilots "
                         "(default: each file is a pilot)")
     from ._options import add_run_options, add_seed, add_terms, field_terms
+    from ._outputs import add_inputs
 
     add_run_options(p)
     # The library names its settings (workers, scheduler); this command spells them as flags.
@@ -56,6 +57,7 @@ def register(sub) -> None:
                    help="warm (default): the expanded search starts from the original's optimum "
                         "plus fixed Km and the models exchange optima, so improvements measure Km, "
                         "not search luck; random: each model searched from random chromosomes")
+    add_inputs(p, "dir", "plants")
     p.set_defaults(func=_run)
 
 

@@ -18,21 +18,23 @@ def register(subparsers) -> None:
     src.add_argument("--analytic", metavar="NAME", help="analytic aircraft in aircraft/ (e.g. roskam) or a TOML path")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder")
     p.add_argument("--config", type=Path, metavar="FILE",
-                   help="TOML file whose [plants] (or, with --analytic, [analytic]) table overrides the defaults")
+                   help="TOML configuration (as 'hesspipe run --config' takes) whose [plants] (or, with "
+                        "--analytic, [analytic]) table overrides the defaults")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.set_defaults(func=_run)
 
 
 def _run(args) -> int:
-    from ..core.config import load_toml
     from ..core.io import check_output_dir
+    from ..pipeline.stages import load_config
     from ..plants.fit import analytic_plants, describe_tf, fit_plants
     from ..plants.settings import AnalyticConfig, PlantsConfig
 
     check_output_dir(args.out, "analytic" if args.analytic else "plants")  # before any work
-    table = load_toml(args.config) if args.config is not None else {}
+    # Read as `hesspipe run --config` reads it: a misspelt section or a bad seed is refused.
+    table, source = load_config(args.config) if args.config is not None else ({}, "<defaults>")
     if args.analytic:
-        cfg = AnalyticConfig.from_table(table.get("analytic", {}), args.config or "<defaults>")
+        cfg = AnalyticConfig.from_table(table.get("analytic", {}), source)
         from ..viz.plants import draw_analytic
 
         plants = analytic_plants(args.analytic, args.out, cfg, draw=None if args.no_figures else draw_analytic)
@@ -41,7 +43,7 @@ def _run(args) -> int:
             print(f"{key}: num {[round(v, 6) for v in d['num']]} den {[round(v, 6) for v in d['den']]}")
         print(f"wrote plants.json, plants_report.md, plants_report.json to {args.out}")
         return 0
-    cfg = PlantsConfig.from_table(table.get("plants", {}), args.config or "<defaults>")
+    cfg = PlantsConfig.from_table(table.get("plants", {}), source)
     from ..viz.plants import draw_plants
 
     result = fit_plants(args.flight, args.out, cfg, draw=None if args.no_figures else draw_plants)

@@ -26,7 +26,9 @@ def register(sub) -> None:
 
 def _run(args) -> int:
     from ..pipeline.stages import build_pipeline, validate
+    from ._options import check_aircraft
 
+    check_aircraft(args.aircraft)  # blamed on the flag: the configuration's file did not name it
     pipe = build_pipeline(args.config, args.out, aircraft=args.aircraft, seed=args.seed)
     say = (lambda line: print(f"[hesspipe] {line}", file=sys.stderr))
     # Every table is checked before the first stage runs; an up-to-date run skips the

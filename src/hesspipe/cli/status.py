@@ -19,7 +19,9 @@ def register(sub) -> None:
 
 def _status(args) -> int:
     from ..pipeline.stages import build_pipeline
+    from ._options import check_aircraft
 
+    check_aircraft(args.aircraft)  # blamed on the flag: the configuration's file did not name it
     pipe = build_pipeline(args.config, args.out, aircraft=args.aircraft, seed=args.seed)
     rows = pipe.status()
     width = max(len(r.name) for r in rows)

@@ -69,7 +69,8 @@ def read_plants(path: str | Path) -> Plants:
     ------
     HesspipeError
         Naming the file and the field: unreadable JSON, a missing or malformed
-        transfer function, a discrete-time one (``dt`` other than 0 or null).
+        transfer function, a discrete-time one (``dt`` other than 0 or null), one whose
+        coefficients overflow when normalised, a zero ``control_to_output``.
     """
     path = Path(path)
     try:
@@ -86,7 +87,9 @@ def read_plants(path: str | Path) -> Plants:
     tfs = ("control_to_output", "disturbance_to_output", "motion_path")
     meta = {k: v for k, v in obj.items() if k not in tfs}
     motion = obj.get("motion_path")
-    return Plants(_read_tf(obj["control_to_output"], path, "control_to_output"),
+    # A zero Yc leaves the pilot nothing to control; a zero Yd (a target-only task) or motion
+    # path (a fixed-base cab) is a plant of its own.
+    return Plants(_read_tf(obj["control_to_output"], path, "control_to_output", allow_zero=False),
                   _read_tf(obj["disturbance_to_output"], path, "disturbance_to_output"), meta,
                   # The cab's rate of an angle display is s times the angle: a bare
                   # differentiator is a natural motion path (the pilot's loop stays proper).

@@ -50,7 +50,7 @@ def tf_coefficients(sys: ct.TransferFunction) -> dict:
     return {"num": num.tolist(), "den": den.tolist()}
 
 
-def _read_tf(obj, path, key, *, excess: int = 0) -> ct.TransferFunction:
+def _read_tf(obj, path, key, *, excess: int = 0, allow_zero: bool = True) -> ct.TransferFunction:
     if not isinstance(obj, Mapping):
         raise HesspipeError(f"{path}: field '{key}': expected an object with 'num' and 'den', got {obj!r}")
     dt = obj.get("dt")
@@ -73,7 +73,14 @@ def _read_tf(obj, path, key, *, excess: int = 0) -> ct.TransferFunction:
     if den.size == 0:
         raise HesspipeError(f"{path}: field '{key}.den': expected a non-zero polynomial")
     if num.size == 0:
+        if not allow_zero:
+            raise HesspipeError(f"{path}: field '{key}.num': expected a non-zero polynomial")
         num = np.zeros(1)
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        scaled = np.concatenate([num, den]) / den[0]
+    if not np.isfinite(scaled).all():
+        raise HesspipeError(f"{path}: field '{key}': its coefficients divided by the denominator's leading one "
+                            f"({den[0]:g}) overflow; expected a gain and poles that are finite numbers")
     if num.size > den.size + excess:
         what = ("a proper transfer function" if not excess else
                 f"a numerator degree at most {excess} above the denominator's (s: the rate of an angle)")

@@ -512,6 +512,8 @@ def fly_pilot(aircraft: str, plants: Plants, out_dir: str | os.PathLike, *, mode
     PilotFlight
         The record (SYNTHETIC) and its truth.
     """
+    if not str(run_id).strip():   # the files would be the hidden .csv, .truth.json
+        raise HesspipeError(f"run_id: expected a non-empty name for the run's files, got {run_id!r}")
     # Checked before the flight: a folder that cannot take the output loses no result.
     out_dir = check_output_dir(out_dir, "fly-pilot")
     config = record_flight(config, target)

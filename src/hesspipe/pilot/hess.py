@@ -23,6 +23,7 @@ from typing import Mapping
 
 import numpy as np
 
+from ..core.config import Fields
 from ..core.errors import HesspipeError
 from .blocks import Block, Loop, Term
 from .effects import EFFECTS, get_effect
@@ -222,6 +223,47 @@ class PilotModel:
             raise HesspipeError(f"parameter {bad[0]!r}: expected a finite number, got {out[bad[0]]!r}")
         if out["k"] not in (1.0, 2.0):
             raise HesspipeError(f"parameter 'k': expected 1 or 2, got {params.get('k')!r}")
+        return out
+
+    def check_values(self, params: Mapping, source: str) -> dict[str, float]:
+        """Given parameter values (a file's) checked for this model, before any flight.
+
+        Each name must be a parameter some model has (as in :meth:`complete`, those of
+        effects this model lacks are dropped) and each value a number at or above the low
+        end of the parameter's search box (:meth:`bounds`, whose loop gains start at 0 on any
+        gain scale), ``wn`` above it. The boxes' high ends are the search's reach, not a
+        pilot's: a drawn pilot's truth may lie beyond them (``Kn`` per simulation step).
+
+        Parameters
+        ----------
+        params : mapping
+            Name → value.
+        source : str
+            Where they came from (a file), named in messages.
+
+        Returns
+        -------
+        dict
+            This model's parameters among them, as floats.
+
+        Raises
+        ------
+        HesspipeError
+            ``SOURCE: field 'NAME': ...`` naming the first bad one and what was expected.
+        """
+        f = Fields(params, source)
+        names = self.parameter_names()
+        known = set(PARAMETERS).union(*(e.parameters for e in EFFECTS.values()))
+        lows = {n: lo for n, (lo, _) in self.bounds().items()}
+        out = {}
+        for name in f.table:
+            if name not in known:
+                raise f.fail(name, f"unknown parameter for model {self.name}; expected one of "
+                                   f"{', '.join(names)}")
+            # wn = 0 is in the box, but its neuromuscular lag then passes nothing: no pilot.
+            value = f.number(name, min=lows.get(name), strict_min=name == "wn")
+            if name in names:
+                out[name] = value
         return out
 
     def loop(self, params: Mapping[str, float]) -> Loop:

@@ -117,17 +117,13 @@ def validate(config: dict, source: str) -> None:
     from ..core.formats import read_file_runs, read_plants
     from ..diagnose.settings import DiagnoseConfig
     from ..diagnose.workflow import _resolve_candidates
-    from ..flight.aircraft import load_aircraft
-    from ..flight.approach import FlightConfig
     from ..pilot.hess import model_from_name
     from ..pilots.batch import check_scheduler_address
     from ..pilots.compare import PilotsConfig, list_runs
     from ..plants.analytic import load_analytic
     from ..plants.settings import AnalyticConfig, PlantsConfig
 
-    flight, (aircraft,) = _split(config.get("flight", {}), "aircraft")
-    FlightConfig.from_table(flight, source)
-    _in_field(source, "flight.aircraft", load_aircraft, aircraft or "737")
+    flight_settings(config, source)
     PlantsConfig.from_table(config.get("plants", {}), source)
     analytic = AnalyticConfig.from_table(config.get("analytic", {}), source)
     _in_field(source, "analytic.model", load_analytic, analytic.model)
@@ -158,6 +154,40 @@ def validate(config: dict, source: str) -> None:
     if run and not Path(run).is_file():
         raise HesspipeError(f"{source}: field 'diagnose.run': expected a run CSV file, {run} not found")
     Fields(config.get("report", {}), source, "report").reject_unknown()
+
+
+def flight_settings(config: dict, source: str) -> tuple:
+    """The aircraft and the settings of a configuration's ``[flight]`` table, both checked.
+
+    Read as the flight stage reads them, for ``hesspipe run`` (:func:`validate`) and for the
+    commands that take the same file (``flight --config``, ``fly-pilot --config``).
+
+    Parameters
+    ----------
+    config : dict
+        The configuration from :func:`load_config`.
+    source : str
+        Its name, used in error messages.
+
+    Returns
+    -------
+    aircraft : str
+        ``[flight] aircraft`` (default ``"737"``).
+    settings : FlightConfig
+        The rest of the table.
+
+    Raises
+    ------
+    HesspipeError
+        Naming `source` and the bad field (an unknown aircraft among them).
+    """
+    from ..flight.aircraft import DEFAULT_AIRCRAFT, load_aircraft
+    from ..flight.approach import FlightConfig
+
+    table, (aircraft,) = _split(config.get("flight", {}), "aircraft")
+    settings = FlightConfig.from_table(table, source)
+    _in_field(source, "flight.aircraft", load_aircraft, aircraft or DEFAULT_AIRCRAFT)
+    return aircraft or DEFAULT_AIRCRAFT, settings
 
 
 def build_pipeline(config_path=None, out="hesspipe-out", *, aircraft=None, seed=None) -> Pipeline:
