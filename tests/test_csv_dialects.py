@@ -76,6 +76,9 @@ def _labview():
     # Units in a row of their own under the names (LabVIEW, DEWESoft, MATLAB exports).
     ("units-row.csv", _units_row(";", ","), "as the columns' units"),
     ("units-row-brackets.tsv", _units_row("\t", ".", brackets=True), "as the columns' units"),
+    # Aligned by spaces, as fixed-width exports write it ('Yaw [deg]' once split into two names).
+    ("units-row-aligned.txt", b"\n".join(b"   " + ln for ln in _units_row("   ", ".").split(b"\n")),
+     "as the columns' units"),
     # A logger's metadata above the header, not marked as comments.
     ("preamble.csv", ("Subject: s02\r\nDate: 2026-11-01; 14:03\r\nCondition = motion\r\n"
                       + _text(PLAIN, ";", ",").replace("\n", "\r\n")).encode("cp1252"),
@@ -145,6 +148,43 @@ def test_two_headers_for_one_role_are_refused(tmp_path):
     with pytest.raises(HesspipeError, match=r"two.csv: columns 'Output \[rad/s\]', 'output \(deg/s\)' "
                                             r"all read as 'output' \(role output\); expected one"):
         read_run(path)
+
+
+def test_a_name_written_twice_is_refused_and_its_columns_mapped_by_position(tmp_path):
+    # Two 'Yaw [deg]' (the second a copy off by a factor): pandas read the second as 'Yaw [deg].1'
+    # and 'Yaw' took the first without a word. Two 'Note' columns that no role reads stay fine.
+    t, d, y, u, _ = _signals()
+    path = tmp_path / "twice.csv"
+    deg = 180 / math.pi
+    path.write_text("\n".join(["Time [s];Disturbance;Yaw [deg];Yaw [deg];Stick;Note;Note"] + [
+        f"{a:.9g};{b:.9g};{2 * c * deg:.9g};{c * deg:.9g};{e:.9g};;x" for a, b, c, e in zip(t, d, y, u)]) + "\n")
+    with pytest.raises(HesspipeError, match=r"twice.csv: 'Yaw' \(role output\) matches columns 3 and 4, both headed "
+                                            r"'Yaw \[deg\]'; expected one: map the one meant by its position with "
+                                            r"columns output=3 or output=4$"):
+        read_run(path, columns="disturbance=Disturbance,output=Yaw,control=Stick")
+    run = read_run(path, columns="disturbance=Disturbance,output=4,control=Stick")
+    np.testing.assert_allclose(run.output, y, rtol=1e-6, atol=1e-9)   # the unit written over it converted
+    np.testing.assert_allclose(run.disturbance, d, rtol=1e-6, atol=1e-9)
+    with pytest.raises(HesspipeError, match="column '5' missing"):   # a name written once keeps its name
+        read_run(path, columns="disturbance=Disturbance,output=4,control=5")
+
+
+@pytest.mark.parametrize("lines", [
+    # A header naming more columns than the rows hold values: the last, mapped, has none.
+    ["time disturbance control reference output"] + [f"{0.02 * k:.2f} 0.1 0.2 0.3" for k in range(300)],
+    # No row holding both a time and a control.
+    ["time,disturbance,output,control"] + [f"{0.02 * k:.2f},0.1,0.2," if k % 2 == 0 else ",0.1,0.2,0.3"
+                                           for k in range(300)],
+])
+def test_a_column_without_a_value_is_refused_not_interpolated(tmp_path, lines):
+    # Interpolating over the missed samples (resample) once crashed on such a column: nothing to
+    # interpolate from ("array of sample points is empty").
+    path = tmp_path / "bad.txt"
+    path.write_text("\n".join(lines) + "\n")
+    for resample in (False, True):
+        with pytest.raises(HesspipeError, match=r"bad.txt: column '(output|control)': no number in any data row"
+                                                r"( that has a time)?; expected a value in each row"):
+            read_run(path, resample=resample)
 
 
 def test_empty_optional_column_is_absent_but_a_gap_is_an_error(tmp_path):

@@ -116,3 +116,19 @@ def test_a_sheet_per_run(tmp_path):
     assert any("left out: 'notes'" in n_ for n_ in runs[0].notes)
     one = read_run(path, columns="reference=Target,disturbance=Disturbance,output=Yaw,control=Stick")
     np.testing.assert_array_equal(one.control, runs[0].control)
+
+
+def test_a_name_written_twice_in_a_sheet_is_refused_and_mapped_by_position(tmp_path):
+    # The sheet is read as its text: the check of a name written twice is the text's.
+    s = _signals()
+    path = tmp_path / "twice.xlsx"
+    book = openpyxl.Workbook()
+    sheet = book.active
+    sheet.append(["time", "disturbance", "output", "output", "control", "reference"])
+    for i in range(s["time"].size):
+        sheet.append([float(s["time"][i]), float(s["disturbance"][i]), 0.0, float(s["output"][i]),
+                      float(s["control"][i]), float(s["reference"][i])])
+    book.save(path)
+    refused(path, None, r"twice.xlsx: 'output' matches columns 3 and 4, both headed 'output'; expected one: "
+                        r"map the one meant by its position with columns output=3 or output=4")
+    _check(read_run(path, columns="output=4"))

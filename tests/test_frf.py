@@ -116,6 +116,27 @@ def test_record_not_a_whole_number_of_periods():
     assert f2.window == (300, 2 * N)
 
 
+def test_a_record_shorter_than_a_period_is_said():
+    # A logger stopped before the forcing's period was over: no window holds whole periods and
+    # the lines leak, which the note says, with the period the lines show. One period, two, one
+    # a sample short (the window handles it) and a run-in of another phase before one say nothing.
+    d, r = _multisine(D_BINS, 7), 0.5 * _multisine(R_BINS, 8)
+    one = _run(d, r, noise=0.01)
+
+    def first(run, n):
+        return Run(time=run.time[:n], disturbance=run.disturbance[:n], output=run.output[:n],
+                   control=run.control[:n], reference=run.reference[:n], id="t", synthetic=True)
+
+    said = "no whole period of the forcing repeats in the record"
+    for part in (0.97, 0.9, 0.7):
+        notes = estimate_frf(first(one, int(part * N))).notes
+        assert any(n.startswith(said) and "a period of about 40 s" in n for n in notes), notes
+    run_in = _run(np.concatenate((_multisine(D_BINS, 9)[-600:], d)),
+                  np.concatenate((0.5 * _multisine(R_BINS, 10)[-600:], r)), noise=0.01)
+    for run in (one, _run(np.tile(d, 2), np.tile(r, 2), noise=0.01), first(one, N - 1), run_in):
+        assert not any(said in n for n in estimate_frf(run).notes)
+
+
 @pytest.mark.parametrize("seed", [4, 5, 6])
 def test_a_record_logging_a_run_in_shorter_than_a_period(seed):
     # A lab's logger writes the whole trial: a run-in of 0.6 period (its forcing faded in over

@@ -222,11 +222,13 @@ def _with_units(header: str, units_row: str, sep: str) -> str:
     """`header` with each name lacking a unit given the one written under it."""
     names = header.split(sep) if sep != r"\s+" else header.split()
     units = _cells(units_row, sep) if sep != r"\s+" else units_row.split()
+    # Between spaces-aligned names a space would split 'Yaw [deg]' into two names.
+    gap = " " if sep != r"\s+" else ""
     out = []
     for i, name in enumerate(names):
         unit = units[i].strip("[]()").strip() if i < len(units) else ""
         bare = name.strip().strip('"')
-        out.append(f"{bare} [{unit}]" if unit and _split_unit(bare)[1] is None else name)
+        out.append(f"{bare}{gap}[{unit}]" if unit and _split_unit(bare)[1] is None else name)
     return (sep if sep != r"\s+" else " ").join(out)
 
 

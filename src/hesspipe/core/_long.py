@@ -57,7 +57,7 @@ def row_groups(frame: Frame, keys: Mapping[str, str]) -> list[tuple[tuple[str, .
             if role == "condition" and not value.strip():
                 raise HesspipeError(f"columns: role 'condition': {keys[role]!r}: expected COLUMN=VALUE, the "
                                     "condition whose rows to read (one condition at a time)")
-            col = _match(path, frame.headers, role, name.strip())
+            col = _match(path, frame.headers, role, name.strip(), frame.as_written)
             if col is None:
                 raise HesspipeError(f"{path}: column '{name.strip()}' missing (role {role}); found columns: "
                                     f"{', '.join(frame.headers)}")

@@ -72,16 +72,34 @@ def _resolution(cells) -> np.ndarray:
     return out
 
 
-def _match(path, headers: list[str], role: str, name: str) -> str | None:
+def _match(path, headers: list[str], role: str, name: str, as_written=None,
+           hint: str | None = None) -> str | None:
     """The header of `role` (asked for as `name`): the exact name, else the one whose name,
-    ignoring case and a unit in brackets, is `name`; two such headers are an error."""
+    ignoring case and a unit in brackets, is `name`; two such headers are an error. Where the
+    file names two columns alike (`as_written`, :attr:`Frame.as_written`) a name matching them
+    is an error too, and each of them is mapped by its position instead, a number 1 to k
+    (`hint`: the setting that maps columns, for the message)."""
     if name in headers:
-        return name
-    want = name.strip().lower()
-    found = [h for h in headers if _split_unit(h)[0].lower() == want or h.strip().lower() == want]
+        found = [name]
+    else:
+        want = name.strip().lower()
+        found = [h for h in headers if _split_unit(h)[0].lower() == want or h.strip().lower() == want]
     if len(found) > 1:
         raise HesspipeError(f"{path}: columns {', '.join(repr(h) for h in found)} all read as "
                             f"'{name}' (role {role}); expected one")
+    if as_written is not None and found:
+        alike = as_written[headers.index(found[0])]
+        at = [str(i) for i, h in enumerate(as_written, 1) if h == alike]
+        if len(at) > 1:
+            label = f" (role {role})" if role != name else ""
+            where = f"{', '.join(at[:-1])} and {at[-1]}"
+            how = f" with {hint} " if hint else ", "
+            raise HesspipeError(f"{path}: '{name}'{label} matches columns {where}, "
+                                f"{'both' if len(at) == 2 else 'all'} headed '{alike}'; expected one: map the "
+                                f"one meant by its position{how}{' or '.join(f'{role}={k}' for k in at)}")
+    if as_written is not None and not found and name.strip().isdigit() and 1 <= int(name) <= len(headers) \
+            and as_written.count(as_written[int(name) - 1]) > 1:
+        return headers[int(name) - 1]
     return found[0] if found else None
 
 
@@ -109,6 +127,10 @@ class Frame:
         The file has no header row.
     item : str
         What a binary file's columns are called in messages ("variable", "channel").
+    as_written : tuple of str or None
+        The headers as written where the file names two columns alike (pandas reads the
+        second ``Yaw`` as ``Yaw.1``): a role matching them is refused, and each of them is
+        mapped by its position, ``1`` to ``k``, instead; None otherwise.
     """
 
     path: Path
@@ -120,6 +142,7 @@ class Frame:
     others: tuple | None = None
     positional: bool = False
     item: str = "variable"
+    as_written: tuple | None = None
 
     @property
     def headers(self) -> list[str]:
@@ -187,13 +210,22 @@ def _text_frame(path: Path, text: str, notes: list, separator_said: bool = True)
                                 "expected one value per named column") from None
         raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip() for c in df.columns]
+    as_written = None
+    if any((m := re.match(r"(.*)\.\d+$", c)) and m.group(1) in df.columns for c in df.columns):
+        # pandas renamed a second 'Yaw' to 'Yaw.1': the header row as written tells a name
+        # written twice from one that ends in a number.
+        head = pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, header=None,
+                           nrows=1, dtype=str, index_col=False, engine=engine).iloc[0]
+        names = tuple(str(h).strip() for h in head)
+        if len(names) == len(df.columns) and len(set(names)) < len(names):
+            as_written = names
 
     @functools.lru_cache(maxsize=None)   # a file of several runs asks once per run
     def written(col: str) -> np.ndarray:
         return pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
                            usecols=[col], dtype=str, engine=engine)[col].to_numpy()
 
-    return Frame(path, df, comments, tuple(notes), decimal, written, None, positional)
+    return Frame(path, df, comments, tuple(notes), decimal, written, None, positional, as_written=as_written)
 
 
 def _sheets_frame(names: list[str], frames: list[Frame]) -> Frame:
@@ -221,7 +253,11 @@ def _sheets_frame(names: list[str], frames: list[Frame]) -> Frame:
                            "as SHEET/COLUMN (a sheet per run: map them with a star, Run */Yaw)"
                            + (f"; left out, more rows than the first: {', '.join(map(repr, longer))}"
                               if longer else ""),)
-    return replace(first, df=df, notes=notes, written=written)
+    alike = None
+    if any(fr.as_written for fr in frames):
+        alike = tuple(first.as_written or first.headers) + tuple(
+            f"{name}/{h}" for name, fr in zip(names, frames) for h in (fr.as_written or fr.headers))
+    return replace(first, df=df, notes=notes, written=written, as_written=alike)
 
 
 def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(), what: str = "a CSV",
@@ -275,16 +311,16 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
     data, used = {}, {}
     flipped = set()
     for role, name in names.items():
-        col = _match(path, headers, role, name)
+        col = _match(path, headers, role, name, frame.as_written, hint)
         if col is None and name.startswith("-") and name[1:].strip():
             # "-NAME": the column NAME with its sign flipped (a stick convention opposite
             # to the plants').
-            col = _match(path, headers, role, name[1:].strip())
+            col = _match(path, headers, role, name[1:].strip(), frame.as_written, hint)
             if col is not None:
                 flipped.add(role)
         if col is None and name != role:
             # A mapping written for some files of a folder: the others keep the plain names.
-            col = _match(path, headers, role, role)
+            col = _match(path, headers, role, role, frame.as_written, hint)
         if col is not None and role in optional and df[col].isna().all():
             col = None  # a column written but left empty: the default, as if absent
         if col is None:
@@ -309,6 +345,14 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
             if clock is not None:
                 data[role] = clock
                 notes.append(f"column '{col}' ({role}): clock times read as seconds from the first")
+    timed = np.isfinite(data["time"]) if "time" in data else np.ones(len(df), dtype=bool)
+    for role, v in data.items():
+        rows = np.ones(v.size, dtype=bool) if role == "time" else timed
+        # Nothing to read, nor to interpolate from: a header naming more columns than the rows
+        # hold values, not a missed frame. Cells of text are named below.
+        if rows.any() and not np.isfinite(v[rows]).any() and _empty(df[used[role]].iloc[rows]).all():
+            raise HesspipeError(f"{path}: column '{used[role]}': no number in any data row"
+                                f"{'' if rows.all() else ' that has a time'}; expected a value in each row")
     first, stop = _complete_rows(data)
     bad = {}
     for role, v in data.items():
@@ -347,7 +391,8 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
         if role in flipped:
             values = -values
             notes.append(f"column '{col}' ({role}): sign flipped, as mapped")
-        unit = _split_unit(col)[1]
+        # pandas' name of a second 'Yaw [deg]', 'Yaw [deg].1', hides the unit written over it.
+        unit = _split_unit(col if frame.as_written is None else frame.as_written[headers.index(col)])[1]
         if unit:
             factor = UNIT_FACTORS.get(role, {}).get(unit.lower().replace(" ", ""))
             if factor is None and unit.lower() not in _DIMENSIONLESS:

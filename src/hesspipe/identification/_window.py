@@ -17,6 +17,15 @@ NEAR = 6
 CLEAN = 0.99
 """A window found by exact recurrence is taken when each forcing's purity there is at least
 this (the share of its power on its lines)."""
+PERIOD_OFF = (0.1, 0.05)
+"""A record holds no whole period (:func:`_longer_period`) when its lines lie more than the first
+of these, in bins, off those of every window up to its length, and within the second of those
+of a longer one. Located lines lay within 0.04 bin of a whole-period window in the records that
+hold one (0.17 with a run-in of another phase), within 0.03 of the period beyond the record in
+those that do not."""
+MIN_PERIOD_LINES = 6
+"""Fewest located lines that :func:`_longer_period` judges a period by (with fewer, some longer
+window holds them by chance)."""
 
 
 def _lines(power: np.ndarray) -> np.ndarray:
@@ -166,6 +175,69 @@ def _window(d: np.ndarray, r: np.ndarray | None):
     m = int(fine[int(np.argmax([purity(n - int(m), int(m)) for m in fine]))])
     best = max(best, (purity(n - m, m), n - m, m), key=lambda b: b[0])
     return best[1], best[2], best[0]
+
+
+def _line_positions(x: np.ndarray, pad: int = 8) -> np.ndarray:
+    """The lines of `x` in bins of its record, fractional: the peaks :func:`_lines` finds on
+    its Hann-windowed spectrum, each located on that spectrum zero-padded `pad` times (a
+    parabola through the log magnitudes at its top). Off the bins the taper keeps each line's
+    leakage off the others, so a line's place is read to about 0.02 of a bin."""
+    n = x.size
+    xw = (x - x.mean()) * np.hanning(n)
+    p = np.abs(np.fft.rfft(xw)) ** 2
+    peaks = [b for b in _lines(p) if p[b] >= p[max(b - 2, 0):b + 3].max()]   # a lobe spans 2 bins each side
+    fine = np.abs(np.fft.rfft(xw, pad * n))
+    out = []
+    for b in peaks:
+        lo = max(pad * (b - 1), 1)
+        i = lo + int(np.argmax(fine[lo:min(pad * (b + 1) + 1, fine.size - 1)]))
+        a, c, e = np.log(fine[i - 1:i + 2] + 1e-300)
+        out.append((i + (0.5 * (a - e) / (a - 2 * c + e) if a - 2 * c + e < 0 else 0.0)) / pad)
+    return np.array(out)
+
+
+def _period_off(lines: np.ndarray, n: int, lo: float, hi: float) -> tuple[float, float]:
+    """(m, off): of the windows from `lo` to `hi` samples long, the one whose bins the `lines`
+    (in bins of a record of `n` samples) come nearest to together, and the largest distance,
+    in bins, of a line from one of them."""
+    m = np.arange(lo, hi, 0.02 * n / lines.max())   # a step moves the highest line 0.02 bin
+    worst = np.zeros(m.size)
+    for b in lines:
+        q = m * (b / n)
+        worst = np.maximum(worst, np.abs(q - np.round(q)))
+    i = int(np.argmin(worst))
+    return float(m[i]), float(worst[i])
+
+
+def _longer_period(forcings) -> float | None:
+    """The forcing's period in samples where the record holds no whole one, or None.
+
+    A window of whole periods puts every line on a bin. Where the record is shorter than the
+    period, no window does: the lines, located on the record's spectrum (:func:`_line_positions`),
+    lie off the bins of every window up to the record's length (by more than PERIOD_OFF[0]),
+    and together on the bins of one a little longer (within PERIOD_OFF[1]). Both must hold: a
+    run-in of another phase shifts the lines by up to 0.17 bin but puts them on no longer
+    window; fewer than MIN_PERIOD_LINES lines tell a period from chance too rarely.
+
+    Parameters
+    ----------
+    forcings : list of ndarray
+        The record's forcing signals (disturbance, target), of one length.
+
+    Returns
+    -------
+    float or None
+        The period, samples; None where a window of whole periods fits in the record, or where
+        the lines cannot tell.
+    """
+    n = forcings[0].size
+    lines = np.concatenate([_line_positions(f) for f in forcings])
+    if lines.size < MIN_PERIOD_LINES:
+        return None
+    if _period_off(lines, n, min(n / lines.min(), n), n + 1.0)[1] < PERIOD_OFF[0]:
+        return None
+    m, off = _period_off(lines, n, n + 1.0, 2.0 * n)
+    return m if off < PERIOD_OFF[1] else None
 
 
 def _periodic_stretch(x: np.ndarray, tail: int = 64, steps: int = 16) -> tuple[int, int] | None:
