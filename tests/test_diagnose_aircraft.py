@@ -13,6 +13,7 @@ import pytest
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.diagnose.aircraft import corrected, plant_finding
 from hesspipe.diagnose.checks import plant_check
+from hesspipe.diagnose.report import format_report
 from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.diagnose.workflow import diagnose
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
@@ -218,3 +219,16 @@ def test_report_says_the_plants_match_once_the_initial_state_is_refitted(tmp_pat
     i = next(j for j, ln in enumerate(lines) if ln.startswith("Plant check: fit"))
     assert "the plants started from rest" in lines[i]
     assert lines[i + 1].startswith("  -> plants reproduce the output: fit 9") and "initial state refitted" in lines[i + 1]
+
+
+def test_a_record_shorter_than_a_period_is_said_in_the_diagnosis(clean):
+    # A logger stopped early: the lines leak, and only `frf` said so.
+    run, plants = clean
+    n = int(0.9 * len(run))
+    short = replace(run, time=run.time[:n], disturbance=run.disturbance[:n], output=run.output[:n],
+                    control=run.control[:n], reference=run.reference[:n])
+    cfg = DiagnoseConfig(candidates=("remnant",), max_effects=1)
+    d = diagnose(short, plants, config=cfg)
+    assert len(d.notes) == 1 and d.notes[0].startswith("no whole period of the forcing repeats")
+    assert "Note: no whole period" in format_report(d) and d.to_dict()["notes"] == list(d.notes)
+    assert diagnose(run, plants, config=cfg).notes == ()

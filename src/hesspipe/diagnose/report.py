@@ -50,6 +50,7 @@ def format_report(d: Diagnosis) -> str:
         # (a yaw-angle task) then "fits" -46 % with exact plants. The finding's refit of the
         # initial state is what says whether the plants match: print it.
         out.append("  -> " + d.plant_finding["message"])
+    out.extend(f"Note: {n}" for n in d.notes)
     dv = d.delay_verdict
     if dv is not None:
         runs = dv.get("runs", 1), dv.get("baseline_runs", 1)

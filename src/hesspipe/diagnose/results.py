@@ -146,6 +146,9 @@ class Diagnosis:
         :func:`hesspipe.diagnose.motion.delay_test` result.
     remnant_verdict : dict or None
         :func:`hesspipe.diagnose.motion.remnant_share` verdict.
+    notes : tuple of str
+        What limits the record's evidence (a record that holds no whole period of its
+        multisine: :func:`hesspipe.identification.lines.window_note`).
     """
 
     run_id: str
@@ -177,6 +180,7 @@ class Diagnosis:
     motion_verdict: dict | None = None  # :class:`hesspipe.diagnose.motion.MotionVerdict` as a dict
     delay_verdict: dict | None = None   # :func:`hesspipe.diagnose.motion.delay_test`
     remnant_verdict: dict | None = None  # :func:`hesspipe.diagnose.motion.remnant_share` verdict
+    notes: tuple = ()
 
     @property
     def gap_reduction(self) -> float:
@@ -215,6 +219,7 @@ class Diagnosis:
             "motion_verdict": self.motion_verdict,
             "delay_verdict": self.delay_verdict,
             "remnant_verdict": self.remnant_verdict,
+            "notes": list(self.notes),
             "control_error_tests": {"before": self.control_error_before,
                                     "after": self.control_error_after},
             "criterion": self.criterion,

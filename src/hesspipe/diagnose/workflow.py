@@ -49,6 +49,7 @@ from ..core.seeds import check_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import check_control
 from ..identification.frf_average import check_repeats
+from ..identification.lines import window_note
 from ..pilot.effects import EFFECTS, get_effect
 from ..pilot.hess import PilotModel, model_from_name
 from ..plants.validation import residual_tests
@@ -332,4 +333,5 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         final_psd=current.psd, seed=seed, source=run.source, plant_finding=finding.to_dict(),
         motion_verdict=None if ev is None else ev.motion.to_dict(),
         delay_verdict=None if ev is None else ev.delay,
-        remnant_verdict=None if ev is None else ev.remnant)
+        remnant_verdict=None if ev is None else ev.remnant,
+        notes=tuple(n for n in (window_note(run) if ev is not None else None,) if n))

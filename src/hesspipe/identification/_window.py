@@ -240,6 +240,36 @@ def _longer_period(forcings) -> float | None:
     return m if off < PERIOD_OFF[1] else None
 
 
+def period_note(forcings, purity: float, dt: float) -> str | None:
+    """The note on a record that holds no whole period of its multisine, or None.
+
+    Parameters
+    ----------
+    forcings : list of ndarray
+        The record's forcing signals (disturbance, target), of one length; constant ones are
+        left out.
+    purity : float
+        The chosen window's purity (:func:`_window`); at :data:`CLEAN` or above it holds whole
+        periods and nothing is said.
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    str or None
+        The note, naming the record's length and the period its lines belong to (s).
+    """
+    if purity >= CLEAN:
+        return None
+    moving = [np.asarray(x, dtype=float) for x in forcings if np.ptp(x) > 0]
+    period = _longer_period(moving) if moving else None
+    if period is None:
+        return None
+    return (f"no whole period of the forcing repeats in the record ({moving[0].size * dt:.4g} s; its lines "
+            f"are those of a period of about {period * dt:.4g} s): the lines leak into their neighbours, "
+            "so the describing function and the remnant share are approximate")
+
+
 def _periodic_stretch(x: np.ndarray, tail: int = 64, steps: int = 16) -> tuple[int, int] | None:
     """(start, length) of the most whole periods inside the stretch where `x` repeats itself,
     found from a segment of `tail` samples stepped back from the record's end over its last

@@ -52,7 +52,7 @@ import numpy as np
 from scipy import signal
 
 from ..core.errors import HesspipeError
-from ._window import CLEAN, _lines, _longer_period, _window
+from ._window import _lines, _window, period_note
 from .frf_channels import Channels, separate_channels
 from .frf_crossover import FrfCrossover, nonparametric_crossover  # noqa: F401  (re-exported)
 
@@ -410,18 +410,16 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
     share = float(pu[quiet].sum() / total) if total > 0 else float("nan")
     cross = (nonparametric_crossover(fb, yc, seed=seed) if yc is not None else
              FrfCrossover(*(float("nan"),) * 4, "no plants given"))
-    period = _longer_period([x for x in (d, r) if np.ptp(x) > 0]) if purity < CLEAN else None
+    leaky = period_note([d, r], purity, dt)
     if start:
-        notes.append(f"first {start} sample(s) left out" + (" so that the window holds whole periods" if period is None
+        notes.append(f"first {start} sample(s) left out" + (" so that the window holds whole periods" if leaky is None
                                                             else ": the lines leak least over the rest"))
     if start + length < d.size:
         notes.append(f"last {d.size - start - length} sample(s) left out: the forcing stops repeating there")
     if drift is not None:
         notes.append("a slow drift in the forcing hid lines: they were found on it less its "
                      "straight-line trend")
-    if period is not None:
-        notes.append(f"no whole period of the forcing repeats in the record ({d.size * dt:.4g} s; its lines are "
-                     f"those of a period of about {period * dt:.4g} s): the lines leak into their neighbours, "
-                     "so the describing function and the remnant share are approximate")
+    if leaky is not None:
+        notes.append(leaky)
     return Frf("multisine", fb, ref, share, cross, (start, length), dt,
                getattr(run, "id", ""), bool(getattr(run, "synthetic", False)), tuple(notes))

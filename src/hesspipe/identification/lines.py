@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._window import _lines, _window
+from ._window import _lines, _window, period_note
 from .frf import NEIGHBOURS, _neighbour_bins, _neighbour_residual_power
 
 MIN_LINES = 4
@@ -49,6 +49,26 @@ def analysis_window(run) -> tuple[int, int]:
     r = np.asarray(run.reference, dtype=float)
     start, length, _ = _window(d, r if np.any(r) else None)
     return int(start), int(length)
+
+
+def window_note(run) -> str | None:
+    """What the analysis window cannot do for `run`: the note on a record that holds no whole
+    period of its multisine (:func:`hesspipe.identification._window.period_note`), or None.
+
+    Parameters
+    ----------
+    run : hesspipe.core.formats.Run
+        Its disturbance and reference are the forcing signals.
+
+    Returns
+    -------
+    str or None
+        The note.
+    """
+    d = np.asarray(run.disturbance, dtype=float)
+    r = np.asarray(run.reference, dtype=float)
+    _, _, purity = _window(d, r if np.any(r) else None)
+    return period_note([d, r], purity, run.dt)
 
 
 def windowed(run):
