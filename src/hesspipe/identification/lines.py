@@ -45,10 +45,15 @@ def analysis_window(run) -> tuple[int, int]:
     (int, int)
         First sample and number of samples of the window.
     """
+    start, length, _ = _run_window(run)[2:]
+    return int(start), int(length)
+
+
+def _run_window(run):
+    """(disturbance, reference, start, length, purity) of `run`'s :func:`_window`."""
     d = np.asarray(run.disturbance, dtype=float)
     r = np.asarray(run.reference, dtype=float)
-    start, length, _ = _window(d, r if np.any(r) else None)
-    return int(start), int(length)
+    return (d, r, *_window(d, r if np.any(r) else None))
 
 
 def window_note(run) -> str | None:
@@ -65,9 +70,7 @@ def window_note(run) -> str | None:
     str or None
         The note.
     """
-    d = np.asarray(run.disturbance, dtype=float)
-    r = np.asarray(run.reference, dtype=float)
-    _, _, purity = _window(d, r if np.any(r) else None)
+    d, r, _, _, purity = _run_window(run)
     return period_note([d, r], purity, run.dt)
 
 
