@@ -8,6 +8,7 @@ import re
 import control as ct
 import numpy as np
 import pytest
+import scipy.io
 
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Plants, Run, as_runs, read_plants, read_run, write_plants, write_run
@@ -273,12 +274,23 @@ def test_jitter_beyond_tolerance_refused_with_spread(tmp_path):
 
 def test_implausible_interval_and_overflowing_values_refused(tmp_path):
     ms = _time_csv(tmp_path / "ms.csv", [str(20 * i) for i in range(50)])
-    with pytest.raises(HesspipeError, match=r"sample interval 20 s .*implausible.*milliseconds"):
+    with pytest.raises(HesspipeError, match=r"sample interval 20 s .*implausible.*milliseconds: head the "
+                                            r"column 'time \[ms\]' or write seconds"):
         read_run(ms)
+    # A MATLAB variable has no header to write a unit in.
+    scipy.io.savemat(tmp_path / "ms.mat", {"t": 20.0 * np.arange(50), "disturbance": np.arange(50.0),
+                                           "output": np.arange(50.0), "control": np.arange(50.0)})
+    with pytest.raises(HesspipeError, match=r"looks like milliseconds: write seconds\)$"):
+        read_run(tmp_path / "ms.mat", columns={"time": "t"})
+    # ... and so headed, the same file reads at 50 Hz.
+    headed = tmp_path / "ms_headed.csv"
+    headed.write_text(ms.read_text().replace("time,", "time [ms],", 1))
+    assert read_run(headed).dt == pytest.approx(0.02)
     # Sample numbers (or milliseconds at 1 kHz) in the time column: 1 Hz is no tracking run.
     frames = _time_csv(tmp_path / "frames.csv", [str(i) for i in range(50)])
     with pytest.raises(HesspipeError, match=r"sample interval 1 s \(1 Hz\) is implausible.*at most 0.1 s \(the times "
-                                            r"are whole numbers, one apart: sample numbers, or milliseconds\?"):
+                                            r"are whole numbers, one apart: sample numbers, or milliseconds\? write seconds, head "
+                                            r"the column 'time \[ms\]'"):
         read_run(frames)
     # Seconds under a header that says milliseconds: 0.01 ms intervals, a 100 kHz "run".
     secs = _csv(tmp_path / "secs.csv", ("time [ms]", "disturbance", "output", "control"),

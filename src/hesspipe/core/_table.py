@@ -103,6 +103,12 @@ def _match(path, headers: list[str], role: str, name: str, as_written=None,
     return found[0] if found else None
 
 
+_BINARY = {".mat": (mat_frame, "variable"), ".npz": (mat_frame, "variable"), ".tdms": (tdms_frame, "channel"),
+           ".h5": (h5_frame, "dataset"), ".hdf5": (h5_frame, "dataset")}
+#: Files whose columns have no header row (a unit is never written over them).
+BINARY_SUFFIXES = tuple(_BINARY)
+
+
 @dataclass(frozen=True)
 class Frame:
     """A file's columns as written, before any is picked by role (:func:`read_frame`).
@@ -170,10 +176,8 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
         Naming the file and the problem.
     """
     path = Path(path)
-    binary = {".mat": (mat_frame, "variable"), ".npz": (mat_frame, "variable"), ".tdms": (tdms_frame, "channel"),
-              ".h5": (h5_frame, "dataset"), ".hdf5": (h5_frame, "dataset")}
-    if path.suffix.lower() in binary:
-        reader, item = binary[path.suffix.lower()]
+    if path.suffix.lower() in _BINARY:
+        reader, item = _BINARY[path.suffix.lower()]
         df, comments, notes, others = reader(path)
         return Frame(path, df, tuple(comments), tuple(notes), ".", None, tuple(others), item=item)
     if path.suffix.lower() in EXCEL_SUFFIXES:

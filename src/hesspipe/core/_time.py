@@ -23,10 +23,10 @@ MAX_INTERVAL_S = 0.1
 MIN_INTERVAL_S = 1e-4
 
 
-def _check_plausible(path, column: str, dt: float, t: np.ndarray | None = None) -> None:
+def _check_plausible(path, column: str, dt: float, t: np.ndarray | None = None, *, headed: bool = True) -> None:
     """Refuse sample intervals no tracking run has (usually times in milliseconds read as
     seconds, sample numbers, or seconds labelled as milliseconds); `t`, the times read,
-    tells whole numbers apart."""
+    tells whole numbers apart; `headed`: the column has a header a unit can be written in."""
     if dt < MIN_INTERVAL_S:
         hint = (" (the column says milliseconds: are its values seconds?)"
                 if "ms" in column.lower().replace(" ", "") else "")
@@ -35,9 +35,13 @@ def _check_plausible(path, column: str, dt: float, t: np.ndarray | None = None) 
                             f"an interval of at least {MIN_INTERVAL_S:g} s{hint}")
     if dt > MAX_INTERVAL_S:
         whole = t is not None and bool(np.all(t == np.round(t)))
+        # A unit in the header is converted ('Time [ms]'): the remedy that leaves a logger's
+        # file as it is, and the one a newcomer looks for.
+        head = f"head the column '{column} [ms]'" if headed else ""
         hint = (" (the times are whole numbers, one apart: sample numbers, or milliseconds? write "
-                "seconds, or map no time column and give the sample rate (sample_rate))" if whole and dt == 1.0
-                else " (the time column looks like milliseconds: write it in seconds)"
+                f"seconds, {head + ', ' if head else ''}or map no time column and give the sample "
+                "rate (sample_rate))" if whole and dt == 1.0
+                else f" (the time column looks like milliseconds: {head + ' or ' if head else ''}write seconds)"
                 if 1.0 < dt <= 100.0 else "")
         raise HesspipeError(f"{path}: column '{column}': sample interval {dt:g} s "
                             f"({1.0 / dt:.3g} Hz) is implausible for a tracking run; expected "

@@ -29,7 +29,7 @@ import pandas as pd
 from ._long import KEY_COLUMNS, row_groups
 from ._plants import Plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
 from ._roles import ERROR_AGREES, target_unread, unwrapped, with_error, without_disturbance  # noqa: F401
-from ._table import RUN_NUMBER, read_frame, read_table, run_columns
+from ._table import BINARY_SUFFIXES, RUN_NUMBER, read_frame, read_table, run_columns
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
 from ._tf import tf_coefficients as tf_coefficients  # re-exported: the plants report and the flight use it
 from ._time import (
@@ -432,7 +432,7 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
                   f"linearly onto a uniform {dt:.9g} s grid ({n} samples read, {grid.size} kept)",)
     else:
         data["time"] = t[0] + dt * np.arange(n, dtype=float) + _intercept(t, dt)
-    _check_plausible(path, tcol, dt, t)
+    _check_plausible(path, tcol, dt, t, headed=Path(path).suffix.lower() not in BINARY_SUFFIXES)
     return _run(path, data, comments, notes, dt)
 
 
