@@ -148,10 +148,11 @@ def read_cli_flight(args: argparse.Namespace) -> tuple:
     from ..flight.approach import FlightConfig
 
     if args.config is None:
-        return (DEFAULT_AIRCRAFT if args.aircraft is None else args.aircraft), FlightConfig()
-    from ..pipeline.stages import flight_settings, load_config
+        aircraft, settings = DEFAULT_AIRCRAFT, FlightConfig()
+    else:
+        from ..pipeline.stages import flight_settings, load_config
 
-    aircraft, settings = flight_settings(*load_config(args.config))
+        aircraft, settings = flight_settings(*load_config(args.config))
     return (aircraft if args.aircraft is None else args.aircraft), settings
 
 

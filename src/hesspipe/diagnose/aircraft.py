@@ -45,7 +45,7 @@ import scipy.stats
 
 from ..pilot.blocks import tf
 from ..pilot.effects import actuator_lag_factor, roll_mode_factor
-from ..plants.consistency import radians_hint
+from ..plants.consistency import UNITS_SIZE, radians_hint
 from ._refit import (  # noqa: F401 (DRIFT_HZ, EVIDENCE_BAND_HZ: re-exported, named by the README and tests)
     DRIFT_HZ,
     EVIDENCE_BAND_HZ,
@@ -84,8 +84,9 @@ def _physical(e, dt: float) -> bool:
 #: disturbance gain and the slow modes' initial state): its own, and the initial state of
 #: the poles it adds (the Dutch roll's two numerators replace the disturbance gain).
 _N_PARAMETERS = {"actuator_lag": 1, "rate_limit": 1, "roll_mode": 3, "dutch_roll": 9}
-#: A path gain beyond this factor (either way) is a units error, not an aircraft change.
-SCALE_RATIO = 3.0
+#: A path gain beyond this factor (either way) is a units error, not an aircraft change: the
+#: reader's own bound (:data:`hesspipe.plants.consistency.UNITS_SIZE`).
+SCALE_RATIO = UNITS_SIZE
 
 
 @dataclass(frozen=True)
@@ -297,9 +298,10 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
         if swapped:
             what.append("columns read as control='%s', disturbance='%s', output='%s'" % perm)
         what += [f"the {r} path's sign flipped" for r in bad_sign]
-        if len(bad_scale) == 2 and abs(math.log(abs(g[0] / g[1]))) < 0.1:
+        common = _common_scale(g[0], g[1])
+        if common is not None:
             # Both paths off alike: the output's unit is the odd one (or both inputs').
-            what.append(f"the output's scale off by {abs(g[0]):.3g} against both inputs'{radians_hint(abs(g[0]))}")
+            what.append(f"the output's scale off by {common:.3g} against both inputs'{radians_hint(common)}")
         else:
             what += [f"the {r} path's scale off by {abs(v):.3g}{radians_hint(abs(v))}"
                      for r, v in zip(("control", "disturbance"), g) if r in bad_scale]
@@ -311,13 +313,20 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
     return out
 
 
+def _common_scale(g_c: float, g_d: float) -> float | None:
+    """The units-size factor both path gains are off by alike (magnitudes within 10 %), or None."""
+    if any(v == 0 or 1 / SCALE_RATIO <= abs(v) <= SCALE_RATIO for v in (g_c, g_d)) \
+            or abs(math.log(abs(g_c / g_d))) >= 0.1:
+        return None
+    return abs(g_c)
+
+
 def _output_is_odd(run, q: dict) -> bool:
     """Whether a wrong-file verdict's units-size factor common to both paths is the output's
     own: the target (logged in the output's unit) then stands apart from the output by that
     factor at its lines, where a tracking loop has the output follow it."""
     g_c, g_d = q["gain_control"], q["gain_disturbance"]
-    if q["swapped"] or g_c <= 0 or g_d <= 0 or 1 / SCALE_RATIO <= g_c <= SCALE_RATIO \
-            or abs(math.log(g_c / g_d)) >= 0.1:
+    if q["swapped"] or g_c <= 0 or g_d <= 0 or _common_scale(g_c, g_d) is None:
         return False
     r = np.asarray(run.reference, dtype=float)
     if not np.any(r != r[0]):

@@ -81,6 +81,11 @@ def table1(k: int = 1) -> dict[str, float]:
     return out
 
 
+def _known_parameters() -> set[str]:
+    """Every parameter some model has: the core's and every registered effect's."""
+    return set(PARAMETERS).union(*(e.parameters for e in EFFECTS.values()))
+
+
 @dataclass(frozen=True)
 class PilotModel:
     """A Hess structural model plus zero or more effects.
@@ -208,7 +213,7 @@ class PilotModel:
         """
         params = dict(params or {})
         names = self.parameter_names()
-        known = set(PARAMETERS).union(*(e.parameters for e in EFFECTS.values()))
+        known = _known_parameters()
         unknown = [n for n in params if n not in (names if strict else known)]
         if unknown:
             raise HesspipeError(f"unknown parameter {unknown[0]!r} for model {self.name}; "
@@ -253,7 +258,7 @@ class PilotModel:
         """
         f = Fields(params, source)
         names = self.parameter_names()
-        known = set(PARAMETERS).union(*(e.parameters for e in EFFECTS.values()))
+        known = _known_parameters()
         lows = {n: lo for n, (lo, _) in self.bounds().items()}
         out = {}
         for name in f.table:
