@@ -62,8 +62,9 @@ def test_run_batch_keeps_item_order_for_any_worker_count():
     items = list(range(7))
     assert run_batch(_square, items, workers=1) == [i * i for i in items]
     assert run_batch(_square, items, workers=2) == [i * i for i in items]
-    with pytest.raises(HesspipeError, match="^workers: expected an integer >= 1, got 0"):
-        run_batch(_square, items, workers=0)
+    assert run_batch(_square, items, workers=0) == [i * i for i in items]   # 0: all cores, as in TOML
+    with pytest.raises(HesspipeError, match=r"^workers: expected an integer >= 0 \(0: all cores\), got -1"):
+        run_batch(_square, items, workers=-1)
 
 
 def test_results_do_not_depend_on_worker_count(tmp_path):
@@ -228,7 +229,7 @@ def test_verdict_without_pilots_says_none_was_identified():
 
 
 @pytest.mark.parametrize("argv, code, words", [
-    (["pilots", "{runs}", "--plants", "{plants}", "--workers", "0"], 1, "--workers: expected"),
+    (["pilots", "{runs}", "--plants", "{plants}", "--workers", "-1"], 1, "--workers: expected"),
     (["pilots", "{tmp}/none", "--plants", "{plants}"], 1, "not found"),
     (["pilots", "{runs}", "--plants", "{tmp}/missing.json"], 1, "missing.json: file not found"),
     (["pilots", "{runs}"], 2, "--plants"),
@@ -443,8 +444,8 @@ def test_compare_pilots_command_spells_the_librarys_settings_as_its_flags():
     from hesspipe.cli._options import cli_message
 
     args = build_parser().parse_args(["compare-pilots", "runs", "--plants", "p.json"])
-    assert cli_message("workers: expected an integer >= 1, got 0", args) == \
-        "--workers: expected an integer >= 1, got 0"
+    assert cli_message("workers: expected an integer >= 0 (0: all cores), got -1", args) == \
+        "--workers: expected an integer >= 0 (0: all cores), got -1"
     assert cli_message("scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (x)", args) == \
         "--scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (x)"
     assert cli_message("runs/p1.csv: column 'control' missing", args) == "runs/p1.csv: column 'control' missing"

@@ -109,6 +109,10 @@ def test_clean_plants_match_and_baseline_names_no_pilot_effect(clean):
     d = diagnose(run, plants)
     assert d.plant_finding["verdict"] == "match"
     assert not set(d.named_effects) & {"motion_feedback", "otoliths", "extra_delay"}, d.named_effects
+    # A nested fit ending a hair above the current one printed "LR=-0.0" (a sign error to a reader)
+    step = replace(d.steps[0], round=1, statistic=-0.03, dof=1, p_value=1.0)
+    text = format_report(replace(d, steps=(*d.steps, step)))
+    assert "LR=-0.0" not in text and f"round 1: {step.candidate:<16} LR=     0.0 dof=1" in text
 
 
 def test_motion_feedback_run_is_named_on_the_describing_function(tmp_path_factory):

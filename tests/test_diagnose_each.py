@@ -56,8 +56,8 @@ def test_the_command_diagnoses_a_folder_run_by_run(runs, tmp_path, capsys):
     assert main(["diagnose", str(folder), "--each", "--plants", str(tmp_path / "p.json"),
                  "--figure", str(tmp_path / "x.png")]) == 1
     assert "--figure: not with --each" in capsys.readouterr().err
-    assert main(["diagnose", str(folder), "--each", "--plants", str(tmp_path / "p.json"), "--workers", "0"]) == 1
-    assert "--workers: expected an integer >= 1, got 0" in capsys.readouterr().err
+    assert main(["diagnose", str(folder), "--each", "--plants", str(tmp_path / "p.json"), "--workers", "-1"]) == 1
+    assert "--workers: expected an integer >= 0 (0: all cores), got -1" in capsys.readouterr().err
     assert main(["diagnose", str(folder / "z_cut.csv"), "--plants", str(tmp_path / "p.json"), "--workers", "2"]) == 1
     assert "--workers: only with --each" in capsys.readouterr().err
 

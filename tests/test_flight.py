@@ -274,15 +274,18 @@ def test_a_copy_of_the_default_configuration_is_accepted(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["flight", "--out", str(out), "--config", str(copy)]) == 0, capsys.readouterr().err
     assert json.loads((out / "trim.json").read_text())["aircraft"] == "737"
+    # ... and its seed: the records `hesspipe run` flies with that file
+    assert json.loads((out / "manifest.json").read_text())["seed"] == 1
 
 
 def test_the_configurations_aircraft_is_flown_unless_the_flag_names_one(tmp_path):
     from hesspipe.cli._options import read_cli_flight
 
-    cfg = _config(tmp_path, '[flight]\naircraft = "B747"\nduration_s = 30.0\n')
-    assert read_cli_flight(Namespace(config=cfg, aircraft=None)) == ("B747", FlightConfig(duration_s=30.0))
-    assert read_cli_flight(Namespace(config=cfg, aircraft="MD11"))[0] == "MD11"
-    assert read_cli_flight(Namespace(config=None, aircraft=None)) == ("737", FlightConfig())
+    cfg = _config(tmp_path, 'seed = 7\n[flight]\naircraft = "B747"\nduration_s = 30.0\n')
+    assert read_cli_flight(Namespace(config=cfg, aircraft=None, seed=None)) == \
+        ("B747", FlightConfig(duration_s=30.0), 7)
+    assert read_cli_flight(Namespace(config=cfg, aircraft="MD11", seed=3))[::2] == ("MD11", 3)
+    assert read_cli_flight(Namespace(config=None, aircraft=None, seed=None)) == ("737", FlightConfig(), 0)
 
 
 @pytest.mark.parametrize("command", ["flight", "fly-pilot", "plants"])

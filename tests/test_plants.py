@@ -181,6 +181,9 @@ def test_bad_input_is_one_line_and_writes_nothing(synthetic_flight, tmp_path, ca
 def test_missing_flight_folder_and_file(tmp_path, capsys):
     assert main(["plants", "--flight", str(tmp_path / "nope"), "--out", str(tmp_path / "o")]) == 1
     assert "flight folder not found" in capsys.readouterr().err
+    (tmp_path / "wind.csv").write_text("time\n0\n")   # the record given for its folder
+    assert main(["plants", "--flight", str(tmp_path / "wind.csv"), "--out", str(tmp_path / "o")]) == 1
+    assert "wind.csv: a file, not a folder; expected the flight stage's output folder" in capsys.readouterr().err
     (tmp_path / "empty").mkdir()
     assert main(["plants", "--flight", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 1
     assert "wind.csv: file not found" in capsys.readouterr().err

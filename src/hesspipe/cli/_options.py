@@ -136,24 +136,28 @@ def check_aircraft(name: str | None) -> None:
 
 
 def read_cli_flight(args: argparse.Namespace) -> tuple:
-    """The aircraft and :class:`~hesspipe.flight.approach.FlightConfig` of ``--aircraft`` and
-    ``--config FILE``.
+    """The aircraft, :class:`~hesspipe.flight.approach.FlightConfig` and seed of ``--aircraft``,
+    ``--config FILE`` and ``--seed``.
 
     The file is read as ``hesspipe run --config`` reads it
     (:func:`hesspipe.pipeline.stages.load_config` and :func:`~hesspipe.pipeline.stages.flight_settings`:
     its sections, seed and ``[flight]`` table checked), so that a copy of the default
-    configuration serves every command; ``--aircraft`` wins over its ``[flight] aircraft``.
+    configuration serves every command and flies what ``hesspipe run`` flies with it;
+    ``--aircraft`` wins over its ``[flight] aircraft`` and ``--seed`` over its ``seed``
+    (without either: 0).
     """
     from ..flight.aircraft import DEFAULT_AIRCRAFT
     from ..flight.approach import FlightConfig
 
     if args.config is None:
-        aircraft, settings = DEFAULT_AIRCRAFT, FlightConfig()
+        aircraft, settings, seed = DEFAULT_AIRCRAFT, FlightConfig(), 0
     else:
         from ..pipeline.stages import flight_settings, load_config
 
-        aircraft, settings = flight_settings(*load_config(args.config))
-    return (aircraft if args.aircraft is None else args.aircraft), settings
+        config, source = load_config(args.config)
+        (aircraft, settings), seed = flight_settings(config, source), config["seed"]
+    return ((aircraft if args.aircraft is None else args.aircraft), settings,
+            (seed if args.seed is None else args.seed))
 
 
 def seed_arg(text: str) -> int:

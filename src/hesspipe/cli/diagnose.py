@@ -48,7 +48,7 @@ def register(sub) -> None:
                    help="diagnose every run on its own (RUN may then be a folder of runs): a line per "
                         "run and how often each effect was named, as a motion / no-motion check counts")
     p.add_argument("--workers", type=int, metavar="N",
-                   help="with --each: local worker processes, a run each at a time (default: all cores)")
+                   help="with --each: local worker processes, a run each at a time (0 or absent: all cores)")
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON (with --each: every "
                                                       "run's and the tally, in one file)")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")

@@ -23,7 +23,7 @@ def register(subparsers) -> None:
                         "overrides the defaults")
     from ._options import add_seed
 
-    add_seed(p, 0, "seed of the excitation signals")
+    add_seed(p, None, "seed of the excitation signals (default: --config's seed, else 0)")
     p.set_defaults(func=_run)
 
 
@@ -34,8 +34,8 @@ def _run(args) -> int:
     from ._options import read_cli_flight
 
     check_output_dir(args.out, "flight")  # before any work: a bad folder loses nothing
-    aircraft, config = read_cli_flight(args)
-    result = fly(aircraft, config, args.out, seed=args.seed, draw=draw_flight)
+    aircraft, config, seed = read_cli_flight(args)
+    result = fly(aircraft, config, args.out, seed=seed, draw=draw_flight)
     tr = result.trim
     print(f"{result.aircraft}: trimmed at {tr['vc_kts']:.2f} KCAS, gamma {tr['gamma_deg']:.2f} deg, "
           f"heading {tr['psi_deg']:.1f} deg, alpha {tr['alpha_deg']:.2f} deg, throttle {tr['throttle']:.3f}")

@@ -32,8 +32,6 @@ def register(sub) -> None:
                         "missing ones take Table 1 on the plants' gain scale")
     p.add_argument("--remnant-share", type=float, metavar="X",
                    help="remnant share of the control variance when Kn is not given (default 0.1)")
-    p.add_argument("--seed", type=int, default=0, metavar="N",
-                   help="seed of the wind excitation and remnant (default: %(default)s)")
     p.add_argument("--id", default="pilot", metavar="ID", help="run id / file stem (default: %(default)s)")
     p.add_argument("--actuator-lag", type=float, default=0.0, metavar="S",
                    help="hidden aileron actuator time constant, s (default: none)")
@@ -50,8 +48,9 @@ def register(sub) -> None:
     p.add_argument("--config", type=Path, metavar="FILE",
                    help="TOML configuration (as 'hesspipe run --config' takes) whose [flight] table "
                         "sets step, duration, limits and the wind")
-    from ._options import add_terms
+    from ._options import add_seed, add_terms
 
+    add_seed(p, None, "seed of the wind excitation and remnant (default: --config's seed, else 0)")
     add_terms(p, {r"(^|: )run_id: ": r"\1--id: "})
     p.set_defaults(func=_run)
 
@@ -91,14 +90,14 @@ def _run(args) -> int:
         if value is not None and not (value == value and ok(value)):
             raise HesspipeError(f"{flag}: expected {want}, got {value:g}")
     plants = read_plants(args.plants)
-    aircraft, config = read_cli_flight(args)
+    aircraft, config, seed = read_cli_flight(args)
     effects = [e.strip() for e in args.effects.split(",") if e.strip()]
     model = model_from_name("+".join([args.model] + [e for e in effects if not (
         e == "motion_feedback" and args.model == "expanded")]))
     act = AircraftEffects(actuator_lag_s=args.actuator_lag, rate_limit_per_s=args.rate_limit,
                           yaw_damper=args.yaw_damper == "on")
     params = _params(args.params, model) if args.params is not None else {}
-    flight = fly_pilot(aircraft, plants, args.out, model=model, params=params, seed=args.seed,
+    flight = fly_pilot(aircraft, plants, args.out, model=model, params=params, seed=seed,
                        config=config, aircraft_effects=act, remnant_share=args.remnant_share,
                        max_bank_deg=args.max_bank, run_id=args.id, draw=draw_pilot_flight,
                        target=named_forcing(args.forcing))

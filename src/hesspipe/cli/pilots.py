@@ -19,7 +19,7 @@ def register(sub) -> None:
                                    "1 - expanded/original fitness.")
     p.add_argument("dir", metavar="DIR", help="folder of run CSVs (or one CSV)")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants JSON (Yc, Yd)")
-    p.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: all cores)")
+    p.add_argument("--workers", type=int, metavar="N", help="local worker processes (0 or absent: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="Dask distributed scheduler, e.g. tcp://10.0.0.5:8786 (needs hesspipe[dask])")
     p.add_argument("--json", metavar="OUT.json", help="write the comparison as JSON")

@@ -104,7 +104,10 @@ def format_report(d: Diagnosis) -> str:
             out.append(f"  describing function: {s.candidate:<16} {'NAMED' if s.accepted else 'not named'}"
                        f" (see above); control-spectrum gap with it {s.gap:.3g}")
             continue
-        out.append(f"  round {s.round}: {s.candidate:<16} LR={s.statistic:8.1f} dof={s.dof} p={s.p_value:9.2e} "
+        # A nested fit that ended a hair above the current one (the search's tolerance) has an
+        # LR just below 0; printed as "-0.0" it read as a sign error.
+        lr = s.statistic if round(s.statistic, 1) else 0.0
+        out.append(f"  round {s.round}: {s.candidate:<16} LR={lr:8.1f} dof={s.dof} p={s.p_value:9.2e} "
                    f"(needs < {s.threshold:.1e}) dBIC={s.delta_bic:8.1f} gap={s.gap:.3g}"
                    f"{f' [{s.veto}]' if s.veto else ''}{'  <- NAMED' if s.accepted else ''}")
     if d.named_effects:

@@ -49,20 +49,26 @@ def _mp_context():
 
 
 def check_workers(workers) -> int:
-    """Return `workers` if it is an integer >= 1 (the one rule; callers check early with it).
+    """Return `workers` if it is an integer >= 0 (the one rule; callers check early with it).
 
     Parameters
     ----------
     workers : int
-        Number of worker processes; a bool is refused.
+        Number of worker processes, 0 for all cores (as the TOML's ``workers = 0``); a bool
+        is refused.
+
+    Returns
+    -------
+    int
+        `workers`, unchanged.
 
     Raises
     ------
     HesspipeError
-        Naming ``workers``, if it is not an integer >= 1.
+        Naming ``workers``, if it is not an integer >= 0.
     """
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise HesspipeError(f"workers: expected an integer >= 1, got {workers!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
+        raise HesspipeError(f"workers: expected an integer >= 0 (0: all cores), got {workers!r}")
     return workers
 
 
@@ -78,7 +84,7 @@ def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
         item's failure must not stop the batch).
     items : sequence
     workers : int, optional
-        Local worker processes (default: all cores; 1 runs in this process).
+        Local worker processes (None or 0: all cores; 1 runs in this process).
         Ignored with `scheduler`.
     scheduler : str, optional
         Address of a Dask distributed scheduler (``tcp://host:port``).
@@ -97,9 +103,9 @@ def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
     items = list(items)
     if scheduler:
         return _run_dask(func, items, scheduler, desc, unit, progress, connect_timeout)
-    if workers is None:
+    if workers is None or check_workers(workers) == 0:
         workers = default_workers()
-    workers = min(check_workers(workers), max(len(items), 1))
+    workers = min(workers, max(len(items), 1))
     results: list = [None] * len(items)
     with progress_bar(len(items), desc, enable=progress, unit=unit) as bar:
         if workers == 1:

@@ -439,8 +439,9 @@ def fit_plants(flight_dir: str | Path, out_dir: str | Path, config: PlantsConfig
     config = config or PlantsConfig()
     flight_dir = Path(flight_dir)
     if not flight_dir.is_dir():
-        raise HesspipeError(f"{flight_dir}: flight folder not found; expected the output of "
-                            "'hesspipe flight' (wind.csv, aileron.csv)")
+        what = "a file, not a folder" if flight_dir.exists() else "flight folder not found"
+        raise HesspipeError(f"{flight_dir}: {what}; expected the flight stage's output folder "
+                            "(wind.csv, aileron.csv)")
     records = {ch.key: read_record(flight_dir / ch.file, ch.input, ch.output) for ch in CHANNELS}
     prepared = {ch.key: prepare(records[ch.key], ch, config) for ch in CHANNELS}
     fits = {ch.key: identify_channel(records[ch.key], ch, config, prepared[ch.key]) for ch in CHANNELS}
