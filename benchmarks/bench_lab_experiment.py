@@ -25,7 +25,7 @@ and the median CPU time per diagnosis.
 
     python benchmarks/bench_lab_experiment.py [--persons 6] [--runs 3] [--seed 7] [--out DIR] [--diagnose]
         [--style lab|daq|matlab|mat|mat-runs|xlsx|lab-error] [--threshold 0.2] [--cab-washout 1.0 --cab-delay 0.08]
-        [--logged-run-in 8.08] [--logged-run-out 3]
+        [--logged-run-in 8.08] [--logged-run-out 3] [--pilot tau=0.35,wn=7,remnant_share=0.4]
 
 ``--style`` writes the files otherwise (module ``STYLES``): ``mat-runs`` saves a person's runs of a
 condition together in one ``.mat`` (a matrix column per run), read with ``--columns
@@ -43,6 +43,11 @@ that the plants file does not state: a lab that writes its motion path as the id
 ``--logged-run-in S`` makes every file hold the whole trial: a run-in of S s (the forcing faded
 in from the record's start) before the measurement; ``--logged-run-out S`` adds S s after it
 while the forcing fades out (the generator's ``logged_run_in`` and ``logged_run_out``).
+
+``--pilot KEY=VALUE,...`` holds generator ranges at one value for every person: the literature's
+corners, e.g. the slowest, noisiest humans ``tau=0.35,wn=7,remnant_share=0.4`` (visual delay s,
+neuromuscular frequency rad/s, remnant share of the control power) or the quickest, cleanest
+``tau=0.15,wn=15,remnant_share=0.1``; ``gain_drift`` sets the wander's CV.
 """
 
 from __future__ import annotations
@@ -269,8 +274,15 @@ def main(argv=None) -> int:
                     help="s of run-in logged before the measurement, from the forcing's fade-in (0: none)")
     ap.add_argument("--logged-run-out", type=float, default=0.0,
                     help="s logged after the measurement while the forcing fades out (0: none)")
+    ap.add_argument("--pilot", default="", metavar="KEY=VALUE,...",
+                    help="generator ranges held at one value for every person (the literature's corners), "
+                         "e.g. tau=0.35,wn=7,remnant_share=0.4 (hesspipe.humanlike.trial.RANGES), and "
+                         "gain_drift (the wander's CV, default 0.15)")
     args = ap.parse_args(argv)
     whole = {}
+    for item in filter(None, args.pilot.split(",")):
+        key, _, value = item.partition("=")
+        whole[key.strip()] = float(value)
     if args.logged_run_in:
         whole.update(run_in=args.logged_run_in, logged_run_in=args.logged_run_in)
     if args.logged_run_out:

@@ -284,8 +284,20 @@ def test_pilots_config_defaults_and_errors():
             PilotsConfig.from_table(table, "x.toml")
 
 
+def test_the_table_says_when_the_motion_test_and_the_expanded_fit_disagree():
+    p = fake_job(Run(0.02 * np.arange(3.0), *(np.zeros(3),) * 4, id="a"))
+    test = {"available": True, "p_value": 1e-6, "Km": 0.3, "Km_per_Ke": 0.2, "forcing": "disturbance and target",
+            "gain": 0.5, "lr": 30.0, "Km_se": 0.1, "Km_per_Ke_se": 0.05, "significant": True}
+    flat = PilotComparison(**{**p.__dict__, "id": "b", "motion_test": test,
+                              "expanded": {**p.expanded, "parameters": {**p.expanded["parameters"], "Km": 0.0}}})
+    named = PilotComparison(**{**p.__dict__, "id": "c", "motion_test": test})
+    assert "motion test and table: on 1 of the 2 run(s)" in Comparison(pilots=(flat, named)).table()
+    other = PilotComparison(**{**named.__dict__, "id": "d"})
+    assert "motion test and table" not in Comparison(pilots=(named, other)).table()
+
+
 def test_improvement_stats_ignore_nan():
-    p = fake_job(Run(np.arange(3.0), *(np.zeros(3),) * 4, id="a"))
+    p = fake_job(Run(0.02 * np.arange(3.0), *(np.zeros(3),) * 4, id="a"))
     nan = PilotComparison(**{**p.__dict__, "id": "b", "improvement": math.nan})
     s = Comparison(pilots=(p, nan)).improvement_stats()
     assert s["n"] == 1 and s["mean"] == pytest.approx(0.5) and math.isnan(s["std"])

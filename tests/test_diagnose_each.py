@@ -62,6 +62,24 @@ def test_the_command_diagnoses_a_folder_run_by_run(runs, tmp_path, capsys):
     assert "--workers: only with --each" in capsys.readouterr().err
 
 
+def test_two_folders_are_tallied_apart_as_well_as_together(runs, tmp_path, capsys):
+    # `diagnose motion/ static/ --each`: the README's use; one pooled tally mixed the conditions
+    plants, rs = runs
+    for r, name in zip(rs, ("a", "b")):
+        write_run(tmp_path / name / f"{name}_r1.csv", r)
+    write_plants(tmp_path / "p.json", plants)
+    assert main(["diagnose", str(tmp_path / "a"), str(tmp_path / "b"), "--each", "--workers", "1",
+                 "--plants", str(tmp_path / "p.json"), "--json", str(tmp_path / "each.json")]) == 0
+    out = capsys.readouterr().out
+    report = json.loads((tmp_path / "each.json").read_text())
+    assert report["runs"] == 2 and set(report["by_input"]) == {str(tmp_path / "a"), str(tmp_path / "b")}
+    for r, name in zip(rs, ("a", "b")):
+        alone = diagnose_each([r], plants)
+        apart = report["by_input"][str(tmp_path / name)]
+        assert apart["runs"] == 1 and apart["named"] == alone.tally()
+        assert f"SUMMARY of {tmp_path / name}: {alone.summary()}" in out
+
+
 def test_runs_diagnosed_in_worker_processes_are_the_same(runs):
     from hesspipe.pilots.batch import run_batch
 

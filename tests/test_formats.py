@@ -366,7 +366,7 @@ def test_seed_rule_no_wrap_around():
 
 
 def test_as_runs():
-    run = Run(*(np.zeros(3) for _ in range(5)))
+    run = Run(0.02 * np.arange(3), *(np.zeros(3) for _ in range(4)))
     assert as_runs(run) == [run]
     assert as_runs((run, run)) == [run, run]
     for bad in ("r1.csv", ["r1.csv"], None):

@@ -264,12 +264,18 @@ def test_gaps():
     run = _run(d, np.zeros(N))
     u = run.control.copy()
     u[100] = np.nan
-    with pytest.raises(HesspipeError, match=r"control: a gap \(non-finite value\) at t = 2 s"):
-        estimate_frf(Run(run.time, run.disturbance, run.output, u, run.reference))
+    # A run is checked where it is built (hesspipe.core._signals), before any analysis
+    with pytest.raises(HesspipeError, match=r"field 'control': a non-finite value \(nan\) at t = 2 s"):
+        Run(run.time, run.disturbance, run.output, u, run.reference)
     t = run.time.copy()
     t[500:] += 0.5
-    with pytest.raises(HesspipeError, match=r"time: a gap of 0.52 s after t = 9.98 s"):
-        estimate_frf(Run(t, run.disturbance, run.output, run.control, run.reference))
+    with pytest.raises(HesspipeError, match=r"field 'time': an interval of 0.52 s after t = 9.98 s"):
+        Run(t, run.disturbance, run.output, run.control, run.reference)
+    short = Run(run.time[:7], *(x[:7] for x in (run.disturbance, run.output, run.control, run.reference)))
+    with pytest.raises(HesspipeError, match=r"7 samples; expected a record of at least 8"):
+        estimate_frf(short)
+    with pytest.raises(HesspipeError, match=r"^run: expected a Run \(read_run reads a file\), got str"):
+        estimate_frf("run.csv")
 
 
 def test_cli_frf_one_line_errors_and_json(tmp_path, capsys):
@@ -291,13 +297,25 @@ def test_cli_frf_one_line_errors_and_json(tmp_path, capsys):
     assert "raw_interpolated_phase_margin_deg" in out["crossover"]
     assert (tmp_path / "o.png").stat().st_size > 0
     short = _run(_multisine(np.array([1, 4, 9]), 11), np.zeros(N))
+    # plants the record agrees with (y = u + d), so that only its length is wrong
+    short = Run(short.time, short.disturbance, short.control + short.disturbance, short.control, short.reference)
+    static = tmp_path / "static.json"
+    static.write_text('{"control_to_output": {"num": [1], "den": [1]}, '
+                      '"disturbance_to_output": {"num": [1], "den": [1]}}')
     write_run(tmp_path / "short.csv", short)
     capsys.readouterr()
-    assert main(["frf", str(tmp_path / "short.csv"), "--plants", str(plants),
+    assert main(["frf", str(tmp_path / "short.csv"), "--plants", str(static),
                  "--json", str(tmp_path / "s.json")]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "short.csv" in err[0] and "two periods" in err[0]
     assert not (tmp_path / "s.json").exists()
+    # a column whose sign is wrong for the plants: refused as pilots and identify refuse it
+    # (frf printed a phase margin of -155 deg without a word)
+    write_run(tmp_path / "neg.csv", Run(short.time, short.disturbance, short.output, -short.control,
+                                        short.reference))
+    assert main(["frf", str(tmp_path / "neg.csv"), "--plants", str(static)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "neg.csv" in err[0] and "sign" in err[0], err
     # --model: an identify --json result drawn over the points; anything else is one line
     (tmp_path / "id.json").write_text('{"model": "original", "criterion": "df", "parameters": '
                                       '{"Ke": 3.0, "tau0": 0.25, "wn": 10.0, "zn": 0.3}}')

@@ -8,7 +8,7 @@ from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Plants
 from hesspipe.identification.spectra import psd
 from hesspipe.pilot.blocks import from_tf
-from hesspipe.pilot.crossover import crossover
+from hesspipe.pilot.crossover import crossover, gain_scale
 from hesspipe.pilot.effects import CANALS, EFFECTS, PLATFORM, WASHOUT, get_effect
 from hesspipe.pilot.hess import PARAMETERS, PilotModel, model_from_name, table1
 from hesspipe.pilot.simulation import Simulator, simulate, synthetic_run
@@ -144,7 +144,8 @@ def test_remnant_is_seeded_and_shaped():
     assert np.allclose(zero.control, orig.control)
     # Remnant PSD follows the analytic closed-loop noise transfer (unit white, 0.5-3 Hz).
     f, p_sim = psd(a.control, 1 / DT)
-    loop = m.loop(m.complete({"Kn": 0.05, "Tn": 0.5}))
+    # simulate's defaults: Table 1 with the loop gains scaled to the plants
+    loop = m.loop(m.complete({"Kn": 0.05, "Tn": 0.5}, gain=gain_scale(pl, 1)))
     s = 2j * np.pi * f
     nm, pf = loop.neuromuscular.response(s), loop.proprioceptive.response(s)
     yc = from_tf(YC).response(s)

@@ -26,7 +26,7 @@ _API = {
     "write_plants": "core.formats", "Run": "core.formats", "Plants": "core.formats",
     "fly": "flight", "FlightConfig": "flight", "fly_pilot": "flight",
     "fit_plants": "plants", "PlantsConfig": "plants",
-    "PilotModel": "pilot", "simulate": "pilot", "Simulator": "pilot",
+    "PilotModel": "pilot", "simulate": "pilot", "synthetic_run": "pilot", "Simulator": "pilot",
     "identify": "identification", "estimate_frf": "identification", "average_frf": "identification",
     "compare_pilots": "pilots", "PilotsConfig": "pilots", "compare_conditions": "pilots",
     "DiagnoseConfig": "diagnose", "Diagnosis": "diagnose",

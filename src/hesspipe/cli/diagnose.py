@@ -138,8 +138,14 @@ def _each(args, cfg, candidates) -> int:
     unread = tuple((f.source, f.error.removeprefix(f"{f.source}: ")) for f in unread)
     result = RunDiagnoses(result.diagnoses, unread + result.failures)
     print("\n".join(result.lines(failures=False)))
+    # Several folders are several conditions (motion/ static/): a tally each, as well as the pooled one.
+    apart = {arg: result.of_files(list_runs(arg)) for arg in args.run} if len(args.run) > 1 else {}
+    for arg, sub in apart.items():
+        print(f"SUMMARY of {arg}: {sub.summary()}")
     if args.json:
-        write_json(args.json, result.to_dict())
+        write_json(args.json, {**result.to_dict(), **({"by_input": {
+            arg: {"runs": len(sub.diagnoses), "named": sub.tally(), "summary": sub.summary()}
+            for arg, sub in apart.items()}} if apart else {})})
         print(f"wrote {args.json}")
     for where, message in result.failures:
         print(f"hesspipe: error: {where}: {cli_message(message, args)}", file=sys.stderr)

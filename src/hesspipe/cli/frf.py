@@ -115,6 +115,10 @@ def run(args) -> int:
     plants = read_plants(args.plants)
     curves = _model_curves(args.model) if args.model else None  # a bad file fails before any work
     recs = read_cli_runs(args.run, args)
+    from ..plants.consistency import check_consistent
+
+    for rec in recs:   # a sign or units mistake, as pilots and identify refuse it
+        check_consistent(rec, plants)
     result = (average_frf(recs, plants, seed=args.seed) if len(recs) > 1 else
               estimate_frf(recs[0], plants, seed=args.seed))
     print(format_table(result))

@@ -13,10 +13,12 @@ def register(sub) -> None:
     # The stage, its package and its command share one name; compare-pilots is kept for old scripts.
     p = sub.add_parser("pilots", aliases=["compare-pilots"],
                        help="identify original / expanded-fixed-Km / expanded models per pilot",
-                       description="For each run CSV in DIR (the file stem is the pilot id) identify the "
-                                   "original Hess model, the expanded model with Km fixed, and the expanded "
-                                   "model with Km identified; print a table and the mean improvement "
-                                   "1 - expanded/original fitness.")
+                       description="Does the pilot need motion? For each run in DIR (the file stem is the "
+                                   "pilot id; --pilot-id when pilots flew several runs) test motion feedback "
+                                   "on the describing function (the motion verdict over the cohort, printed "
+                                   "first), and identify the original Hess model, the expanded model with Km "
+                                   "fixed, and the expanded model with Km identified; print a table and the "
+                                   "mean improvement 1 - expanded/original fitness.")
     p.add_argument("dir", metavar="DIR", help="folder of run CSVs (or one CSV)")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants JSON (Yc, Yd)")
     p.add_argument("--workers", type=int, metavar="N", help="local worker processes (0 or absent: all cores)")

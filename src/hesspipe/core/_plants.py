@@ -9,9 +9,10 @@ from pathlib import Path
 from typing import Mapping
 
 import control as ct
+import numpy as np
 
 from ._csv import decode
-from ._tf import _read_tf, tf_coefficients
+from ._tf import _read_tf, siso_coefficients, tf_coefficients
 from .errors import HesspipeError
 from .io import write_json
 
@@ -40,6 +41,19 @@ class Plants:
     meta: dict = field(default_factory=dict)
     motion_path: ct.TransferFunction | None = None
 
+    def __post_init__(self):
+        # Built in Python, each path is checked as a file's is (read_plants): continuous,
+        # SISO, proper, finite; a (num, den) pair, a {"num", "den"} mapping, a state-space
+        # or scipy system is taken as its transfer function.
+        for key, excess in (("control_to_output", 0), ("disturbance_to_output", 0), ("motion_path", 1)):
+            value = getattr(self, key)
+            if value is None and key == "motion_path":
+                continue
+            checked = _read_tf(_as_coefficients(value, key), "Plants", key, excess=excess,
+                               allow_zero=key != "control_to_output")
+            if not isinstance(value, ct.TransferFunction):
+                object.__setattr__(self, key, checked)
+
     @property
     def Yc(self) -> ct.TransferFunction:
         """``Yc``: the control-to-output transfer function (the paper's name)."""
@@ -49,6 +63,56 @@ class Plants:
     def Yd(self) -> ct.TransferFunction:
         """``Yd``: the disturbance-to-output transfer function (the paper's name)."""
         return self.disturbance_to_output
+
+
+def as_plants(plants) -> Plants:
+    """`plants` if it is a :class:`Plants`, else an error a researcher can act on.
+
+    Parameters
+    ----------
+    plants : Plants
+
+    Returns
+    -------
+    Plants
+        `plants`, unchanged.
+
+    Raises
+    ------
+    HesspipeError
+        Naming ``plants`` and what was given (a path: :func:`read_plants` reads it).
+    """
+    if isinstance(plants, Plants):
+        return plants
+    hint = " (read_plants reads a plants file)" if isinstance(plants, (str, Path)) else (
+        " (Plants(Yc, Yd) builds it from transfer functions)")
+    raise HesspipeError(f"plants: expected a Plants{hint}, got {type(plants).__name__}")
+
+
+def _as_coefficients(value, key: str) -> Mapping:
+    """`value` (a transfer function in any form :class:`Plants` takes) as SPEC.md's
+    ``{"num", "den", "dt"}``; anything else is refused naming `key`."""
+    if isinstance(value, Mapping):
+        return value
+    if isinstance(value, (tuple, list)) and len(value) == 2:
+        return {"num": np.atleast_1d(np.asarray(value[0], dtype=float)).tolist(),
+                "den": np.atleast_1d(np.asarray(value[1], dtype=float)).tolist()}
+    if hasattr(value, "to_tf") and not isinstance(value, ct.InputOutputSystem):   # scipy.signal.lti
+        value = value.to_tf()
+        return {"num": np.atleast_1d(value.num).tolist(), "den": np.atleast_1d(value.den).tolist(),
+                "dt": getattr(value, "dt", None)}
+    if isinstance(value, ct.StateSpace):
+        value = ct.ss2tf(value)
+    if isinstance(value, ct.TransferFunction):
+        if value.ninputs != 1 or value.noutputs != 1:
+            raise HesspipeError(f"Plants: field '{key}': expected a single-input single-output transfer "
+                                f"function, got {value.noutputs} outputs x {value.ninputs} inputs")
+        num, den = siso_coefficients(value)
+        # python-control's dt: 0 or None continuous, True or a period discrete.
+        return {"num": num.tolist(), "den": den.tolist(), "dt": None if not value.dt else value.dt}
+    hint = " (a plants file: read_plants reads it)" if isinstance(value, (str, Path)) else ""
+    raise HesspipeError(f"Plants: field '{key}': expected a transfer function (control.tf, a (num, den) "
+                        f"pair or {{'num': [...], 'den': [...]}}), got {type(value).__name__}{hint}")
 
 
 def read_plants(path: str | Path) -> Plants:

@@ -27,8 +27,9 @@ import numpy as np
 import pandas as pd
 
 from ._long import KEY_COLUMNS, row_groups
-from ._plants import Plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
+from ._plants import Plants, as_plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
 from ._roles import ERROR_AGREES, target_unread, unwrapped, with_error, without_disturbance  # noqa: F401
+from ._signals import SIGNALS, checked_signals
 from ._table import BINARY_SUFFIXES, RUN_NUMBER, read_frame, read_table, run_columns
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
 from ._tf import tf_coefficients as tf_coefficients  # re-exported: the plants report and the flight use it
@@ -75,7 +76,11 @@ class Run:
         Sample times in s, uniform.
     disturbance, output, control, reference : ndarray
         Lateral wind (ft/s), roll rate (rad/s), pilot control (plant input
-        units) and reference (rad/s, usually zero).
+        units) and reference (rad/s; None when built: zeros, a task without a target).
+        Built in memory, each may be any array-like of numbers (a list, a pandas Series,
+        float32, an N x 1 column); it is stored as a 1-D float64 array and checked as a
+        reader checks a file (one length, finite, time uniform in plausible seconds):
+        a mistake raises :class:`HesspipeError` naming the field.
     id : str
         Pilot/run id (the file stem).
     synthetic : bool
@@ -101,7 +106,7 @@ class Run:
     disturbance: np.ndarray
     output: np.ndarray
     control: np.ndarray
-    reference: np.ndarray
+    reference: np.ndarray | None = None
     id: str = "run"
     synthetic: bool = False
     comments: tuple[str, ...] = ()
@@ -110,6 +115,12 @@ class Run:
     notes: tuple[str, ...] = ()
     number: int = 0
     person: str = ""
+
+    def __post_init__(self):
+        where = self.source or f"Run '{self.id}'"
+        checked = checked_signals(where, {k: getattr(self, k) for k in SIGNALS}, self.interval)
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
 
     @property
     def dt(self) -> float:

@@ -51,6 +51,27 @@ class RunDiagnoses:
                 counts[name] = counts.get(name, 0) + 1
         return dict(sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])))
 
+    def of_files(self, paths) -> "RunDiagnoses":
+        """The diagnoses and failures of the runs read from `paths` (a condition's folder
+        among several: its own tally, not one pooled with another condition's).
+
+        Parameters
+        ----------
+        paths : iterable of str or Path
+            Files; a run of a file holding several is ``PATH#k``.
+
+        Returns
+        -------
+        RunDiagnoses
+        """
+        keys = [str(p) for p in paths]
+
+        def mine(source: str) -> bool:
+            return any(source == k or source.startswith(f"{k}#") for k in keys)
+
+        return RunDiagnoses(tuple(d for d in self.diagnoses if mine(d.source)),
+                            tuple(f for f in self.failures if mine(f[0])))
+
     def summary(self) -> str:
         """One sentence: each effect and on how many of the diagnosed runs it was named.
 

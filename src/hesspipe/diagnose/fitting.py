@@ -14,6 +14,7 @@ import scipy.optimize
 
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run
+from ..pilot.crossover import gain_scale
 from ..pilot.effects import get_effect
 from .expected import ExpectedSpectrum
 from .likelihood import Likelihood
@@ -61,10 +62,15 @@ class Problem:
         A model's expected control PSD on the run's Welch bins.
     likelihood : Likelihood
         The measured PSD and the likelihood of a model's against it.
+    gain : float
+        :func:`hesspipe.pilot.crossover.gain_scale` of the plants for ``cfg.k``: the loop
+        gains' defaults and boxes follow the plants' gain, as identification's do (a plant
+        in degrees, 57 times one in radians, takes a pilot gain 57 times smaller).
     """
 
     def __init__(self, run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int):
         self.run, self.plants, self.cfg = run, plants, cfg
+        self.gain = gain_scale(plants, cfg.k)
         self.likelihood = Likelihood(run, cfg)
         self.spectrum = ExpectedSpectrum(run, plants, cfg, seed, self.likelihood.freq)
 
@@ -106,7 +112,7 @@ class Problem:
         model : hesspipe.pilot.hess.PilotModel
             The model whose boxes are taken.
         """
-        out = dict(model.bounds())
+        out = dict(model.bounds(self.gain))
         if "Kn" in out:
             lo, hi = out["Kn"]
             need = 2.0 * float(np.std(self.run.control)) * math.sqrt(2.0 * _REMNANT_TN_REF / self.run.dt)
@@ -148,7 +154,7 @@ class Problem:
         """
         names = model.parameter_names()
         bounds = self.bounds(model)
-        params = {**model.defaults(k=self.cfg.k), **{k: v for k, v in start.items() if k in names}}
+        params = {**model.defaults(k=self.cfg.k, gain=self.gain), **{k: v for k, v in start.items() if k in names}}
         free = self.free_parameters(model)
         scale = _UnitScale([bounds[p] for p in free], [p not in self.cfg.free for p in free])
         bad = np.full(2 * int(self.likelihood.mask.sum()), _UNSTABLE_RESIDUAL)

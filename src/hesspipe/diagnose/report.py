@@ -93,9 +93,11 @@ def format_report(d: Diagnosis) -> str:
     for b in d.bands_before:
         verdict = f"DISAGREES: {b.direction}" if b.disagrees else "agrees within chance"
         out.append(f"  {b.lo_hz:5.2f}-{b.hi_hz:<5.2f} {b.level_db:9.1f} {b.rms_db:7.1f} {b.share:6.0%}  {verdict}")
-    out.append(f"Candidates (score = delta BIC; named if p < alpha/m, delta BIC > 0 and not vetoed: "
-               f"Eq. 10 gap must not rise; "
-               f"alpha={d.config.alpha:g}):")
+    # The veto is the spectral rounds' rule; a reader took it for the describing-function
+    # verdicts' too and saw remnant "named against the rule" where the gap rose.
+    out.append(f"Candidates (describing function: judged above, the control-spectrum gap shown for "
+               f"information; rounds: score = delta BIC, named if p < alpha/m, delta BIC > 0 and not "
+               f"vetoed: Eq. 10 gap must not rise; alpha={d.config.alpha:g}):")
     for s in d.steps:
         if s.status != "ok":
             out.append(f"  round {s.round}: {s.candidate:<16} FAILED ({s.error})")

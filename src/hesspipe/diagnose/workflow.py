@@ -43,13 +43,14 @@ import scipy.special
 import scipy.stats
 
 from ..core.errors import HesspipeError
-from ..core.formats import Plants, Run, as_runs
+from ..core.formats import Plants, Run, as_plants, as_runs
 from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import check_control
 from ..identification.frf_average import check_repeats
 from ..identification.lines import window_note
+from ..pilot.crossover import gain_scale
 from ..pilot.effects import EFFECTS, get_effect
 from ..pilot.hess import PilotModel, model_from_name
 from ..plants.validation import residual_tests
@@ -186,10 +187,13 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     cfg = replace(cfg, candidates=cands)  # what was actually tried, for the record
 
     check_seed(seed)
+    if not isinstance(run, Run):
+        raise HesspipeError(f"run: expected a Run (read_run reads a file), got {type(run).__name__}")
     check_control(run)
+    plants = as_plants(plants)
     _check_inputs(run, plants, cfg)
     bases = [] if baseline_run is None else as_runs(baseline_run)
-    repeats = list(repeat_runs)
+    repeats = as_runs(list(repeat_runs)) if repeat_runs else []
     for other in bases + repeats:
         check_control(other)
         _check_inputs(other, plants, cfg)
@@ -204,7 +208,8 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         # "Before" is the pilot identified around the plants as given (same measured
         # spectrum), so the report shows what naming the aircraft effect closed.
         before = Problem(run, plants, cfg, seed)
-        before = (before, before.fit(base, base.defaults(k=cfg.k), grid=before.free_parameters(base)))
+        before = (before, before.fit(base, base.defaults(k=cfg.k, gain=before.gain),
+                                     grid=before.free_parameters(base)))
     # The same aircraft: the same correction.
     bases = [corrected(b, plants, finding)[0] for b in bases]
     repeats = [corrected(r, plants, finding)[0] for r in repeats]
@@ -215,7 +220,8 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     # Multisine lines: the describing function judges motion and delay and gives the
     # pilot's own dynamics (phase-aware); the baseline starts from them.
     k_df = choose_k(plants)[0]
-    ev = df_evidence(run, plants, base.defaults(k=k_df), k=k_df, cfg=cfg, baseline_run=bases or None,
+    ev = df_evidence(run, plants, base.defaults(k=k_df, gain=gain_scale(plants, k_df)), k=k_df, cfg=cfg,
+                     baseline_run=bases or None,
                      repeat_runs=repeats) \
         if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else None
     dynamics = {n: v for n, v in (ev.dynamics if ev else {}).items() if n not in cfg.free}
@@ -230,7 +236,8 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         if k != cfg.k:
             cfg = replace(cfg, k=k)
             problem = Problem(run, plants, cfg, seed)
-        starts = ([{**base.defaults(k=k), **dynamics}] if dynamics else []) + [base.defaults(k=k)]
+        starts = ([{**base.defaults(k=k, gain=problem.gain), **dynamics}] if dynamics else []) + [
+            base.defaults(k=k, gain=problem.gain)]
         for start in starts:
             current = problem.fit(base, start, grid=problem.free_parameters(base))
             if current.stable:

@@ -138,6 +138,21 @@ class Trial:
     truth: dict = field(repr=False)
     gain_factor: np.ndarray | None = field(default=None, repr=False)
 
+    def to_run(self):
+        """The trial as a :class:`hesspipe.core.formats.Run` in memory, labelled synthetic as
+        its written files are (the signals as simulated, in the plant's units).
+
+        Returns
+        -------
+        hesspipe.core.formats.Run
+        """
+        from ..core.formats import Run
+        from .writer import LABEL
+
+        return Run(time=self.time, disturbance=self.disturbance, output=self.output, control=self.control,
+                   reference=self.reference, id=self.spec.name, synthetic=True,
+                   comments=(f"{LABEL}; trial {self.spec.name}",))
+
 
 def _slope_order(yc, w: float) -> int:
     """Hess's rule: integer slope of |Yc| over [w/2, 2w] (1: K/s-like, 2: K/s^2-like)."""
@@ -554,9 +569,14 @@ def simulate_trial(spec: TrialSpec, *, fine_ratio: int | None = None) -> Trial:
                      "gaussian_gain": float(erfc(o["threshold"] / np.sqrt(2.0)))}
         fn = compile_loop(_wiring(spec, h, rate, threshold["half_width"]))
         y, u = sim(fn, r, d, w, g)
+    tenth = max(len(idx) // 10, 1)
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(u))) \
-            or np.max(np.abs(y[idx])) > 1e6 * (np.max(np.abs(y_f[idx])) + 1e-12) + 1e6:
-        raise HesspipeError(f"trial {spec.name}: the simulated loop diverged")
+            or np.max(np.abs(y[idx])) > 1e6 * (np.max(np.abs(y_f[idx])) + 1e-12) + 1e6 \
+            or np.std(y[idx][-tenth:]) > 100.0 * np.std(y[idx][:tenth]) + 1e-12:
+        # The last check: an unstable loop (a pilot re-run without the motion feedback his
+        # visual gain relied on) grows alike with and without the remnant, so only its
+        # growth over the record tells; no human's record grows a hundredfold.
+        raise HesspipeError(f"trial {spec.name}: the simulated loop diverged (an unstable pilot and plant)")
     sim_info = {"fine_step_s": h, "gain_factor": factor[idx],
                 "remnant_gain": g, "rate_limit_per_s": rate,
                 "u_forcing": u_f[idx], "u": u[idx], "h": h, "ratio": ratio, "threshold": threshold,

@@ -30,7 +30,7 @@ from scipy.optimize import differential_evolution
 
 from ..core.choices import OPTIMIZERS  # one list, in a light module: the command line reads it too
 from ..core.errors import HesspipeError
-from ..core.formats import as_runs, siso_coefficients
+from ..core.formats import as_plants, as_runs, siso_coefficients
 from ..core.paper import WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover, tracking_crossover
@@ -211,6 +211,7 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
     model = model_from_name(model)
     criterion = check_criterion(criterion)
     runs = as_runs(run)
+    plants = as_plants(plants)
     if not runs:
         raise HesspipeError("run: expected at least one run, got none")
     if criterion != "df" and len(runs) > 1:
@@ -227,9 +228,13 @@ def identify(run, plants, model="original", *, free: Sequence[str] | None = None
         k_rule = f"k = {int(round(float(fixed['k'])))} (given)"
     elif k is None:
         k, k_rule = choose_k(plants)
+    elif isinstance(k, bool) or k not in (1, 2):
+        raise HesspipeError(f"k: expected Table 1's column 1 (a K/s-like plant) or 2 (K/s^2-like), got {k!r}")
     else:
         k_rule = f"k = {k} (given)"
     seed = check_seed(seed)
+    if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) or restarts < 1:
+        raise HesspipeError(f"restarts: expected an integer >= 1, got {restarts!r}")
     if criterion != "paper":
         # The band and PSD method still define the control PSDs reported beside the fit.
         result = identify_phase_aware(run, plants, model, criterion=criterion, free=free, fixed=fixed,

@@ -39,6 +39,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.formats import Run
 from .frf import Frf, Response, estimate_frf
 from .frf_crossover import FrfCrossover, nonparametric_crossover
 from .lines import analysis_window, line_variances, windowed
@@ -178,6 +179,10 @@ def average_frf(runs: Sequence, plants=None, *, seed: int = 0) -> Frf:
         runs whose sampling interval, analysed length or reference lines differ (naming
         the run); what :func:`~hesspipe.identification.frf.estimate_frf` raises for a run.
     """
+    if isinstance(runs, Run):   # one run is its own average
+        runs = [runs]
+    if isinstance(runs, (str, bytes)) or not hasattr(runs, "__iter__"):
+        raise HesspipeError(f"runs: expected a list of Runs (read_run reads a file), got {type(runs).__name__}")
     runs = list(runs)
     if not runs:
         raise HesspipeError("average_frf: expected at least one run, got none")

@@ -199,13 +199,24 @@ class Identification:
     free, fixed : tuple / dict
         Identified names; fixed name → value (user-fixed only).
     fitness : float
-        RMS PSD difference over the band at the optimum (lower is better);
-        never NaN: an unstable optimum keeps its graded score >= UNSTABLE_FITNESS
-        (and ``stable`` is False).
+        The criterion's misfit at the optimum, lower is better, in ``fitness_units``
+        (``paper``: RMS PSD difference over the band, Eq. 10; ``df``: the describing
+        function's weighted misfit; ``output``: the output-error misfit); never NaN: an
+        unstable optimum keeps its graded score >= UNSTABLE_FITNESS (and ``stable`` is False).
     benchmark_fitness : float
         The same fitness for the McRuer precision model fitted to the data
         (NaN if not computed).
     crossover : Crossover
+        Where ``|L|`` falls through 1 for the last time (SPEC.md's definition: the gain crossover in the
+        control-theory sense; with a lightly damped neuromuscular peak it can lie far above
+        the tracking crossover). The tracking crossover a human-factors reader compares with
+        the crossover model is ``primary_crossover``.
+    primary_crossover : Crossover or None
+        The tracking crossover: the first fall of ``|L|`` through 1 above the record's
+        lowest resolvable frequency (:func:`hesspipe.pilot.crossover.tracking_crossover`);
+        what the reports and tables print.
+    stable : bool
+        Whether the identified closed loop is stable on the record.
     evaluations : int
         Fitness evaluations of the search.
     identifiability : dict

@@ -11,7 +11,7 @@ __getattr__, __dir__, __all__ = attach(__name__, {
     "Loop": "blocks", "Term": "blocks", "Crossover": "crossover", "CrossoverLimits": "crossover",
     "loop_crossover": "crossover", "Effect": "effects", "get_effect": "effects",
     "PilotModel": "hess", "Simulator": "simulation", "gain_scale": "crossover", "model_from_name": "hess",
-    "simulate": "simulation", "table1": "hess", "PrecisionFit": "mcruer", "fit_precision": "mcruer",
+    "simulate": "simulation", "synthetic_run": "simulation", "table1": "hess", "PrecisionFit": "mcruer", "fit_precision": "mcruer",
     "precision_loop": "mcruer", "motion_block": "motion", "paper_motion_path": "motion",
     "with_motion_path": "motion", "remnant_gain": "remnant",
 })

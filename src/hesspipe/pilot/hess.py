@@ -99,6 +99,9 @@ class PilotModel:
     effects: tuple[str, ...] = ()
 
     def __post_init__(self):
+        if isinstance(self.effects, str):
+            raise HesspipeError(f"effects: expected a tuple of effect ids, got the string {self.effects!r} "
+                                "(model_from_name builds a model from its name, e.g. 'expanded')")
         effects = tuple(self.effects)
         for e in effects:
             get_effect(e)

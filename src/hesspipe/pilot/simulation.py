@@ -34,8 +34,9 @@ import numpy as np
 import scipy.fft as sfft
 
 from ..core.errors import HesspipeError
-from ..core.formats import Run
+from ..core.formats import Run, as_plants
 from .blocks import ONE, Block, Loop, from_tf, max_delay, max_real_root, pade_order_for
+from .crossover import gain_scale
 from .hess import model_from_name
 from .motion import motion_block, with_motion_path
 
@@ -252,10 +253,15 @@ class Simulator:
 
     def __init__(self, plants, disturbance, dt: float, *, reference=None, noise_seed: int = 0,
                  pad_factor: int = 4, decays: float = 10.0):
+        plants = as_plants(plants)
         w = np.asarray(disturbance, dtype=float)
         if w.ndim != 1 or w.size < 2:
             raise HesspipeError("disturbance: expected a 1-D signal of at least 2 samples")
-        if not (dt > 0 and np.isfinite(dt)):
+        if not np.all(np.isfinite(w)):
+            raise HesspipeError(f"disturbance: a non-finite value at sample {int(np.argmax(~np.isfinite(w)))}; "
+                                "expected a continuous record")
+        if isinstance(dt, (bool, str)) or not isinstance(dt, (int, float, np.number)) \
+                or not (dt > 0 and np.isfinite(dt)):
             raise HesspipeError(f"dt: expected a positive sample interval, got {dt!r}")
         self.contour = c = Contour.for_record(w.size, float(dt), pad_factor=pad_factor, decays=decays)
         self.n, self.dt, self.nfft = c.n, c.dt, c.nfft
@@ -274,6 +280,9 @@ class Simulator:
         r = None if reference is None else np.asarray(reference, dtype=float)
         if r is not None and r.shape != w.shape:
             raise HesspipeError("reference: expected the same length as the disturbance")
+        if r is not None and not np.all(np.isfinite(r)):
+            raise HesspipeError(f"reference: a non-finite value at sample {int(np.argmax(~np.isfinite(r)))}; "
+                                "expected a continuous record")
         self.r = r if r is not None and np.any(r) else None
         self.rf = None if self.r is None else c.spectrum(self.r)
         self.noise_seed = int(noise_seed)
@@ -486,7 +495,9 @@ def simulate(model, params: Mapping[str, float] | None, plants, disturbance, dt:
     model : PilotModel or str
         "original", "expanded", ... (see :func:`model_from_name`).
     params : mapping
-        Parameter values; missing ones take the model's defaults (Table 1).
+        Parameter values; missing ones take the model's defaults (Table 1, its loop gains
+        scaled to the plants by :func:`hesspipe.pilot.crossover.gain_scale`, as
+        identification's defaults are).
     plants : hesspipe.core.formats.Plants
     disturbance : array
         Disturbance w (input of Yd) sampled at `dt`, from t = 0.
@@ -504,7 +515,9 @@ def simulate(model, params: Mapping[str, float] | None, plants, disturbance, dt:
         record (:func:`growth_limit`); never raises for it.
     """
     model = model_from_name(model)
-    p = model.complete(params, k)
+    plants = as_plants(plants)
+    order = k if k is not None else int((params or {}).get("k", 1))
+    p = model.complete(params, k, gain=gain_scale(plants, order) if order in (1, 2) else 1.0)
     loop = model.loop(p)
     sim = Simulator(plants, disturbance, dt, reference=reference,
                     noise_seed=0 if seed is None else int(seed))
@@ -520,7 +533,7 @@ def synthetic_run(model, params: Mapping[str, float] | None, plants, disturbance
     model : PilotModel or str
         The generating model.
     params : mapping, optional
-        Parameter values (missing ones: Table 1 defaults).
+        Parameter values (missing ones: Table 1 defaults, loop gains scaled as in :func:`simulate`).
     plants : hesspipe.core.formats.Plants
     disturbance : array
         Disturbance w sampled at `dt`, the plants' disturbance units.

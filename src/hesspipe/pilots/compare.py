@@ -39,6 +39,8 @@ from ..core.formats import (
     Plants,
     Run,
     _parse_columns,
+    as_plants,
+    as_runs,
     check_sample_rate,
     plants_coefficients,
     read_file_runs,
@@ -337,7 +339,14 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
         if not path.exists():
             raise HesspipeError(f"{path}: not found; expected a folder of run files or a run file (CSV, MAT, XLSX)")
         return [path]
-    files = [Path(p) for p in paths_or_dir]
+    if isinstance(paths_or_dir, Run) or not isinstance(paths_or_dir, Iterable):
+        raise HesspipeError(f"paths_or_dir: expected a folder, run files or Runs, got {type(paths_or_dir).__name__}")
+    given = list(paths_or_dir)
+    odd = next((p for p in given if not isinstance(p, (str, Path))), None)
+    if odd is not None:
+        raise HesspipeError(f"paths_or_dir: expected a folder, run files or Runs, got a list holding "
+                            f"{type(odd).__name__}")
+    files = [Path(p) for p in given]
     if not files:
         raise HesspipeError("paths_or_dir: no run files given; expected a folder or a list of run files")
     return files
@@ -384,8 +393,9 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
 
     Parameters
     ----------
-    paths_or_dir : path or iterable of paths
-        A folder of run CSVs (the file stem is the pilot id) or the files.
+    paths_or_dir : path, iterable of paths, Run or list of Run
+        A folder of run files (the file stem is the pilot id), the files, or runs already
+        read or built in memory (each run's id is the pilot id).
     plants : Plants
         Yc (control → roll rate) and Yd (lateral wind ft/s → roll rate rad/s).
     workers : int, optional
@@ -422,14 +432,19 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     HesspipeError
         No run files at all, bad settings, or an unreachable scheduler.
     """
+    plants = as_plants(plants)
     settings = _with_k(replace(settings or CompareSettings(), **fields), plants)  # validated here
     if job is None and settings.km_fixed is None:
         settings = replace(settings, km_fixed=_km_fixed(settings, plants))
-    _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
-    paths = list_runs(paths_or_dir)
-    pilot_groups([p.stem for p in paths], pilot_id, {p.stem: str(p) for p in paths})  # before any work
-    check_sample_rate(sample_rate)   # the user's one mistake, not every file's
-    runs, failures = read_runs(paths, columns=columns, resample=resample, sample_rate=sample_rate)
+    if isinstance(paths_or_dir, Run) or (isinstance(paths_or_dir, (list, tuple)) and paths_or_dir
+                                         and all(isinstance(r, Run) for r in paths_or_dir)):
+        runs, failures, paths = as_runs(paths_or_dir), [], []
+    else:
+        _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
+        paths = list_runs(paths_or_dir)
+        pilot_groups([p.stem for p in paths], pilot_id, {p.stem: str(p) for p in paths})  # before any work
+        check_sample_rate(sample_rate)   # the user's one mistake, not every file's
+        runs, failures = read_runs(paths, columns=columns, resample=resample, sample_rate=sample_rate)
     groups = pilot_groups([r.id for r in runs], pilot_id, {r.id: r.source for r in runs},
                           {r.id: r.file_id for r in runs})
     check_repeats([], runs)   # a record copied into the folder would count its evidence twice

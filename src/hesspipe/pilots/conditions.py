@@ -42,6 +42,7 @@ import numpy as np
 from scipy import stats
 
 from ..core.errors import HesspipeError
+from ..core.formats import as_plants, as_runs
 from ..core.provenance import SYNTHETIC_BANNER
 from ..core.seeds import derive_seed
 from ..identification.frf import estimate_frf
@@ -343,9 +344,10 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
         :func:`person_metrics` raises (naming the run).
     """
     labels = check_labels(labels)
+    plants = as_plants(plants)
     persons: dict[str, dict] = {}
     synthetic, grouped = False, []
-    runs_a, runs_b = list(runs_a), list(runs_b)
+    runs_a, runs_b = as_runs(list(runs_a)), as_runs(list(runs_b))
     # One folder given for both conditions (or a file copied into the other) would compare
     # records with themselves and report "no difference" for nothing.
     check_repeats([], [*runs_a, *runs_b])

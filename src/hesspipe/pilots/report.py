@@ -12,7 +12,7 @@ from typing import Callable
 from ..core.io import write_json, write_text
 from ..pilot.hess import km_per_ke
 from .settings import CONFIGURATIONS
-from .verdict import verdict_lines
+from .verdict import ALPHA, verdict_lines
 
 #: Parameters shown in the comparison table (Table 5's columns).
 TABLE_PARAMETERS = ("Ke", "K1", "K2", "Km")
@@ -98,9 +98,25 @@ def format_table(comparison) -> str:
     out.append("Km/|Ke|: the vestibular gain relative to the visual one. Where 1/T1 lies below the "
                "forcing, Ke and Km scale together with 1 + K1 K2 (only their ratio, the crossover and "
                "the phase margin are determined): compare runs and pilots by these, not by Ke or Km")
+    out += _test_against_table(comparison)
     for f in comparison.failures:
         out.append(f"FAILED {f.id}: {f.error}")
     return "\n".join(out)
+
+
+def _test_against_table(comparison) -> list[str]:
+    # A reviewer read "yes, 4 of 5 pilots" above a table whose expanded Km was 0 on 12 of 15
+    # runs as a contradiction: the two answer with different models.
+    named = [p for p in comparison.pilots
+             if (p.motion_test or {}).get("available") and p.motion_test.get("p_value", 1.0) < ALPHA]
+    flat = [p for p in named if not (p.configuration("expanded").get("parameters", {}).get("Km") or 0.0) > 0.0]
+    if not flat:
+        return []
+    return [f"motion test and table: on {len(flat)} of the {len(named)} run(s) whose motion test is "
+            f"significant (p < {ALPHA:g}) the expanded model's fit above leaves Km at 0. The verdict rests "
+            "on the describing function's test, whose vestibular path has its own delay (and, with a "
+            "target, the pilot's feedforward); the paper's expanded model has neither. Read a run's "
+            "motion gain from its test (Km/|Ke| in comparison.json's motion_test), not from this table"]
 
 
 def write_comparison(comparison, out_dir: str | Path, *, draw: Callable | None = None,

@@ -13,7 +13,7 @@ them explain it and the run as written does not. Plants that miss part of the dy
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -58,6 +58,10 @@ class Consistency:
         path that carries under :data:`PATH_SHARE` of the predicted power (not judged).
     paths_scaled : float
         The share left with those two factors.
+    swapped : dict of str to float
+        The same with two columns' roles exchanged: ``"control and disturbance"`` (or the
+        plants' two paths) and ``"control and output"`` (then the share of the logged
+        control's power the plants leave, predicting it from the logged output).
     """
 
     unexplained: float
@@ -67,6 +71,7 @@ class Consistency:
     n_bins: int
     path_scales: tuple = (1.0, 1.0)
     paths_scaled: float = math.inf
+    swapped: dict = field(default_factory=dict)
 
     def problem(self) -> str | None:
         """The columns' sign or units mistake the evidence names, or None."""
@@ -88,6 +93,13 @@ class Consistency:
                     f"as written {100 * self.unexplained:.0f} %); write every column's unit in the "
                     f"header (e.g. 'Yaw [deg]'; a column without one is read as written) or rescale "
                     f"the plants")
+        swap, left = min(self.swapped.items(), key=lambda kv: kv[1], default=("", math.inf))
+        if left <= CONVINCING and left <= self.unexplained / 5:
+            also = " (or the plants' control_to_output and disturbance_to_output)" if "disturbance" in swap else ""
+            return (f"the {swap} columns look swapped{also}: read the other way round the plants leave "
+                    f"{100 * left:.0f} % of the power at the forcing unexplained, as written "
+                    f"{100 * self.unexplained:.0f} %; map each role to its column with columns "
+                    f"control=NAME,...")
         # One column in another unit (a stick in per cent, one angle left in degrees): the
         # joint factor above cannot show it, since the other path's prediction is right.
         off = [(r, g) for r, g in zip(("control", "disturbance"), self.path_scales)
@@ -175,10 +187,15 @@ def consistency(run: Run, plants: Plants, *, band_hz: tuple[float, float] = (0.0
     power = np.abs(pc) ** 2 + np.abs(pd) ** 2
     keep = np.argsort(power)[::-1][:max(min_bins, int(math.ceil(top * band.size)))]
     pc, pd, y = pc[keep], pd[keep], y[keep]
-    ref = float(np.sum(np.abs(y) ** 2)) or 1.0
 
-    def left(pred):
-        return float(np.sum(np.abs(y - pred) ** 2)) / ref
+    def left(pred, target=y):
+        return float(np.sum(np.abs(target - pred) ** 2)) / (float(np.sum(np.abs(target) ** 2)) or 1.0)
+
+    # Two columns' roles exchanged, on the same bins (a multisine's lines stay its lines).
+    swapped = {"control and disturbance": left(predicted(plants.control_to_output, run.disturbance)[keep]
+                                               + predicted(plants.disturbance_to_output, run.control)[keep]),
+               "control and output": left(predicted(plants.control_to_output, run.output)[keep] + pd,
+                                          detrended_spectrum(run.control)[keep])}
 
     pred = pc + pd
     den = float(np.sum(np.abs(pred) ** 2))
@@ -194,7 +211,7 @@ def consistency(run: Run, plants: Plants, *, band_hz: tuple[float, float] = (0.0
                        flipped={"control": left(-pc + pd), "disturbance": left(pc - pd), "output": left(-pred)},
                        scale=g, scaled=left(g * pred), n_bins=int(keep.size),
                        path_scales=(gc, gd),
-                       paths_scaled=left(gains[0] * pc + gains[1] * pd))
+                       paths_scaled=left(gains[0] * pc + gains[1] * pd), swapped=swapped)
 
 
 def check_consistent(run: Run, plants: Plants) -> Consistency:
