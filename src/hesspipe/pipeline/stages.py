@@ -120,6 +120,7 @@ def validate(config: dict, source: str) -> None:
     from ..pilot.hess import model_from_name
     from ..pilots.batch import check_scheduler_address
     from ..pilots.compare import PilotsConfig, list_runs
+    from ..pilots.verdict import pilot_groups
     from ..plants.analytic import load_analytic
     from ..plants.settings import AnalyticConfig, PlantsConfig
 
@@ -137,6 +138,12 @@ def validate(config: dict, source: str) -> None:
                             f"{pilots.data} not found")
     if pilots.plants:
         _in_field(source, "pilots.plants", read_plants, pilots.plants)   # as the stages read it
+    if pilots.data:
+        _in_field(source, "pilots.data", list_runs, pilots.data)   # a folder without runs
+    if pilots.data and pilots.pilot_id:
+        # A pattern that misses a file name failed after flight, plants and analytic had run.
+        _in_field(source, "pilots.pilot_id",
+                  lambda pattern: pilot_groups([p.stem for p in list_runs(pilots.data)], pattern), pilots.pilot_id)
     if pilots.data and (pilots.columns or pilots.sample_rate):
         # The data's first run read as the pilots stage reads it: a misspelt column name fails
         # here, not after flight and plants (any other fault of that file would fail the
@@ -209,6 +216,11 @@ def build_pipeline(config_path=None, out="hesspipe-out", *, aircraft=None, seed=
     Pipeline
     """
     config, source = load_config(config_path, aircraft=aircraft, seed=seed)
+    data = config.get("pilots", {}).get("data")
+    if isinstance(data, str) and data and Path(data).resolve() == Path(out).resolve():
+        raise HesspipeError(f"{source}: field 'pilots.data': {data} is the output folder too; expected the "
+                            "outputs in a folder of their own (the report and the stages' folders beside "
+                            "the runs)")
     return Pipeline(load_stages(data_dir("pipeline") / "stages.toml"), config, out, source)
 
 
@@ -330,9 +342,17 @@ def pilots_inputs(section: dict, config: dict) -> list:
     Returns
     -------
     list of Path
-        ``[Path(data)]`` and ``Path(plants)``, or empty for the synthetic cohort (``data`` unset).
+        The run files the stage reads from ``data`` (a folder's, as
+        :func:`hesspipe.pilots.compare.list_runs` lists them: not a notes file, a
+        ``.DS_Store`` or an output folder beside them) and ``Path(plants)``; empty for the
+        synthetic cohort (``data`` unset).
     """
-    return [Path(section[k]) for k in ("data", "plants") if isinstance(section.get(k), str) and section[k]]
+    from ..pilots.compare import list_runs
+
+    data, plants = (section.get(k) for k in ("data", "plants"))
+    runs = list_runs(data) if isinstance(data, str) and data and Path(data).exists() else (
+        [Path(data)] if isinstance(data, str) and data else [])
+    return runs + ([Path(plants)] if isinstance(plants, str) and plants else [])
 
 
 def _study_plants(ctx):

@@ -80,7 +80,7 @@ from ..core.config import aircraft_file
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, read_csv_columns, sample_interval, write_plants
 from ..core.io import staged_output, write_json, write_text
-from ..core.provenance import file_hash, versions
+from ..core.provenance import file_hash, says_synthetic, versions
 from ..pilot.motion import paper_motion_path
 from ..pilot.simulation import growth_limit
 from . import arx as _arx
@@ -132,7 +132,7 @@ class Record:
     @property
     def synthetic(self) -> bool:
         """True if a comment labels the record synthetic."""
-        return any("synthetic" in c.lower() for c in self.comments)
+        return says_synthetic(self.comments)
 
 
 def read_record(path: str | Path, input_column: str, output_column: str, *,
