@@ -166,6 +166,10 @@ def test_unknown_stage_and_bad_config_are_one_line_errors(reference, tmp_path, c
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.toml: field 'diagnose.alpha'" in err[0], err
     assert not (tmp_path / "o").exists()
+    # `status` checks the file as `run` does (it said "stale: configuration changed")
+    assert main(["status", "--config", str(bad), "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.toml: field 'diagnose.alpha'" in err[0], err
     # So does a data folder or plants file of the pilots stage that is not there or not plants.
     (tmp_path / "lab").mkdir()
     (tmp_path / "notplants.json").write_text('{"source": "x"}')
@@ -264,6 +268,7 @@ def test_own_recordings_with_their_own_plants_and_persons(reference, tmp_path, c
     assert json.loads((work / "diagnose" / "diagnosis.json").read_text())["run"] == "s1_r1"
     report = (work / "report.md").read_text()
     assert "Plants the runs were identified with: Yc = `" in report
+    assert f"Runs: 4 from `{lab}` (`[pilots] data`)" in report
     assert comp["plants"]["motion_path"] == plants_dict(spec)["motion_path"]
     assert "the cab's motion path `" in report and "motion_path_note" not in comp["plants"]
     # What the stage does not read changes nothing: a notes file, a Finder file, a folder (an
@@ -281,6 +286,13 @@ def test_own_recordings_with_their_own_plants_and_persons(reference, tmp_path, c
     assert main(["status", "--config", str(own), "--out", str(work)]) == 0
     state = {ln.split()[0]: ln.split()[1] for ln in capsys.readouterr().out.splitlines()}
     assert [s for s in STAGES if state[s] != "fresh"] == ["pilots", "diagnose", "report"]
+    # A misspelt data folder over outputs that exist: the file and field, not "input file not found"
+    gone = tmp_path / "gone.toml"
+    gone.write_text(own.read_text().replace('data = "lab"', 'data = "lba"'))
+    for command in ("run", "status"):
+        assert main([command, "--config", str(gone), "--out", str(work)]) == 1
+        err = [ln for ln in capsys.readouterr().err.strip().splitlines() if not ln.startswith("[hesspipe]")]
+        assert len(err) == 1 and "gone.toml: field 'pilots.data': " in err[0] and "lba not found" in err[0], err
 
 
 def test_the_report_cautions_beside_the_verdict_when_the_plants_are_not_the_runs(tmp_path):

@@ -18,11 +18,14 @@ def register(sub) -> None:
 
 
 def _status(args) -> int:
-    from ..pipeline.stages import build_pipeline
+    from ..pipeline.stages import build_pipeline, validate
     from ._options import check_aircraft
 
     check_aircraft(args.aircraft)  # blamed on the flag: the configuration's file did not name it
     pipe = build_pipeline(args.config, args.out, aircraft=args.aircraft, seed=args.seed)
+    # As `run` checks it: a misspelt key said "stale: configuration changed", a missing data
+    # folder "input file not found" without the file or the field.
+    validate(pipe.config, pipe.source)
     rows = pipe.status()
     width = max(len(r.name) for r in rows)
     for r in rows:

@@ -362,7 +362,12 @@ class Pipeline:
         outcomes = []
         claimed = False
         for stage in self.stages:
-            parts = self._fingerprint_parts(stage)
+            try:
+                parts = self._fingerprint_parts(stage)
+            except HesspipeError:
+                if before is not None:   # a missing input is a configuration's mistake: name its field
+                    before()
+                raise
             reason = self._why_stale(stage, parts)
             if reason is None and stage.name in forced:
                 reason = "forced"

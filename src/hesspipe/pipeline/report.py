@@ -142,6 +142,11 @@ def _pilots(folder: Path, root: Path) -> list[str]:
         # A data folder's runs may come with their own task's plants ([pilots] plants): say which.
         cab = (f", the cab's motion path `{format_tf(plants['motion_path'])}`" if plants.get("motion_path")
                else " (no motion path: the paper's washout and platform on the output)")
+        # Two conditions' reports differed only by the configuration's name.
+        folders = sorted({str(Path(str(p.get("source") or "")).parent) for p in comp["pilots"] if p.get("source")})
+        if folders:
+            out += [f"Runs: {len(comp['pilots'])} from `{'`, `'.join(folders)}` (`[pilots] data`); sections 1-3 "
+                    "fly the JSBSim aircraft beside them and are not used for these runs.", ""]
         out += [f"Plants the runs were identified with: Yc = `{format_tf(plants['control_to_output'])}`, "
                 f"Yd = `{format_tf(plants['disturbance_to_output'])}`{cab}.", ""]
         if plants.get("motion_path_note"):
