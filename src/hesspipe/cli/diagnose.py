@@ -130,7 +130,8 @@ def _each(args, cfg, candidates) -> int:
     if args.workers is not None:
         check_workers(args.workers)   # before any work
     plants = read_cli_plants(args.plants)
-    paths = [path for arg in args.run for path in list_runs(arg)]
+    listed = [(arg, list_runs(arg)) for arg in args.run]
+    paths = [path for _, files in listed for path in files]
     runs, unread = read_runs(paths, min_samples=WELCH_SEGMENT, **run_options(args))
     print_reading({run.source: run.notes for run in runs})
     result = diagnose_each(runs, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
@@ -139,7 +140,7 @@ def _each(args, cfg, candidates) -> int:
     result = RunDiagnoses(result.diagnoses, unread + result.failures)
     print("\n".join(result.lines(failures=False)))
     # Several folders are several conditions (motion/ static/): a tally each, as well as the pooled one.
-    apart = {arg: result.of_files(list_runs(arg)) for arg in args.run} if len(args.run) > 1 else {}
+    apart = {arg: result.of_files(files) for arg, files in listed} if len(listed) > 1 else {}
     for arg, sub in apart.items():
         print(f"SUMMARY of {arg}: {sub.summary()}")
     if args.json:

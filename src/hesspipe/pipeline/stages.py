@@ -90,10 +90,10 @@ PATH_FIELDS = (("flight", "aircraft"), ("analytic", "model"), ("pilots", "data")
                ("diagnose", "run"), ("diagnose", "model"))
 
 
-def _in_field(source: str, field: str, check, value) -> None:
-    """Run ``check(value)``; re-raise its error as one naming `source` and `field`."""
+def _in_field(source: str, field: str, check, value):
+    """Return ``check(value)``; re-raise its error as one naming `source` and `field`."""
     try:
-        check(value)
+        return check(value)
     except HesspipeError as exc:
         raise HesspipeError(f"{source}: field '{field}': {exc}") from None
 
@@ -138,17 +138,16 @@ def validate(config: dict, source: str) -> None:
                             f"{pilots.data} not found")
     if pilots.plants:
         _in_field(source, "pilots.plants", read_plants, pilots.plants)   # as the stages read it
-    if pilots.data:
-        _in_field(source, "pilots.data", list_runs, pilots.data)   # a folder without runs
-    if pilots.data and pilots.pilot_id:
+    runs = _in_field(source, "pilots.data", list_runs, pilots.data) if pilots.data else []   # none there
+    if runs and pilots.pilot_id:
         # A pattern that misses a file name failed after flight, plants and analytic had run.
-        _in_field(source, "pilots.pilot_id",
-                  lambda pattern: pilot_groups([p.stem for p in list_runs(pilots.data)], pattern), pilots.pilot_id)
-    if pilots.data and (pilots.columns or pilots.sample_rate):
+        _in_field(source, "pilots.pilot_id", lambda pattern: pilot_groups([p.stem for p in runs], pattern),
+                  pilots.pilot_id)
+    if runs and (pilots.columns or pilots.sample_rate):
         # The data's first run read as the pilots stage reads it: a misspelt column name fails
         # here, not after flight and plants (any other fault of that file would fail the
         # stage too).
-        first = list_runs(pilots.data)[0]
+        first = runs[0]
         _in_field(source, "pilots.columns" if pilots.columns else "pilots.sample_rate",
                   lambda c: read_file_runs(first, columns=c, resample=pilots.resample,
                                            sample_rate=pilots.sample_rate), pilots.columns)
