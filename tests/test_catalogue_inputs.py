@@ -147,7 +147,8 @@ CASES = [
     ("diagnose: dropped sample", ["diagnose", "{d}/gap.csv", "--plants", "{d}/plants.json"], REFUSED,
      r"gap\.csv: column 'time': expected uniform.*pass --resample", None),
     ("diagnose: other names", ["diagnose", "{d}/renamed.csv", "--plants", "{d}/plants.json"], REFUSED,
-     r"renamed\.csv: column 'time' missing.*map other names with --columns time=NAME", None),
+     r"renamed\.csv: columns 'time', 'output' and 'control' missing; found columns: t, wind, p, stick; map "
+     r"other names with --columns time=NAME,output=NAME,control=NAME, or give the sample rate", None),
     ("pilots: bad role", ["pilots", "{d}/cohort", "--plants", "{d}/plants.json",
                                   "--columns", "stick=control"], REFUSED, r"--columns: unknown role 'stick'", None),
     # -- item 3: silent wrong results are refused ---------------------------------------------

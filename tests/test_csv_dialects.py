@@ -401,8 +401,11 @@ def test_a_file_without_a_header_row_is_read_by_position(tmp_path, name, data, n
     if note:
         assert any(note in n for n in run.notes), run.notes
     # Unmapped, the message says why no name matches and how to map the positions.
-    with pytest.raises(HesspipeError, match=rf"{name}: column 'time' missing; the file has no header "
-                                            r"row, its columns are named by position 1-5"):
+    # Every role is missing at once, and all are named in the one message.
+    with pytest.raises(HesspipeError, match=rf"{name}: columns 'time', 'output' and 'control' missing; the "
+                                            r"file has no header row, its columns are named by position 1-5; "
+                                            r"map them with columns time=POSITION,output=POSITION,"
+                                            r"control=POSITION, or give the sample rate"):
         read_run(path)
 
 

@@ -51,6 +51,7 @@ def test_the_command_diagnoses_a_folder_run_by_run(runs, tmp_path, capsys):
     assert f"hesspipe: error: {folder / 'z_cut.csv'}: column 'control' missing" in err
     report = json.loads((tmp_path / "each.json").read_text())
     assert report["runs"] == 2 and report["failures"][0]["source"] == str(folder / "z_cut.csv")
+    assert report["hesspipe_version"] and report["seed"] == 0 and report["plants"].endswith(".json")
     assert report["named"] == diagnose_each(rs, plants).tally()
     assert f"SUMMARY: {report['summary']}" in out and out.count(" named") >= 2
     assert main(["diagnose", str(folder), "--each", "--plants", str(tmp_path / "p.json"),
@@ -78,6 +79,11 @@ def test_two_folders_are_tallied_apart_as_well_as_together(runs, tmp_path, capsy
         apart = report["by_input"][str(tmp_path / name)]
         assert apart["runs"] == 1 and apart["named"] == alone.tally()
         assert f"SUMMARY of {tmp_path / name}: {alone.summary()}" in out
+    # Files listed one by one (a shell's glob) are not conditions: no "1 of 1" tally per file.
+    assert main(["diagnose", str(tmp_path / "a" / "a_r1.csv"), str(tmp_path / "b" / "b_r1.csv"), "--each",
+                 "--workers", "1", "--plants", str(tmp_path / "p.json")]) == 0
+    out = capsys.readouterr().out
+    assert "SUMMARY: " in out and "SUMMARY of" not in out
 
 
 def test_runs_diagnosed_in_worker_processes_are_the_same(runs):

@@ -66,7 +66,8 @@ def test_a_units_row_clock_times_and_no_header(tmp_path):
     bare = tmp_path / "bare.xlsx"
     _frame({k: k for k in s}).to_excel(bare, header=False, index=False)
     _check(read_run(bare, columns="time=1,disturbance=2,output=3,control=4,reference=5"))
-    with pytest.raises(HesspipeError, match=r"bare.xlsx: column 'time' missing; the file has no header row"):
+    with pytest.raises(HesspipeError, match=r"bare.xlsx: columns 'time', 'output' and 'control' missing; the file "
+                                            r"has no header row"):
         read_run(bare)
 
 

@@ -116,7 +116,23 @@ def test_free_fixed_and_expanded_defaults(data):
     for key in ("model", "parameters", "fixed", "fitness", "benchmark_fitness", "crossover",
                 "evaluations", "identifiability"):
         assert key in d
-    assert set(d["crossover"]) >= {"frequency_rad_s", "phase_margin_deg", "within_limits"}
+    assert set(d["crossover"]) >= {"frequency_rad_s", "phase_margin_deg", "within_limits", "definition"}
+    # The JSON's "crossover" is the tracking crossover the tables print; SPEC's last fall of |L|
+    # (a neuromuscular peak can put it near 12 rad/s) sits beside it under its own name.
+    from dataclasses import replace
+
+    from hesspipe.pilot.crossover import Crossover
+
+    two = replace(res, crossover=Crossover(12.5, -173.0, False),
+                  primary_crossover=Crossover(2.66, 49.4, True)).to_dict(spectra=False)
+    assert two["crossover"]["frequency_rad_s"] == 2.66 and "tracking crossover" in two["crossover"]["definition"]
+    assert two["crossover_last_fall"]["frequency_rad_s"] == 12.5 and "primary_crossover" not in two
+    # A fit on its search box's upper edge is said; Km = 0 on its lower edge (no motion) is not.
+    bits, scale, offset = res.fields["Km"]
+    hi = offset + (2 ** bits - 1) / scale
+    assert replace(res, parameters={**res.parameters, "Km": hi}).box_edges() == {"Km": {"side": "upper", "bound": hi}}
+    assert replace(res, parameters={**res.parameters, "Km": 0.0}).box_edges() == {}
+    assert replace(res, parameters={**res.parameters, "Km": 0.5 * hi}).to_dict()["at_box_edge"] == {}
     # Everything fixed: the given parameters are evaluated, no search.
     ev = identify(run, pl, "original", fixed={"Ke": 12.0, "K1": 3.0, "K2": 1.5},
                   with_benchmark=False)

@@ -259,7 +259,13 @@ def test_a_pilots_runs_are_combined_before_the_cohort_counts_pilots():
     none = cohort_verdict({"b3": tests["b3"]}, groups=groups)
     assert none["answer"] == "undetermined" and none["per_pilot"]["b"]["untested_runs"] == ["b3"]
     text = "\n".join(verdict_lines(v))
-    assert "  a (2 runs): misfit removed 50.0 %" in text
+    # Per pilot, each figure says how the runs were combined (the F beside Fisher's p is a median).
+    assert f"  a (2 runs): median misfit removed 50.0 %, median F = {a['lr']:.3g}, Fisher's p = " in text
+    assert "Fisher's combination" in a["combined"] and "combined" not in v["per_pilot"].get("c", {})
+    # A run left out of its pilot's test is named on the pilot's line, with why.
+    why = cohort_verdict({**tests, "b3": {"available": False, "reason": "3 multisine forcing lines found (need 4)"}},
+                         groups=groups)
+    assert "; b3 not tested (3 multisine forcing lines found (need 4))" in "\n".join(verdict_lines(why))
     assert "Km/|Ke| 0.2 +/- 0.1, Km 2 +/- 1" in text
 
 

@@ -30,6 +30,7 @@ _API = {
     "identify": "identification", "estimate_frf": "identification", "average_frf": "identification",
     "compare_pilots": "pilots", "PilotsConfig": "pilots", "compare_conditions": "pilots",
     "DiagnoseConfig": "diagnose", "Diagnosis": "diagnose",
+    "to_json": "core.io",
 }
 
 #: The packages, each also an attribute of ``hesspipe`` (imported on first use).

@@ -63,16 +63,24 @@ def check_file_outputs(*, json: str | None = None, figure: str | None = None) ->
         check_figure_path(figure)
 
 
-def write_result_json(path: str, result, **inputs) -> None:
-    """Write ``result.to_dict()`` to `path`, with the input files it came from (`inputs`: key →
-    path, or a list of paths; a list of one is written as that path)."""
+def write_command_json(path: str, obj: dict, **inputs) -> None:
+    """Write a command's result `obj` to `path` with what it came from: `inputs` (key → a path,
+    a list of paths, a list of one written as that path, or a number such as the seed) and the
+    hesspipe version."""
+    from .. import __version__
     from ..core.io import write_json
 
     def one_or_list(value):
+        if isinstance(value, (int, float)):
+            return value
         if not isinstance(value, (list, tuple)):
             return str(value)
         return str(value[0]) if len(value) == 1 else [str(v) for v in value]
 
-    obj = result.to_dict()
-    obj.update({key: one_or_list(value) for key, value in inputs.items()})
-    write_json(path, obj)
+    write_json(path, {**obj, **{key: one_or_list(value) for key, value in inputs.items()},
+                      "hesspipe_version": __version__})
+
+
+def write_result_json(path: str, result, **inputs) -> None:
+    """Write ``result.to_dict()`` to `path` (:func:`write_command_json`)."""
+    write_command_json(path, result.to_dict(), **inputs)

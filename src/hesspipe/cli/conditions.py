@@ -59,7 +59,7 @@ def run(args) -> int:
     print(format_conditions(result))
     if args.json:
         write_result_json(args.json, result, first=[str(f) for f in files[0]],
-                          second=[str(f) for f in files[1]], plants=args.plants)
+                          second=[str(f) for f in files[1]], plants=args.plants, seed=args.seed)
     if args.figure:
         from ..viz.conditions import conditions_figure
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 import sys
 from dataclasses import replace
+from pathlib import Path
 
 from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 
@@ -66,12 +67,11 @@ def register(sub) -> None:
 
 def _diagnose(args) -> int:
     from ..core.errors import HesspipeError
-    from ..core.io import write_json
     from ..core.paper import WELCH_SEGMENT
     from ..diagnose.report import format_report
     from ..diagnose.settings import DiagnoseConfig
     from ..diagnose.workflow import diagnose
-    from ._outputs import check_file_outputs
+    from ._outputs import check_file_outputs, write_command_json
 
     check_file_outputs(json=args.json, figure=args.figure)  # before any work
     # The library checks its settings (DiagnoseConfig); cli_message names the flags.
@@ -103,7 +103,7 @@ def _diagnose(args) -> int:
                       baseline_run=base, repeat_runs=repeats)
     print(format_report(result))
     if args.json:
-        write_json(args.json, result.to_dict())
+        write_command_json(args.json, result.to_dict(), plants=args.plants, seed=args.seed)
         print(f"wrote {args.json}")
     if args.figure:
         from ..viz.diagnose import plot_diagnosis
@@ -117,12 +117,12 @@ def _each(args, cfg, candidates) -> int:
     # Every run alone: a folder's runs (or the files given, each file's runs), read as
     # `pilots` reads them (a file it cannot read is a failure, not the end), then tallied.
     from ..core.errors import HesspipeError
-    from ..core.io import write_json
     from ..core.paper import WELCH_SEGMENT
     from ..diagnose.each import RunDiagnoses, diagnose_each
     from ..pilots.batch import check_workers, run_batch
     from ..pilots.compare import list_runs, read_runs
     from ._options import cli_message, print_reading, read_cli_plants, run_options
+    from ._outputs import write_command_json
 
     if args.baseline_run or args.figure:
         raise HesspipeError(f"{'--baseline-run' if args.baseline_run else '--figure'}: not with --each, which "
@@ -140,13 +140,16 @@ def _each(args, cfg, candidates) -> int:
     result = RunDiagnoses(result.diagnoses, unread + result.failures)
     print("\n".join(result.lines(failures=False)))
     # Several folders are several conditions (motion/ static/): a tally each, as well as the pooled one.
-    apart = {arg: result.of_files(files) for arg, files in listed} if len(listed) > 1 else {}
+    # Files listed one by one (a shell's motion/*.csv) are not conditions: a tally each was a
+    # "1 of 1 runs" line per file.
+    apart = ({arg: result.of_files(files) for arg, files in listed if Path(arg).is_dir()}
+             if len(listed) > 1 else {})
     for arg, sub in apart.items():
         print(f"SUMMARY of {arg}: {sub.summary()}")
     if args.json:
-        write_json(args.json, {**result.to_dict(), **({"by_input": {
+        write_command_json(args.json, {**result.to_dict(), **({"by_input": {
             arg: {"runs": len(sub.diagnoses), "named": sub.tally(), "summary": sub.summary()}
-            for arg, sub in apart.items()}} if apart else {})})
+            for arg, sub in apart.items()}} if apart else {})}, plants=args.plants, seed=args.seed)
         print(f"wrote {args.json}")
     for where, message in result.failures:
         print(f"hesspipe: error: {where}: {cli_message(message, args)}", file=sys.stderr)

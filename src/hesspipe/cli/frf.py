@@ -65,7 +65,8 @@ def format_table(frf) -> str:
                          f"{20 / np.log(10) * r:6.2f} {abs(py) / abs(pe):9.3f}")
         lines.append(f"median |Hpy|/|Hpe| at {ch.lines_in_band} line(s) between 1 and 5 rad/s: "
                      f"{ch.ratio_median:.3g} (remnant raises it; compare conditions, not zero)")
-    lines.append(f"remnant share of control power  {frf.remnant_share:.3f}")
+    lines.append(f"remnant share of control power  {frf.remnant_share:.3f}   (every bin to the Nyquist "
+                 f"frequency; diagnose counts its band only)")
     c = frf.crossover
     if math.isfinite(c.frequency_rad_s):
         lines.append(f"crossover (nonparametric)      {c.frequency_rad_s:.3f} +- {c.frequency_std:.3f} "
@@ -123,7 +124,7 @@ def run(args) -> int:
               estimate_frf(recs[0], plants, seed=args.seed))
     print(format_table(result))
     if args.json:
-        write_result_json(args.json, result, run=args.run, plants=args.plants)
+        write_result_json(args.json, result, run=args.run, plants=args.plants, seed=args.seed)
     if args.figure:
         from ..viz.frf import frf_figure
 

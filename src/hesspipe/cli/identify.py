@@ -130,7 +130,15 @@ def format_table(result) -> str:
     bench = result.benchmark_fitness
     lines.append(f"benchmark fitness  {bench:.6g}   (McRuer precision model, same criterion and units)"
                  if math.isfinite(bench) else "benchmark fitness  not computed")
-    c = result.crossover
+    edges = result.box_edges()
+    if edges:
+        lines.append("on the box's edge   " + ", ".join(f"{n} = {result.parameters[n]:.4g} ({e['side']} bound "
+                                                        f"{e['bound']:.4g})" for n, e in edges.items())
+                     + ": the optimum may lie beyond it (plants in other units than the run, or a pilot "
+                       "the model cannot follow)")
+    # The tracking crossover first, as every table prints it; SPEC's last fall only where it differs.
+    last = result.crossover
+    c = result.primary_crossover if result.primary_crossover is not None else last
     limits = (f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
               f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
     if math.isfinite(c.frequency_rad_s):
@@ -140,11 +148,10 @@ def format_table(result) -> str:
     else:
         lines.append("crossover          none found (the open loop's gain never crosses 1), within "
                      "limits: no " + limits)
-    pc = result.primary_crossover
-    if pc is not None and math.isfinite(pc.frequency_rad_s) and pc.frequency_rad_s != c.frequency_rad_s:
-        lines.append(f"primary crossover  {pc.frequency_rad_s:.3f} rad/s, phase margin "
-                     f"{pc.phase_margin_deg:.1f} deg (|L| first falls through 1 here and rises "
-                     "above 1 again higher up)")
+    if c is not last and math.isfinite(last.frequency_rad_s) and last.frequency_rad_s != c.frequency_rad_s:
+        lines.append(f"last crossing      {last.frequency_rad_s:.3f} rad/s, phase margin "
+                     f"{last.phase_margin_deg:.1f} deg (|L| rises above 1 again above the crossover and "
+                     "falls through it last here)")
     frf = result.frf
     if isinstance(frf, str):
         lines.append(f"nonparametric      {frf}")

@@ -64,11 +64,12 @@ def register(sub) -> None:
 
 
 def _run(args) -> int:
-    from ..core.io import check_output_dir, check_output_file, staged_output, write_json
+    from ..core.io import check_output_dir, check_output_file, staged_output
     from ..pilots.batch import check_scheduler_address
     from ..pilots.compare import compare_pilots
     from ..pilots.settings import CompareSettings
     from ._options import cli_message, print_reading, read_cli_plants, run_options
+    from ._outputs import write_command_json
 
     # Every output and the scheduler address are checked before any work.
     if args.json:
@@ -87,20 +88,31 @@ def _run(args) -> int:
 
         check_workers(args.workers)
     plants = read_cli_plants(args.plants)
+    said = set()
+
+    def on_read(reading, unread):
+        # What reading found, said before the fits: a folder of 30 runs took three minutes, and
+        # a broken file among them was reported only with the table.
+        print_reading(reading)
+        for f in unread:
+            print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
+            said.add(id(f))
+        sys.stderr.flush()
+
     result = compare_pilots(args.dir, plants, settings, workers=args.workers, scheduler=args.scheduler,
-                            pilot_id=args.pilot_id, **run_options(args))
-    print_reading(result.reading)
+                            pilot_id=args.pilot_id, on_read=on_read, **run_options(args))
     if result.pilots:   # with none identified: no table, no verdict, no output file
         print(result.table())
         if args.json:
-            write_json(args.json, result.to_dict())
+            write_command_json(args.json, result.to_dict())
         if args.figures:
             from ..viz.compare import draw_pilots
 
             with staged_output(args.figures, kind="figures") as stage:
                 draw_pilots(stage, result.pilots)
     for f in result.failures:
-        print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
+        if id(f) not in said:
+            print(f"hesspipe: error: {cli_message(f.error, args)}", file=sys.stderr)
     # A file that could not be read is counted as a file: how many runs it holds is unknown.
     files = sum(f.unread for f in result.failures)
     runs = len(result.failures) - files

@@ -1,6 +1,7 @@
 """What a run's roles say about each other, checked once its columns are read
 (:func:`hesspipe.core.formats.read_file_runs`): the displayed error and the target, an angle
-logged within one turn, a task without a disturbance, a target the mapping left unread.
+logged within one turn, a task without a disturbance, a target the mapping left unread or
+a column headed "target".
 Each takes the role → values mapping (and the role → column names read) and returns the
 notes it adds; those that fill or change a role do so in place."""
 
@@ -10,11 +11,45 @@ from typing import Mapping
 
 import numpy as np
 
-from ._csv import unwrap_turns
+from ._csv import _split_unit, unwrap_turns
 from .errors import HesspipeError
 
 #: The displayed error agrees with reference - output within this fraction of its RMS.
 ERROR_AGREES = 0.05
+
+#: Headers (case and a bracketed unit aside) read as the reference where none is mapped or
+#: named ``reference``: the manual-control literature's word for it.
+TARGET_NAMES = ("target",)
+
+
+def target_column(headers, mapping: Mapping[str, str]) -> tuple[str | None, tuple[str, ...]]:
+    """The column to read as the reference where the file names it the target, and the note.
+
+    Parameters
+    ----------
+    headers : sequence of str
+        The file's columns.
+    mapping : mapping
+        The caller's role → column mapping.
+
+    Returns
+    -------
+    (str or None, tuple of str)
+        The header, and the note saying so; (None, ()) where the reference or the error is
+        mapped, a column is named ``reference`` or ``error``, or no single column is named
+        the target. Left unread, a target reads as "no target": its lines are taken for
+        remnant and the motion test cannot separate the two paths.
+    """
+    if {"reference", "error"} & set(mapping):
+        return None, ()
+    bare = [_split_unit(str(h))[0].lower() for h in headers]
+    if {"reference", "error"} & set(bare):
+        return None, ()
+    found = [h for h, b in zip(headers, bare) if b in TARGET_NAMES]
+    if len(found) != 1:
+        return None, ()
+    return found[0], (f"column '{found[0]}' read as the target (reference); map reference=NAME to "
+                      f"read another",)
 
 
 def with_error(data: dict, columns: Mapping[str, str]) -> tuple[str, ...]:

@@ -306,14 +306,38 @@ def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(
     return _by_role(frame, names, optional, hint, also or {}, gaps_hint if not gaps else None)
 
 
+def _missing(frame: Frame, missing: list[tuple[str, str]], hint: str | None, also: Mapping[str, str]) -> str:
+    """:func:`_by_role`'s message for the required columns (role, name asked for) not found."""
+    positional, others = frame.positional, frame.others
+    item = frame.item if others is not None else "column"
+    what = "POSITION" if positional else "NAME"
+    names = [f"'{name}'" + (f" (role {role})" if role != name else "") for role, name in missing]
+    tail = (f"; map {'them' if positional else 'other names'} with {hint} "
+            f"{','.join(f'{role}={what}' for role, _ in missing)}" if hint else "") \
+        + "".join(also.get(role, "") for role, _ in missing)
+    if len(missing) == 1:
+        role, name = missing[0]
+        subject = f"{item} '{name}' missing" + (f" (role {role})" if role != name else "")
+    else:
+        subject = f"{item}s {', '.join(names[:-1])} and {names[-1]} missing"
+    headers = ", ".join(frame.headers)
+    if others is not None:
+        left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
+        return f"{frame.path}: {subject}; found {item}s: {headers}{left}{tail}"
+    if positional:
+        return (f"{frame.path}: {subject}; the file has no header row, its columns are "
+                f"named by position 1-{len(frame.headers)}{tail}")
+    return f"{frame.path}: {subject}; found {item}s: {headers}{tail}"
+
+
 def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refuse_gaps: str | None) -> Table:
     """:func:`read_table`'s columns found by role in `frame`, checked and converted."""
     path, df, decimal, written = frame.path, frame.df, frame.decimal, frame.written
-    others, positional, comments = frame.others, frame.positional, frame.comments
+    comments = frame.comments
     notes = list(frame.notes)   # a frame read once serves several runs: each its own notes
     headers = list(df.columns)
     data, used = {}, {}
-    flipped = set()
+    flipped, missing = set(), []
     for role, name in names.items():
         col = _match(path, headers, role, name, frame.as_written, hint)
         if col is None and name.startswith("-") and name[1:].strip():
@@ -328,27 +352,19 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
         if col is not None and role in optional and df[col].isna().all():
             col = None  # a column written but left empty: the default, as if absent
         if col is None:
-            if role in optional:
-                continue
-            label = f" (role {role})" if role != name else ""
-            what = "POSITION" if positional else "NAME"
-            tail = (f"; map {'them' if positional else 'other names'} with {hint} {role}={what}" if hint else "") \
-                + also.get(role, "")
-            if others is not None:
-                left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
-                raise HesspipeError(f"{path}: {frame.item} '{name}' missing{label}; found {frame.item}s: "
-                                    f"{', '.join(headers)}{left}{tail}")
-            if positional:
-                raise HesspipeError(f"{path}: column '{name}' missing{label}; the file has no header "
-                                    f"row, its columns are named by position 1-{len(headers)}{tail}")
-            raise HesspipeError(f"{path}: column '{name}' missing{label}; found columns: "
-                                f"{', '.join(headers)}{tail}")
+            if role not in optional:
+                missing.append((role, name))
+            continue
         data[role], used[role] = _numeric(df[col], decimal), col
         if role == "time" and data[role].size and np.mean(np.isfinite(data[role])) < 0.5:
             clock = _clock(df[col])
             if clock is not None:
                 data[role] = clock
                 notes.append(f"column '{col}' ({role}): clock times read as seconds from the first")
+    if missing:
+        # Every missing column in one message: a file from another logger misses several,
+        # and naming them one per attempt cost a user as many runs.
+        raise HesspipeError(_missing(frame, missing, hint, also))
     timed = np.isfinite(data["time"]) if "time" in data else np.ones(len(df), dtype=bool)
     for role, v in data.items():
         rows = np.ones(v.size, dtype=bool) if role == "time" else timed

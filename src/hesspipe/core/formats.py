@@ -29,7 +29,14 @@ import pandas as pd
 
 from ._long import KEY_COLUMNS, row_groups
 from ._plants import Plants, as_plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
-from ._roles import ERROR_AGREES, target_unread, unwrapped, with_error, without_disturbance  # noqa: F401
+from ._roles import (  # noqa: F401
+    ERROR_AGREES,
+    target_column,
+    target_unread,
+    unwrapped,
+    with_error,
+    without_disturbance,
+)
 from ._signals import SIGNALS, checked_signals
 from ._table import BINARY_SUFFIXES, RUN_NUMBER, read_frame, read_table, run_columns
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
@@ -356,6 +363,9 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     if untracked:
         also["disturbance"] = ", or give the target (reference or error) of a task without a disturbance"
     frame = read_frame(path, "a measured-run CSV")
+    target, said = target_column(frame.headers, mapping)
+    if target is not None:
+        names["reference"] = target
 
     keys = {role: mapping[role] for role in KEY_COLUMNS if role in mapping}
 
@@ -367,7 +377,7 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
             read_table(source, run_names, optional=optional, **kw)   # raises: no forcing at all
         run = _run_from_table(where, table, resample=resample, min_samples=min_samples, rtol=rtol,
                               sample_rate=fs)
-        return replace(run, notes=run.notes + target_unread(source.headers, table.columns, keys))
+        return replace(run, notes=run.notes + said + target_unread(source.headers, table.columns, keys))
 
     if keys:   # a long table: runs one after another, told apart by their key columns
         if any(RUN_NUMBER in name for name in names.values()):
@@ -434,8 +444,10 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
         if not resample:
             worst = int(np.argmax(np.abs(steps - dt)))
             spread = float(abs(steps[worst] - dt) / dt)
+            # The tolerance in seconds as well: "within 0.0001 of 0.01 s" read as 0.1 ms.
             raise HesspipeError(f"{path}: column '{tcol}': expected uniform sampling (every interval "
-                                f"within {rtol:g} of {dt:.9g} s), found intervals from {steps.min():.9g} "
+                                f"within a fraction {rtol:g} of {dt:.9g} s, +-{rtol * dt:.3g} s), found "
+                                f"intervals from {steps.min():.9g} "
                                 f"to {steps.max():.9g} s (up to {spread:.2g} of the interval off, after "
                                 f"data row {worst + 1}); set resample to interpolate onto a uniform grid")
         t0, rel = t[0], t - t[0]

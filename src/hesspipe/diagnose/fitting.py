@@ -14,6 +14,7 @@ import scipy.optimize
 
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run
+from ..identification.spectra import spectral_view
 from ..pilot.crossover import gain_scale
 from ..pilot.effects import get_effect
 from .expected import ExpectedSpectrum
@@ -69,6 +70,7 @@ class Problem:
     """
 
     def __init__(self, run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int):
+        run = spectral_view(run)   # the same segments' span at every logging rate
         self.run, self.plants, self.cfg = run, plants, cfg
         self.gain = gain_scale(plants, cfg.k)
         self.likelihood = Likelihood(run, cfg)

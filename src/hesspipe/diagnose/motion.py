@@ -80,6 +80,11 @@ class MotionVerdict:
     verdict : str
         The verdict in words (what the report prints): named, no evidence, or, with one
         forcing function and no significant test, that the data cannot tell.
+    path_check : dict or None
+        Where motion was not named: the test with the plants' ``motion_path`` negated,
+        differentiated or integrated once more (``p_values``), and ``better``, the one
+        that names motion (or None): the path given may be wrong
+        (:func:`hesspipe.identification.motion_test.motion_test`'s ``path_check``).
     """
 
     named: bool
@@ -96,6 +101,7 @@ class MotionVerdict:
     separable: bool = True
     verdict: str = ""
     Km_per_Ke: float = float("nan")
+    path_check: dict | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready fields and the criterion that produced them."""
@@ -104,7 +110,7 @@ class MotionVerdict:
                 "n_lines": self.n_lines,
                 "runs": self.runs,
                 "alpha": self.alpha, "note": self.note, "forcing": self.forcing,
-                "separable": self.separable, "verdict": self.verdict,
+                "separable": self.separable, "verdict": self.verdict, "path_check": self.path_check,
                 "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
                              "lines (equation error, per-line remnant variance from the unforced "
                              "neighbours), p halved for Km >= 0"}
@@ -162,6 +168,27 @@ def motion_words(named: bool, forcing: str) -> str:
     other = "a disturbance" if forcing == "target only" else "a target"
     return (f"cannot tell whether the pilot uses motion: {why}, so the data cannot separate them "
             f"(neither named nor ruled out; {other} on lines of its own would)")
+
+
+def path_words(check: dict | None) -> str:
+    """What the motion-path check found, in words ("" where nothing was found).
+
+    Parameters
+    ----------
+    check : dict or None
+        :class:`MotionVerdict`'s ``path_check``.
+    """
+    if not check or not check.get("better"):
+        return ""
+    p, n = check["p_values"], len(check["p_values"])
+    # Every variant that names motion, not only the best: with the Km alternative alone a
+    # path one differentiation off can fit better than the right one (a negated path on the
+    # lab stand-in's yaw runs: the right sign p = 1.6e-5, differentiated 2.8e-8), so which
+    # mistake was made is the user's to check.
+    found = ", ".join(f"{name} (p={p[name]:.2g})" for name in sorted(p, key=p.get) if p[name] * n < check["level"])
+    return (f"motion is not named with the path given, but it is with the path {found}, of {n} variants "
+            f"tried: check motion_path's sign and whether it differentiates the output (SPEC: output -> "
+            f"cab angular velocity)")
 
 
 def delay_test(delay_s: float, se_s: float, max_pilot_delay_s: float, alpha: float) -> dict:
@@ -328,9 +355,11 @@ def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float
     return (float(power[inband & ~forced].sum()) / total if total > 0 else float("nan")), int(lines.size)
 
 
-def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_runs=()) -> DFEvidence | None:
+def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
+                repeat_runs=()) -> tuple[DFEvidence | None, str]:
     """Motion and delay verdicts and the pilot's dynamics from the describing function
-    (:func:`hesspipe.identification.motion_test.motion_test`), or None when the record has no forcing lines.
+    (:func:`hesspipe.identification.motion_test.motion_test`), and "", or None and why not
+    (a record without enough forcing lines: no multisine, or less than one period of it).
 
     Parameters
     ----------
@@ -370,18 +399,18 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
     pool = bool(repeat_runs) and forcing != SEPARABLE
     t = safe_motion_test([run, *repeat_runs] if pool else run, plants, start, k=k,
                          max_delay=cfg.max_pilot_delay if baseline_run is None else None,
-                         display=cfg.display)
+                         display=cfg.display, path_check=cfg.motion_alpha)
     if not t.get("available"):
         if baseline_run is not None:
             raise HesspipeError(f"{run.source or run.id}: a baseline run was given, but this run has no "
                                 f"describing function for the paired delay test ({t.get('reason', '')})")
-        return None
+        return None, t.get("reason", "motion test unavailable")
     named = bool(t["p_value"] < cfg.motion_alpha)
     mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
                        separable=forcing == SEPARABLE,
                        verdict=motion_words(named, forcing), runs=1 + len(repeat_runs) if pool else 1,
-                       Km_per_Ke=float(t.get("Km_per_Ke", math.nan)))
+                       Km_per_Ke=float(t.get("Km_per_Ke", math.nan)), path_check=t.get("path_check"))
     pars, se = _df_delay(t, mv.named)
     if baseline_run is None:
         bound = t.get("delay_bound")
@@ -406,9 +435,9 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None, repeat_ru
     dyn["tau0"] = min(dyn["tau0"], own)
     share, _ = remnant_share(run, cfg.band_hz)
     remnant = {"named": bool(share >= cfg.remnant_share), "share": share,
-               "threshold": cfg.remnant_share,
+               "threshold": cfg.remnant_share, "band_hz": list(cfg.band_hz),
                "criterion": "share of the control power between the multisine lines"}
-    return DFEvidence(mv, delay, dyn, remnant)
+    return DFEvidence(mv, delay, dyn, remnant), ""
 
 
 def motion_step(ev: DFEvidence, problem, current, cfg):

@@ -7,6 +7,7 @@ import math
 from ..core.errors import HesspipeError
 from ..core.provenance import SYNTHETIC_BANNER
 from .fitting import _effect
+from .motion import path_words
 from .results import Diagnosis
 
 # -- readable report ------------------------------------------------------------------------
@@ -68,7 +69,8 @@ def format_report(d: Diagnosis) -> str:
                    f"(needs < {dv['alpha']:g}) -> {'extra_delay NAMED' if dv['named'] else 'no extra delay'}")
     rv = d.remnant_verdict
     if rv is not None:
-        out.append(f"Remnant: {100 * rv['share']:.1f} % of the control power lies between the forcing "
+        out.append(f"Remnant: {100 * rv['share']:.1f} % of the control power in "
+                   f"{d.config.band_hz[0]:g}-{d.config.band_hz[1]:g} Hz lies between the forcing "
                    f"lines (named from {100 * rv['threshold']:g} %) -> {'NAMED' if rv['named'] else 'not named'}")
     mv = d.motion_verdict
     if mv is not None:
@@ -81,6 +83,9 @@ def format_report(d: Diagnosis) -> str:
                    f"{'NAMED' if mv['named'] else 'not named'}")
         if mv.get("verdict"):
             out.append(f"  -> {mv['verdict']}")
+        said = path_words(mv.get("path_check"))
+        if said:
+            out.append(f"  -> CHECK motion_path: {said}")
     ce = d.control_error_before
     if ce is not None:
         out.append(f"Control error of the baseline model (time domain): "
@@ -104,7 +109,8 @@ def format_report(d: Diagnosis) -> str:
             continue
         if s.round == 0:  # judged on the describing function (its lines above)
             out.append(f"  describing function: {s.candidate:<16} {'NAMED' if s.accepted else 'not named'}"
-                       f" (see above); control-spectrum gap with it {s.gap:.3g}")
+                       f" (see above)" + (f"; control-spectrum gap with it {s.gap:.3g}" if math.isfinite(s.gap)
+                                          else "; not fitted on the control spectrum"))
             continue
         # A nested fit that ended a hair above the current one (the search's tolerance) has an
         # LR just below 0; printed as "-0.0" it read as a sign error.
@@ -120,8 +126,16 @@ def format_report(d: Diagnosis) -> str:
                 continue
             evidence = "describing function (above)" if step.round == 0 else \
                 f"LR {step.statistic:.1f} on {step.dof} parameter(s), p = {step.p_value:.1e}"
-            out.append(f"  {eff}: {_describe(eff).rstrip('.')}; {evidence}; fitted " + ", ".join(
-                           f"{k}={step.parameters.get(k, float('nan')):.4g}" for k in _effect(eff).parameters))
+            names = _effect(eff).parameters
+            fitted = ", ".join(f"{k}={step.parameters.get(k, float('nan')):.4g}" for k in names)
+            moved = [k for k in names if k in d.parameters_after and k in step.parameters
+                     and not math.isclose(d.parameters_after[k], step.parameters[k], rel_tol=1e-9)]
+            if step.round == 0 and moved:
+                # Two fits hold these parameters: a reader took the final model's (the JSON's
+                # parameters_after) for the describing function's, 0.03 against 0.17 in Km/|Ke|.
+                after = ", ".join(f"{k}={d.parameters_after[k]:.4g}" for k in moved)
+                fitted = f"{fitted} on the describing function (the final model's control-spectrum refit: {after})"
+            out.append(f"  {eff}: {_describe(eff).rstrip('.')}; {evidence}; fitted {fitted}")
     elif not d.steps:
         out.append("Named: nothing (no candidates to try)")
     else:

@@ -116,7 +116,11 @@ class Diagnosis:
     log_rms_db_before, log_rms_db_after : float
         RMS difference of the measured and model log control spectra, dB.
     parameters_before, parameters_after : dict
-        Fitted model parameters.
+        Fitted model parameters, both fitted on the control spectrum (Eq. 10). An effect
+        named on the describing function (``motion_feedback``, ``extra_delay``) has its
+        describing-function values in its step's ``parameters`` and in ``motion_verdict``
+        (``Km``, ``Km_per_Ke``); the control spectrum places Km poorly, so the two can differ
+        several-fold.
     steps : tuple of Step
         Every candidate tried, round by round.
     bands_before, bands_after : tuple of Band
@@ -149,6 +153,9 @@ class Diagnosis:
     notes : tuple of str
         What limits the record's evidence (a record that holds no whole period of its
         multisine: :func:`hesspipe.identification.lines.window_note`).
+    untested : str
+        Why the describing function's tests (motion, extra delay, remnant) did not run ("" where
+        they ran or were not asked for): too few forcing lines.
     """
 
     run_id: str
@@ -181,6 +188,7 @@ class Diagnosis:
     delay_verdict: dict | None = None   # :func:`hesspipe.diagnose.motion.delay_test`
     remnant_verdict: dict | None = None  # :func:`hesspipe.diagnose.motion.remnant_share` verdict
     notes: tuple = ()
+    untested: str = ""
 
     @property
     def gap_reduction(self) -> float:
@@ -210,6 +218,8 @@ class Diagnosis:
             "gap_reduction": self.gap_reduction,
             "log_rms_db_before": self.log_rms_db_before, "log_rms_db_after": self.log_rms_db_after,
             "parameters_before": self.parameters_before, "parameters_after": self.parameters_after,
+            "parameters_fitted_on": "control spectrum (Eq. 10); the describing function's Km and Km_per_Ke "
+                                    "are motion_verdict's",
             "steps": [s.to_dict() for s in self.steps],
             "bands": [{"lo_hz": b.lo_hz, "hi_hz": b.hi_hz, "before": b.to_dict(), "after": a.to_dict(),
                        "closed": bool(b.disagrees and not a.disagrees)}
@@ -219,7 +229,7 @@ class Diagnosis:
             "motion_verdict": self.motion_verdict,
             "delay_verdict": self.delay_verdict,
             "remnant_verdict": self.remnant_verdict,
-            "notes": list(self.notes),
+            "notes": list(self.notes), "describing_function_untested": self.untested or None,
             "control_error_tests": {"before": self.control_error_before,
                                     "after": self.control_error_after},
             "criterion": self.criterion,

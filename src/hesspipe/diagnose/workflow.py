@@ -81,6 +81,16 @@ def _check_inputs(run: Run, plants: Plants, cfg: DiagnoseConfig) -> None:
                             f"{run.fs / 2:g} Hz of the record")
 
 
+def _untested(reason: str) -> str:
+    # Said where the describing function's tests could not run: without it a truncated record
+    # (half a period of the forcing) read "remnant named" and nothing about motion.
+    if not reason:
+        return ""
+    return (f"motion feedback, extra delay and remnant not tested on the describing function: {reason} "
+            "(a multisine record shorter than one period of its forcing finds too few lines; the "
+            "control-spectrum rounds below still ran)")
+
+
 def _veto(step: "Step", gap_now: float, check: PlantCheck) -> str:
     """Why `step`'s candidate may not be named whatever its score ("" if it may).
 
@@ -220,10 +230,9 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     # Multisine lines: the describing function judges motion and delay and gives the
     # pilot's own dynamics (phase-aware); the baseline starts from them.
     k_df = choose_k(plants)[0]
-    ev = df_evidence(run, plants, base.defaults(k=k_df, gain=gain_scale(plants, k_df)), k=k_df, cfg=cfg,
-                     baseline_run=bases or None,
-                     repeat_runs=repeats) \
-        if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else None
+    ev, no_df = df_evidence(run, plants, base.defaults(k=k_df, gain=gain_scale(plants, k_df)), k=k_df,
+                            cfg=cfg, baseline_run=bases or None, repeat_runs=repeats) \
+        if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else (None, "")
     dynamics = {n: v for n, v in (ev.dynamics if ev else {}).items() if n not in cfg.free}
     # Starts, in order: the describing function's dynamics (the pilot's own), then the
     # defaults, first with the configured order and then with Hess's rule's. The
@@ -341,4 +350,6 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         motion_verdict=None if ev is None else ev.motion.to_dict(),
         delay_verdict=None if ev is None else ev.delay,
         remnant_verdict=None if ev is None else ev.remnant,
-        notes=tuple(n for n in (window_note(run) if ev is not None else None,) if n))
+        notes=tuple(n for n in (window_note(run) if ev is not None else None, _untested(no_df),
+                                *problem.run.notes[len(run.notes):]) if n),
+        untested=no_df)

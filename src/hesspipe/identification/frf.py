@@ -53,7 +53,7 @@ from scipy import signal
 
 from ..core.errors import HesspipeError
 from ..core.formats import Run
-from ._window import _lines, _window, period_note
+from ._window import MIN_LINES, _lines, _window, period_note
 from .frf_channels import Channels, separate_channels
 from .frf_crossover import FrfCrossover, nonparametric_crossover  # noqa: F401  (re-exported)
 
@@ -407,5 +407,10 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
                      "straight-line trend")
     if leaky is not None:
         notes.append(leaky)
+    found = int(np.union1d(d_lines, r_lines).size)
+    if found < MIN_LINES:
+        notes.append(f"only {found} forcing line(s) found in {length * dt:.4g} s: the crossover rests on "
+                     f"them; a multisine record shorter than one period of its forcing (a run cut short) "
+                     f"leaves few of its lines on bins, and the motion test needs {MIN_LINES}")
     return Frf("multisine", fb, ref, share, cross, (start, length), dt,
                getattr(run, "id", ""), bool(getattr(run, "synthetic", False)), tuple(notes))

@@ -15,10 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._window import _lines, _window, period_note
+from ._window import MIN_LINES, _lines, _window, period_note
 from .frf import NEIGHBOURS, _neighbour_bins, _neighbour_residual_power
 
-MIN_LINES = 4
 SMOOTH_ORDER = 2
 """Order of the polynomial in log frequency that smooths the lines' remnant levels."""
 MIN_LINE_SNR = 10.0

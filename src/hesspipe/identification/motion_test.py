@@ -75,10 +75,11 @@ from typing import Callable, Mapping
 import numpy as np
 from scipy import stats
 
+from ..core._tf import siso_coefficients
 from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 from ..core.errors import HesspipeError
 from ..core.formats import as_runs
-from ..pilot.blocks import from_tf
+from ..pilot.blocks import from_tf, tf
 from ..pilot.crossover import gain_scale
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
@@ -142,6 +143,29 @@ compensatory p, a lower bound of it that is at least 0.5: every decision at a le
 0.5 is exact - diagnose's, and the cohort's median-pilot test, whose p is at least 0.5 when
 its median pilot's is (:func:`hesspipe.pilots.verdict.median_pilot_p`)."""
 
+PATH_VARIANTS = {"negated": (-1.0, 0), "differentiated": (1.0, 1), "integrated": (1.0, -1)}
+"""The motion path's likely mistakes that :func:`motion_test`'s ``path_check`` tries, name:
+(sign, powers of s multiplied in): its sign (the cab's rotation against the logged output's)
+and one differentiation off (an angle output given the path of a rate, or the reverse). On the
+lab stand-in's single-integrator yaw runs (s/(0.01 s + 1), motion named on 6 of 6) the path
+negated named motion on 2 of 6, without its differentiator on 1 of 6, without a word."""
+
+
+def _variant_cabs(plants) -> dict:
+    # The motion path's PATH_VARIANTS as blocks (none where the plants give no path: the
+    # paper's platform x washout, whose angle-output mistake motion_path_note names).
+    mp = getattr(plants, "motion_path", None)
+    if mp is None:
+        return {}
+    num, den = siso_coefficients(mp)
+    out = {}
+    for name, (sign, power) in PATH_VARIANTS.items():
+        n_ = sign * (np.append(num, np.zeros(power)) if power > 0 else num)
+        d_ = np.append(den, np.zeros(-power)) if power < 0 else den
+        out[name] = tf(n_, d_)
+    return out
+
+
 VISUAL_EQUALISER = {1: ("TI_v", 0.2, 1.0), 2: ("TL_v", 1.0, 5.0)}
 """The test's visual equaliser by Hess order k: (name, start, upper bound in s) of a lag
 ``1/(1 + TI_v s)`` (k = 1) or a lead ``1 + TL_v s`` (k = 2) on the visual path, a
@@ -188,8 +212,30 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
             "bounded_tau0": float(p_b["tau0"])}
 
 
+def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, level: float) -> dict | None:
+    # motion_test's path_check: the Km alternative refitted with each of the path's likely
+    # mistakes (PATH_VARIANTS) in place of the path given; None without a path to vary.
+    cabs = _variant_cabs(plants)
+    if not cabs:
+        return None
+    expanded = PilotModel(("motion_feedback",))
+    _, _, _, (base_e, free_e, lo_e, hi_e) = km_fit
+    starts = [[c[n_] for n_ in core] + [km] for c in (p_o, base)
+              for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"]))]
+    dof = n_res - len(free_e)
+    p = {}
+    for name, cab in cabs.items():
+        rss_v, _, _ = _fit(expanded, base_e, free_e, lo_e, hi_e, starts, cab, *data[1:], w, keep=EXPANDED_KEEP)
+        p[name] = _nested_f(rss_o, min(rss_v, rss_o), 1, dof)[1]
+    best = min(p, key=p.get)
+    # Bonferroni over the variants: on records without motion feedback a variant is then
+    # found with probability at most `level`, as motion itself is.
+    found = best if p[best] * len(p) < level else None
+    return {"p_values": p, "better": found, "level": float(level)}
+
+
 def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, max_delay: float | None,
-                 display: str) -> tuple[dict, Callable[[float], dict] | None]:
+                 display: str, path_check: float | None = None) -> tuple[dict, Callable[[float], dict] | None]:
     # :func:`motion_test` for one display ("compensatory" or "pursuit") on the lines `ld`,
     # without the profile intervals: returned is the result and the function that
     # computes those of Km and Km/|Ke| at a level (a dict of the two result keys; None
@@ -309,6 +355,9 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
     # generator's runs drawn with tau_m = 0.15 s.
     p_value, lr, rss_e, p_e, extra, (base_e, free_e, lo_e, hi_e) = min(tests, key=lambda t: t[0])
     p_value = min(1.0, p_value * len(tests))
+    checked = None
+    if path_check is not None and p_value >= path_check:
+        checked = _path_check(plants, fits[0], core, km0, rss_o, p_o, base, n_res, data, ld.w, path_check)
     # How much (Km, Km/|Ke|, their intervals): the estimate's own fit (_km_estimate).
     estimate, profile = km_estimate(expanded, base_e, free_e, lo_e, hi_e, p_e, p_o, (eq, lo[-1], hi[-1]),
                                     n_res - len(free_e), 1e-3 * km0, data, ld)
@@ -325,14 +374,15 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "Km_se": estimate["Km_se"],
             "significant": bool(p_value < ALPHA),
             "alternatives": {"+".join(t[4]): t[0] for t in tests},
-            "delay_bound": delay_bound, "display": display, "target_lines": target,
+            "delay_bound": delay_bound, "display": display, "target_lines": target, "path_check": checked,
             "feedforward": None if yc_inv is None else {n_: float(p_e[n_]) for n_ in FEEDFORWARD},
             "degrees_of_freedom": dof}, profile
 
 
 def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                 band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
-                interval: float | None = None, display: str = DEFAULT_DISPLAY) -> dict:
+                interval: float | None = None, display: str = DEFAULT_DISPLAY,
+                path_check: float | None = None) -> dict:
     """Likelihood-ratio test of motion feedback on one pilot's describing-function lines.
 
     Parameters
@@ -366,6 +416,11 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         records with target lines. "either" (display not known): motion is significant only
         if it is so with and without that path (an intersection-union test; the reported
         result is the one with the larger p, and ``display_p`` gives both).
+    path_check : float, optional
+        A level: where the test's p is not below it and the plants give a ``motion_path``,
+        the Km alternative is refitted with the path's likely mistakes in its place
+        (:data:`PATH_VARIANTS`: negated, differentiated once more, integrated once more),
+        and one is reported where its p, times their number, is below the level.
 
     Returns
     -------
@@ -395,13 +450,15 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         only on records with target lines where the compensatory p is below
         :data:`EITHER_EXACT`); ``forcing`` (:func:`~.lines.forcing_sets` of the first run:
         with one forcing function the test rests on the model's shapes of the two paths
-        alone, and no motion found is "cannot tell", not "no").
+        alone, and no motion found is "cannot tell", not "no"); ``path_check`` (None unless
+        asked and run; else ``p_values``, variant → p of motion with that path,
+        ``better``, the variant found or None, and ``level``).
     """
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
     runs = as_runs(run)
     ld = line_data(runs[0], band_hz) if len(runs) == 1 else pooled_line_data(runs, band_hz)
-    kw = dict(k=k, max_delay=max_delay)
+    kw = dict(k=k, max_delay=max_delay, path_check=path_check)
     forcing = {"forcing": forcing_sets(runs[0], band_hz)}
     if display != "either":
         return {**_with_interval(*_one_display(ld, plants, start, display=display, **kw), interval), **forcing}
@@ -433,13 +490,14 @@ def _with_interval(result: dict, profile, interval: float | None) -> dict:
 
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
                      band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
-                     interval: float | None = None, display: str = DEFAULT_DISPLAY) -> dict:
+                     interval: float | None = None, display: str = DEFAULT_DISPLAY,
+                     path_check: float | None = None) -> dict:
     """:func:`motion_test`, with a failure of the test reported in the result, not raised
     (a pilot's identification stays valid when its describing function cannot be tested).
 
     Parameters
     ----------
-    run, plants, start, k, band_hz, max_delay, interval, display
+    run, plants, start, k, band_hz, max_delay, interval, display, path_check
         As :func:`motion_test`.
 
     Returns
@@ -449,6 +507,6 @@ def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     """
     try:
         return motion_test(run, plants, start, k=k, band_hz=band_hz, max_delay=max_delay,
-                           interval=interval, display=display)
+                           interval=interval, display=display, path_check=path_check)
     except (HesspipeError, ValueError, np.linalg.LinAlgError) as exc:
         return {"available": False, "reason": f"motion test failed: {exc}"}

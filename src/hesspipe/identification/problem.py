@@ -13,11 +13,11 @@ from typing import Mapping
 import numpy as np
 
 from ..core.errors import HesspipeError
-from ..pilot.crossover import Crossover, gain_scale
+from ..pilot.crossover import Crossover, crossover_fields, gain_scale
 from ..pilot.hess import LOOP_GAINS, STRUCTURAL, PilotModel, model_from_name
 from ..pilot.simulation import UNSTABLE_FITNESS, Simulator, unstable_fitness
 from .apid import ClimbResult, Field
-from .spectra import band_mask, psd, rms_difference
+from .spectra import band_mask, psd, rms_difference, spectral_view
 
 STABLE_CAP = UNSTABLE_FITNESS / 10
 CORE_FREE = ("Ke", "K1", "K2")
@@ -54,6 +54,8 @@ class SpectralObjective:
 
     def __init__(self, run, plants, model: PilotModel, base: Mapping[str, float], *,
                  band=(0.0, 5.0), psd_method: str = "paper", noise_seed: int = 0):
+        run = spectral_view(run)   # the same segments' span at every logging rate
+        self.run = run
         self.model = model
         self.base = dict(base)
         self.band = (float(band[0]), float(band[1]))
@@ -257,6 +259,34 @@ class Identification:
     frf: object = field(default=None, repr=False)
     primary_crossover: Crossover | None = None
 
+    def box_edges(self) -> dict:
+        """Free parameters found on the edge of their search box, name → ``{"side", "bound"}``.
+
+        The box is the APID bit field's span (``fields``) or, for the least-squares
+        criteria, the model's bounds (scaled to the plants' gain as the search was). On
+        its edge the optimum may lie outside: plants in other units than the runs, or a
+        pilot the model cannot follow. A lower bound of 0 is left out: there the
+        parameter is absent (Km = 0: no motion feedback; 1/T1 = 0: no proprioceptive lead).
+        Within :data:`BOX_EDGE` of the box's width counts as on it.
+        """
+        if self.fields:
+            box = {n: (o, o + (2 ** b - 1) / s) for n, (b, s, o) in self.fields.items()}
+        else:
+            box = model_from_name(self.model).bounds(self.gain_scale)
+        out = {}
+        for name in self.free:
+            if name not in box or name not in self.parameters:
+                continue
+            lo, hi = box[name]
+            v, tol = float(self.parameters[name]), BOX_EDGE * (hi - lo)
+            if not (np.isfinite(v) and np.isfinite(tol)):
+                continue
+            if v >= hi - tol:
+                out[name] = {"side": "upper", "bound": float(hi)}
+            elif lo != 0.0 and v <= lo + tol:
+                out[name] = {"side": "lower", "bound": float(lo)}
+        return out
+
     def to_dict(self, spectra: bool = True) -> dict:
         """The identification as JSON-ready values.
 
@@ -271,7 +301,7 @@ class Identification:
             "fitness": self.fitness, "benchmark_fitness": self.benchmark_fitness,
             "benchmark_model": "McRuer precision model Kp (TL s+1)/(TI s+1) e^(-tau s) Y_NM",
             "benchmark_parameters": dict(self.benchmark_parameters),
-            "crossover": self.crossover.to_dict(), "evaluations": self.evaluations,
+            **crossover_fields(self.primary_crossover, self.crossover), "evaluations": self.evaluations,
             "identifiability": self.identifiability, "optimizer": self.optimizer, "seed": self.seed,
             "restarts": self.restarts, "coding": self.coding,
             "passes": self.passes, "band_hz": list(self.band), "psd_method": self.psd_method,
@@ -279,9 +309,7 @@ class Identification:
             "fields": {n: {"bits": b, "scale": s, "offset": o} for n, (b, s, o) in self.fields.items()},
             "gain_scale": self.gain_scale,
             "criterion": self.criterion, "fitness_units": self.fitness_units, "k_rule": self.k_rule,
-            "nonparametric": _nonparametric(self.frf),
-            "primary_crossover": (None if self.primary_crossover is None
-                                  else self.primary_crossover.to_dict()),
+            "nonparametric": _nonparametric(self.frf), "at_box_edge": self.box_edges(),
         }
         if self.climb is not None:
             out["passes_run"] = self.climb.passes
@@ -290,6 +318,11 @@ class Identification:
             out["spectra"] = {"freq_hz": self.freq_hz, "measured": self.measured_psd,
                               "simulated": self.simulated_psd}
         return out
+
+
+BOX_EDGE = 0.005
+"""Share of a search box's width within which a fitted parameter counts as on its edge
+(:meth:`Identification.box_edges`)."""
 
 
 def _nonparametric(frf) -> dict | None:

@@ -89,6 +89,37 @@ class Crossover:
                 "limits_note": LIMITS_NOTE}
 
 
+TRACKING_DEFINITION = ("tracking crossover: the first fall of |L| through 1 above the lowest frequency the "
+                       "record resolves, 2 pi / duration (what the tables print)")
+LAST_FALL_DEFINITION = ("the last fall of |L| through 1 in 0.001-1000 rad/s (SPEC.md's |L| = 1 at its highest "
+                        "crossing; a neuromuscular peak touching 1 can put it far above the tracking crossover)")
+
+
+def crossover_fields(tracking: Crossover | None, last_fall: Crossover) -> dict:
+    """The two crossovers as a result's JSON fields, each with its definition.
+
+    ``crossover`` is the tracking crossover (the one tables print and the crossover model
+    is about; `last_fall` where no record length gave one), ``crossover_last_fall`` SPEC's
+    highest crossing.
+
+    Parameters
+    ----------
+    tracking : Crossover or None
+        :func:`tracking_crossover`'s.
+    last_fall : Crossover
+        :func:`loop_crossover`'s (``first=False``).
+
+    Returns
+    -------
+    dict
+        ``{"crossover": {...}, "crossover_last_fall": {...}}``.
+    """
+    shown = tracking if tracking is not None else last_fall
+    return {"crossover": {**shown.to_dict(),
+                          "definition": TRACKING_DEFINITION if tracking is not None else LAST_FALL_DEFINITION},
+            "crossover_last_fall": {**last_fall.to_dict(), "definition": LAST_FALL_DEFINITION}}
+
+
 def _plant_block(plants) -> Block:
     if isinstance(plants, Block):
         return plants

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Iterable, Mapping, Sequence
@@ -51,7 +52,7 @@ from ..identification.fit import benchmark as mcruer_benchmark
 from ..identification.fit import identify
 from ..identification.frf_average import check_repeats
 from ..identification.problem import SpectralObjective
-from ..pilot.crossover import gain_scale, loop_crossover, tracking_crossover
+from ..pilot.crossover import crossover_fields, gain_scale, loop_crossover, tracking_crossover
 from ..pilot.hess import PilotModel, model_from_name
 from ..pilot.motion import motion_path_note
 from ..plants.consistency import check_consistent
@@ -132,8 +133,8 @@ def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
     return {"model": model.name, "run_id": run.id, "synthetic": run.synthetic,
             "parameters": complete, "free": [], "fixed": complete, "fitness": fit,
             "benchmark_fitness": bench_fit, "benchmark_parameters": bench_par,
-            "crossover": loop_crossover(loop, obj.sim.yc_block).to_dict(), "evaluations": 1,
-            "primary_crossover": tracking_crossover(loop, obj.sim.yc_block, len(run.time) * run.dt).to_dict(),
+            **crossover_fields(tracking_crossover(loop, obj.sim.yc_block, len(run.time) * run.dt),
+                               loop_crossover(loop, obj.sim.yc_block)), "evaluations": 1,
             "identifiability": {"method": "not computed: nothing identified"},
             "band_hz": list(obj.band), "stable": sim_psd is not None,
             "simulated_psd": sim_psd if sim_psd is not None else np.full_like(obj.measured, np.nan)}
@@ -314,9 +315,16 @@ def _guarded(job, run: Run):
 
 # -- many pilots ------------------------------------------------------------------------------
 
+def _natural(path: Path) -> list:
+    # s2 before s10, as a lab numbers its subjects (a plain sort put s10 first).
+    # The name last: s01 and s1 tie on the numbers, and the folder's listing order is the
+    # file system's.
+    return [(0, int(t), "") if t.isdigit() else (1, 0, t) for t in re.split(r"(\d+)", path.name)] + [(2, 0, path.name)]
+
+
 def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
     """The run files of a folder (``*.csv``, ``*.tsv``, ``*.lvm``, ``*.mat``, ``*.xlsx`` and
-    ``*.xlsm``, sorted; in a folder without them ``*.txt`` and ``*.dat``) or of an explicit list.
+    ``*.xlsm``, in natural order: s2 before s10; in a folder without them ``*.txt`` and ``*.dat``) or of an explicit list.
 
     ``*.truth.json`` and other files beside the runs are ignored.
 
@@ -329,10 +337,12 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
     if isinstance(paths_or_dir, (str, Path)):
         path = Path(paths_or_dir)
         if path.is_dir():
-            files = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in RUN_SUFFIXES)
+            files = sorted((p for p in path.iterdir() if p.is_file() and p.suffix.lower() in RUN_SUFFIXES),
+                           key=_natural)
             # Exporters also write .txt and .dat; beside CSV runs such a file is a README or a
             # log, in a folder of them they are the runs.
-            files = files or sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in TEXT_SUFFIXES)
+            files = files or sorted((p for p in path.iterdir() if p.is_file() and p.suffix.lower() in TEXT_SUFFIXES),
+                                    key=_natural)
             if not files:
                 raise HesspipeError(f"{path}: no run files (*.csv, *.tsv, *.lvm, *.mat, *.xlsx; else *.txt, *.dat) in this folder")
             return files
@@ -388,7 +398,8 @@ def read_runs(paths: Sequence[Path], *, columns=None, resample: bool = False,
 def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | None = None, *,
                    workers: int | None = None, scheduler: str | None = None, columns=None,
                    resample: bool = False, progress: bool | None = None, job=None,
-                   pilot_id: str | None = None, sample_rate: float | None = None, **fields) -> Comparison:
+                   pilot_id: str | None = None, sample_rate: float | None = None,
+                   on_read: Callable[[dict, tuple], None] | None = None, **fields) -> Comparison:
     """Identify original, expanded-fixed-Km and expanded models on each pilot's run.
 
     Parameters
@@ -420,6 +431,11 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
         each run is still identified on its own, and the motion verdict combines a pilot's
         runs before counting pilots (in a file holding several runs, ``s01#2``, it is
         searched in the whole id). Default: each file is a pilot, its runs one pilot's.
+    on_read : callable, optional
+        ``on_read(reading, unread)``, called once the files are read and before any
+        identification: ``reading`` maps each run's source to its reading notes, ``unread``
+        holds the :class:`PilotFailure` of each file that could not be read (a command
+        line says them at once, not minutes later with the table).
 
     Returns
     -------
@@ -448,6 +464,8 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
     groups = pilot_groups([r.id for r in runs], pilot_id, {r.id: r.source for r in runs},
                           {r.id: r.file_id for r in runs})
     check_repeats([], runs)   # a record copied into the folder would count its evidence twice
+    if on_read is not None:
+        on_read({r.source: r.notes for r in runs if r.notes}, tuple(failures))
     if job is None:
         job = functools.partial(compare_run, plants=plants, settings=settings)
     results = run_batch(functools.partial(_guarded, job), runs, workers=workers, scheduler=scheduler,

@@ -86,8 +86,8 @@ class Metric:
 METRICS = (
     Metric("crossover_rad_s", "disturbance-loop crossover", "rad/s"),
     Metric("phase_margin_deg", "phase margin", "deg"),
-    Metric("error_variance", "error variance", "output unit^2", log=True),
-    Metric("control_variance", "control variance", "control unit^2", log=True, primary=False),
+    Metric("error_variance", "error variance", "output unit^2 as read (an angle logged in deg: rad^2)", log=True),
+    Metric("control_variance", "control variance", "control unit^2 as read (deg: rad^2)", log=True, primary=False),
     Metric("remnant_share", "remnant share of control power", "", primary=False),
     Metric("output_channel", "output channel |Hpy|/|Hpe|", "", log=True, primary=False),
 )

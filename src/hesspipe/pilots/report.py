@@ -93,11 +93,25 @@ def format_table(comparison) -> str:
     for meaning, count in notes.items():
         out.append(f"identifiability: {meaning} ({count} of {2 * len(comparison.pilots)} "
                    "identifications); only that combination is determined")
+    edges: dict[str, int] = {}
+    for p in comparison.pilots:
+        for name in ("original", "expanded"):
+            for n, e in (p.configuration(name).get("at_box_edge") or {}).items():
+                key = f"{n} ({e['side']} bound {e['bound']:.4g})"
+                edges[key] = edges.get(key, 0) + 1
+    if edges:
+        out.append("on the search box's edge: " + ", ".join(f"{k} in {c}" for k, c in edges.items())
+                   + f" of {2 * len(comparison.pilots)} identifications: there the optimum may lie beyond "
+                   "the box (plants in other units than the runs, or pilots the model cannot follow)")
     out.append(f"expanded_fixed: original's parameters with Km = {_fmt(comparison.km_fixed_value(), 'g')}, "
                "not re-identified; x = not in the model")
     out.append("Km/|Ke|: the vestibular gain relative to the visual one. Where 1/T1 lies below the "
                "forcing, Ke and Km scale together with 1 + K1 K2 (only their ratio, the crossover and "
                "the phase margin are determined): compare runs and pilots by these, not by Ke or Km")
+    # A reviewer read 0.048 in the table and 0.142 in the verdict for one run, both "Km/|Ke|".
+    out.append("Km and Km/|Ke| in the table are the control-spectrum fit's (APID, the paper's criterion); "
+               "those of the motion verdict above are the describing function's estimate, the one to "
+               "compare (comparison.json: motion_test)")
     out += _test_against_table(comparison)
     for f in comparison.failures:
         out.append(f"FAILED {f.id}: {f.error}")

@@ -134,6 +134,12 @@ def _per_pilot(done: Mapping[str, Mapping], groups: Mapping[str, str]) -> dict[s
         if len(ts) == 1:
             out[pid].update({key: ts[0].get(key) for key in ("Km_interval", "Km_per_Ke_interval",
                                                             "interval_level")})
+        else:
+            # A reader took the pilot's F and p for a statistic and its p, and Km_se for the
+            # run's curvature error.
+            out[pid]["combined"] = ("p_value: Fisher's combination of the runs' p; gain and lr: medians "
+                                    "over the runs; Km and Km_per_Ke: means over the runs, *_se their "
+                                    "standard errors")
     return out
 
 
@@ -264,8 +270,9 @@ def _per_pilot_out(tests, pilots, groups, alpha) -> dict:
            for pid, t in pilots.items()}
     for rid, t in tests.items():
         if not t.get("available"):
-            out.setdefault(groups.get(rid, rid), {"available": False, "reason": t.get("reason", "")}) \
-                .setdefault("untested_runs", []).append(rid)
+            pilot = out.setdefault(groups.get(rid, rid), {"available": False, "reason": t.get("reason", "")})
+            pilot.setdefault("untested_runs", []).append(rid)
+            pilot.setdefault("untested_reasons", {})[rid] = t.get("reason", "")
     return out
 
 
@@ -306,7 +313,14 @@ def verdict_lines(verdict: Mapping) -> list[str]:
         km = ", ".join(gains)
         runs = f" ({t['runs']} runs)" if t.get("runs", 1) > 1 else ""
         one = f" (one forcing function, {t['forcing']})" if t.get("forcing", SEPARABLE) != SEPARABLE else ""
-        out.append(f"  {pid}{runs}: misfit removed {100 * t['gain']:.1f} %, F = {t['lr']:.3g}, "
-                   f"p = {t['p_value']:.2g}{' *' if t['significant'] else ''}{one}, {km}")
+        if t.get("runs", 1) > 1:
+            stat = (f"median misfit removed {100 * t['gain']:.1f} %, median F = {t['lr']:.3g}, "
+                    f"Fisher's p = {t['p_value']:.2g}")
+        else:
+            stat = f"misfit removed {100 * t['gain']:.1f} %, F = {t['lr']:.3g}, p = {t['p_value']:.2g}"
+        # A run left out of its pilot's test is said where the pilot's figures are read (a
+        # truncated run was left out without a word; the reason was only in the JSON).
+        left = "".join(f"; {rid} not tested ({why})" for rid, why in (t.get("untested_reasons") or {}).items())
+        out.append(f"  {pid}{runs}: {stat}{' *' if t['significant'] else ''}{one}, {km}{left}")
     out.append(f"  ({verdict['method']})")
     return out

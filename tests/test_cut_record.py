@@ -1,0 +1,51 @@
+"""A run cut short (a logger crash, an aborted trial) says what it could not test (SYNTHETIC).
+
+A yaw-angle trial of the independent generator (:mod:`hesspipe.humanlike`, sparse
+line layout, 81.92 s period at 50 Hz) cut to 37 % of one period: few of its lines fall on
+the short record's bins. Before, ``frf`` gave a crossover from two lines without a word and
+``diagnose`` named only the remnant, with no line about motion.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from hesspipe.core.formats import Run, read_plants, read_run
+from hesspipe.diagnose.each import RunDiagnoses
+from hesspipe.diagnose.report import format_report
+from hesspipe.diagnose.workflow import diagnose
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.humanlike.forcing import SPARSE_LAYOUT
+from hesspipe.identification import estimate_frf
+
+
+@pytest.fixture(scope="module")
+def cut(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cut")
+    spec = draw_trial("1/s", 1, task="both", pilot="hess", effects=("motion_feedback",), output="angle",
+                      style="plain", name="pilot", **{**SPARSE_LAYOUT, "fs": 50.0})
+    run = read_run(write_trial(folder, simulate_trial(spec)))
+    n = int(0.37 * 81.92 / run.dt)
+    short = Run(time=run.time[:n], disturbance=run.disturbance[:n], output=run.output[:n],
+                control=run.control[:n], reference=run.reference[:n], id="cut", synthetic=True)
+    return short, read_plants(folder / "plants.json")
+
+
+def test_frf_says_its_crossover_rests_on_few_lines(cut):
+    run, plants = cut
+    frf = estimate_frf(run, plants)
+    assert frf.feedback.freq_rad_s.size < 4
+    assert any(n.startswith(f"only {frf.feedback.freq_rad_s.size} forcing line(s) found in 30.") and
+               "shorter than one period" in n for n in frf.notes), frf.notes
+
+
+def test_diagnose_says_the_describing_function_was_not_tested(cut):
+    run, plants = cut
+    d = diagnose(run, plants, seed=1)
+    assert d.motion_verdict is None and d.untested.startswith("2 multisine forcing lines found (need 4)")
+    assert d.to_dict()["describing_function_untested"] == d.untested
+    assert "Note: motion feedback, extra delay and remnant not tested on the describing function: 2 " \
+           "multisine forcing lines found" in format_report(d)
+    each = RunDiagnoses((d,), ())
+    assert f"cut: {', '.join(d.named_effects) or 'nothing'} named (motion not tested: {d.untested})" in each.lines()
+    assert "motion not tested on 1 of 1 runs (too few forcing lines)" in each.summary()

@@ -1,0 +1,69 @@
+"""A wrong ``motion_path`` is named, not silent (SYNTHETIC data of the independent generator).
+
+A yaw-angle task (1/s, the cab turning with the displayed angle, ``motion_path``
+s/(0.01 s + 1)) with target and disturbance lines, drawn and simulated by
+:mod:`hesspipe.humanlike` (fine-step block simulation, no hesspipe model code). With the
+path negated in the plants file the motion test loses the vestibular path; the path check
+refits it with the path's likely mistakes and says which names motion.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from hesspipe.core.formats import read_plants, read_run
+from hesspipe.diagnose.report import format_report
+from hesspipe.diagnose.workflow import diagnose
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+from hesspipe.identification.motion_test import ALPHA, PATH_VARIANTS, motion_test
+
+
+def _trial(folder, effects, seed=1):
+    spec = draw_trial("1/s", seed, task="both", pilot="hess", effects=effects, output="angle", fs=50.0,
+                      T_m=70.0, style="plain", name="pilot")
+    path = write_trial(folder, simulate_trial(spec))
+    return read_run(path), read_plants(folder / "plants.json")
+
+
+@pytest.fixture(scope="module")
+def twins(tmp_path_factory):
+    return (_trial(tmp_path_factory.mktemp("motion"), ("motion_feedback",)),
+            _trial(tmp_path_factory.mktemp("static"), ()))
+
+
+def test_a_negated_motion_path_is_named_by_diagnose(twins):
+    (run, plants), _ = twins
+    negated = dataclasses.replace(plants, motion_path=-plants.motion_path)
+    d = diagnose(run, negated, seed=1)
+    mv = d.motion_verdict
+    assert "motion_feedback" not in d.named_effects, mv      # the wrong path hides it ...
+    assert mv["path_check"]["better"] == "negated", mv["path_check"]   # ... and the check finds it
+    assert set(mv["path_check"]["p_values"]) == set(PATH_VARIANTS)
+    text = format_report(d)
+    assert "CHECK motion_path: motion is not named with the path given, but it is with the path negated (p=" in text
+    assert "check motion_path's sign" in text
+
+
+def test_the_path_check_is_quiet_where_the_path_is_right(twins):
+    (run, plants), (run0, _) = twins
+    named = motion_test(run, plants, {}, k=1, path_check=ALPHA)
+    assert named["p_value"] < ALPHA and named["path_check"] is None    # named: nothing to check
+    static = motion_test(run0, plants, {}, k=1, path_check=ALPHA)
+    assert static["p_value"] >= ALPHA
+    assert static["path_check"] is not None and static["path_check"]["better"] is None, static["path_check"]
+    assert motion_test(run0, plants, {}, k=1)["path_check"] is None     # not asked
+
+
+def test_the_report_says_which_fit_holds_the_named_motion_gain(twins):
+    # A reader took the final model's Km (parameters_after, the control-spectrum refit) for the
+    # describing function's: 0.03 against 0.17 in Km/|Ke| on a lab stand-in run.
+    (run, plants), _ = twins
+    d = diagnose(run, plants, seed=1)
+    assert "motion_feedback" in d.named_effects and d.motion_verdict["path_check"] is None
+    km = next(s for s in d.steps if s.accepted and s.candidate == "motion_feedback").parameters["Km"]
+    assert d.parameters_after["Km"] != pytest.approx(km, rel=1e-6)
+    assert (f"fitted Km={km:.4g} on the describing function (the final model's control-spectrum refit: "
+            f"Km={d.parameters_after['Km']:.4g})") in format_report(d)
+    assert d.to_dict()["parameters_fitted_on"].startswith("control spectrum")
