@@ -156,6 +156,15 @@ def test_list_runs_errors(tmp_path):
         list_runs(tmp_path / "nope")
 
 
+def test_the_table_says_which_fit_its_km_comes_from(tmp_path):
+    # A reviewer read 0.048 in the table and 0.142 in the verdict for one run, both "Km/|Ke|".
+    folder = _write_runs(tmp_path / "runs", n=2)
+    for criterion, words in (("paper", "the control-spectrum fit's (APID, Eq. 10)"),
+                             ("df", "the paper's expanded model fitted to the describing function")):
+        table = compare_pilots(folder, paper_plants(), workers=1, job=fake_job, criterion=criterion).table()
+        assert f"Km and Km/|Ke| in the table are {words}" in table and "motion test's estimate" in table
+
+
 def test_a_folders_runs_are_listed_in_natural_order(tmp_path):
     # A lab numbers its subjects s1, s2, ..., s10: a plain sort listed s10 second.
     for name in ("s10_r1.csv", "s2_r10.csv", "s2_r2.csv", "s1_r1.csv", "s01_r1.csv"):

@@ -35,7 +35,8 @@ def test_frf_says_its_crossover_rests_on_few_lines(cut):
     run, plants = cut
     frf = estimate_frf(run, plants)
     assert frf.feedback.freq_rad_s.size < 4
-    assert any(n.startswith(f"only {frf.feedback.freq_rad_s.size} forcing line(s) found in 30.") and
+    # (Which part of a record without a whole period is analysed is arbitrary; the note is not.)
+    assert any(n.startswith("only ") and " forcing line(s) found in " in n and
                "shorter than one period" in n for n in frf.notes), frf.notes
 
 

@@ -139,6 +139,16 @@ def test_non_uniform_time_fails_unless_resampled(tmp_path):
     np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(101), rtol=1e-9, atol=1e-9)
 
 
+def test_quantised_stamps_are_resampled_onto_their_true_interval(tmp_path):
+    # A 1 kHz logger writing float32 seconds since its start, 1000 s in: each stamp is rounded
+    # to 61 us, so the intervals read 0.98-1.04 ms. Their median (0.98 ms) made the grid, and
+    # 34 spurious lines appeared; the span over its intervals is 1 ms.
+    t = (np.float32(1000.0) + 0.001 * np.arange(20000)).astype(np.float32).astype(float)
+    run = read_run(_time_csv(tmp_path / "q.csv", [f"{v:.9g}" for v in t]), resample=True)
+    assert run.dt == pytest.approx(0.001, rel=1e-5) and len(run) == 20000
+    assert any("resampled linearly onto a uniform 0.00100000" in n for n in run.notes), run.notes
+
+
 def test_a_missed_frame_is_refused_unless_resampled_then_interpolated(tmp_path):
     # A logger that misses a frame leaves empty cells (or NaN) between complete rows; a
     # row may lose its time too. Built records, linear in time: interpolation is exact.

@@ -425,3 +425,21 @@ def test_a_record_of_several_periods_keeps_them_all():
         r = sum(0.5 * np.sin(2 * np.pi * (k + 1) * t / period + rng.uniform(0, 2 * np.pi)) for k in lines)
         start, length, purity = _window(np.round(d, 5), np.round(r, 5))
         assert (start + length, length) == (t.size, 3 * period) and purity > 0.999, seed
+
+
+@pytest.mark.parametrize("fade_s", [7.5, 20.0])
+def test_a_logger_started_with_the_measurement_and_run_on_keeps_its_start(fade_s):
+    # SYNTHETIC (hesspipe.humanlike): no run-in logged, the forcing faded out while the logger
+    # ran on. The window ended at the record's end, over the fade-out (a reviewer's 7.5 s:
+    # samples 752-8942 of an 8192-sample period, "left out so that the window holds whole
+    # periods"), or 263 samples in with 20 s.
+    from hesspipe.humanlike import draw_trial, simulate_trial
+    from hesspipe.humanlike.forcing import SPARSE_LAYOUT
+
+    spec = draw_trial("1/s", 3, task="both", pilot="hess", output="angle", name="fade",
+                      **{**SPARSE_LAYOUT, "fs": 50.0}, logged_run_in=0.0, logged_run_out=fade_s)
+    tr = simulate_trial(spec)
+    run = Run(time=tr.time, disturbance=tr.disturbance, output=tr.output, control=tr.control,
+              reference=tr.reference, id="fade", synthetic=True)
+    assert len(run.time) > 4096 + 100
+    assert estimate_frf(run).window == (0, 4096)

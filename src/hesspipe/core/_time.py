@@ -74,8 +74,9 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     precision). The interval is the least-squares slope of time against
     sample number over the whole record (rounding averages out). Uniform
     means every interval is within `rtol` of it plus what the rounding of the
-    two written times explains (SPEC.md "Time"). For non-uniform times the
-    median interval is returned (the grid of a resampling).
+    two written times explains (SPEC.md "Time"). For non-uniform times the grid of a
+    resampling is returned: the span over its intervals, each step counted as the whole
+    number of median intervals nearest to it (dropped samples and quantised stamps alike).
 
     Parameters
     ----------
@@ -124,7 +125,12 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     slope = float(np.dot(i, rel - rel.mean()) / np.dot(i, i))
     if slope > 0 and np.all(np.abs(steps - slope) <= rtol * slope + rounding):
         return slope, True
-    return float(np.median(steps)), False
+    # The grid of a resampling: the span over the number of intervals it holds, each step
+    # counted as the whole number of median steps nearest to it. The median alone is the
+    # interval where samples were dropped, but not where stamps are quantised: float32 times
+    # 1000 s after a logger's start gave 0.98 ms for 1 ms, and 34 spurious lines.
+    med = float(np.median(steps))
+    return float(rel[-1] / np.sum(np.maximum(1.0, np.round(steps / med)))), False
 
 
 def fill_missing(data: dict, columns: dict) -> tuple[dict, tuple[str, ...]]:

@@ -131,7 +131,8 @@ def _window(d: np.ndarray, r: np.ndarray | None):
     period earlier (a logged run-in shorter than the period); else the length
     between half the record and all of it whose spectrum concentrates most power in
     as many bins as there are lines (one period of a forcing whose period is not the
-    record's length). The window ends at the record's end, so a start-up transient
+    record's length), ending at the record's end or, where purer, starting at its
+    beginning. The window ends at the record's end, so a start-up transient
     falls outside it, unless the forcing stops repeating before the end (faded out
     while the logger ran on): then it ends where the forcing last repeats itself.
     A window is judged by the purity of each forcing on its own (the smallest).
@@ -162,13 +163,15 @@ def _window(d: np.ndarray, r: np.ndarray | None):
     period = _period_by_end(x)
     # A forcing that stops repeating before the record ends: the stretch where it repeats.
     window = (n - period, period) if period else None if best[0] >= 0.999 else _periodic_stretch(x)
-    if window is not None:
-        pur = purity(*window)
+    # The stretch found, and as long a window from the record's start (a logger started
+    # with the measurement: a 20 s fade-out put the stretch 263 samples in).
+    for cand in ((window, (0, window[1])) if window is not None else ()):
+        pur = purity(*cand)
         # Purer by more than rounding only: on a 300 s record of an 81.92 s multisine one
         # period found by the end (0.9999999999999996) beat three found by lag
         # (0.9999999999999994) and the analysis lost two periods.
         if pur >= CLEAN and pur > best[0] + PURITY_TIE:
-            best = (pur, *window)
+            best = (pur, *cand)
     if best[0] >= 0.999:
         return best[1], best[2], best[0]
     lines = _purity(x)[1]
@@ -176,13 +179,22 @@ def _window(d: np.ndarray, r: np.ndarray | None):
         return best[1], best[2], best[0]
     k = int(min(lines.size, 400))
     coarse = np.arange(n, n // 2, -4)
-    scores = np.array([_topk_purity(x[n - m:], k) for m in coarse])
-    m0 = int(coarse[int(np.argmax(scores))])
-    # The top-k share of the sum peaked up to 9 samples off a lab record's period (its k from
-    # the leaky whole record: 5 of 20 lines); the forcings' own purity is 1 there.
-    fine = np.arange(min(n, m0 + 16), max(n // 2, m0 - 16) - 1, -1)
-    m = int(fine[int(np.argmax([purity(n - int(m), int(m)) for m in fine]))])
-    best = max(best, (purity(n - m, m), n - m, m), key=lambda b: b[0])
+    for at_end in (True, False):
+        # Ending at the record's end (a run-in before the window), and starting at its
+        # beginning, taken where purer: a logger started with the measurement and run on
+        # while the forcing faded out put the end-anchored window over the fade-out (a
+        # reviewer's 7.5 s fade-out: samples 752-8942 of a 8192-sample period).
+        part = (lambda m: x[n - m:]) if at_end else (lambda m: x[:m])
+        scores = np.array([_topk_purity(part(m), k) for m in coarse])
+        m0 = int(coarse[int(np.argmax(scores))])
+        # The top-k share of the sum peaked up to 9 samples off a lab record's period (its k
+        # from the leaky whole record: 5 of 20 lines); the forcings' own purity is 1 there.
+        fine = np.arange(min(n, m0 + 16), max(n // 2, m0 - 16) - 1, -1)
+        first = (lambda m: n - m) if at_end else (lambda m: 0)
+        m = int(fine[int(np.argmax([purity(first(int(m)), int(m)) for m in fine]))])
+        pur = purity(first(m), m)
+        if pur > best[0] + (0.0 if at_end else PURITY_TIE):
+            best = (pur, first(m), m)
     return best[1], best[2], best[0]
 
 

@@ -109,9 +109,13 @@ def format_table(comparison) -> str:
                "forcing, Ke and Km scale together with 1 + K1 K2 (only their ratio, the crossover and "
                "the phase margin are determined): compare runs and pilots by these, not by Ke or Km")
     # A reviewer read 0.048 in the table and 0.142 in the verdict for one run, both "Km/|Ke|".
-    out.append("Km and Km/|Ke| in the table are the control-spectrum fit's (APID, the paper's criterion); "
-               "those of the motion verdict above are the describing function's estimate, the one to "
-               "compare (comparison.json: motion_test)")
+    crit = getattr(getattr(comparison, "settings", None), "criterion", "")
+    fit = {"paper": "the control-spectrum fit's (APID, Eq. 10)",
+           "df": "the paper's expanded model fitted to the describing function (criterion df)"}.get(
+               crit, f"the criterion {crit} fit's")
+    out.append(f"Km and Km/|Ke| in the table are {fit}; those of the motion verdict above are the "
+               "motion test's estimate (its vestibular path has a delay and the pilot a visual "
+               "equaliser), the one to compare (comparison.json: motion_test)")
     out += _test_against_table(comparison)
     for f in comparison.failures:
         out.append(f"FAILED {f.id}: {f.error}")
