@@ -50,3 +50,19 @@ def test_diagnose_says_the_describing_function_was_not_tested(cut):
     each = RunDiagnoses((d,), ())
     assert f"cut: {', '.join(d.named_effects) or 'nothing'} named (motion not tested: {d.untested})" in each.lines()
     assert "motion not tested on 1 of 1 runs (too few forcing lines)" in each.summary()
+
+
+def test_a_broadband_record_says_why_there_is_no_describing_function():
+    # SYNTHETIC (the pilot model's own run): a random wind, as the JSBSim pipeline's cohort
+    # flies, has no lines at all; the note must not blame a record cut short.
+    import numpy as np
+
+    from hesspipe.core.formats import Plants
+    from hesspipe.pilot import synthetic_run
+
+    plants = Plants(([2.0], [1.0, 1.0]), ([1.0], [1.0, 1.0]))
+    wind = np.random.default_rng(4).standard_normal(3000)
+    run = synthetic_run("original", None, plants, wind, 0.02, seed=1)
+    d = diagnose(run, plants, seed=1, candidates="motion_feedback")
+    assert d.untested.startswith("0 multisine forcing lines found") and "(a broadband forcing" in d.untested
+    assert "shorter than one period" not in d.untested

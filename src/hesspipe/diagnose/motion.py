@@ -404,7 +404,12 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
         if baseline_run is not None:
             raise HesspipeError(f"{run.source or run.id}: a baseline run was given, but this run has no "
                                 f"describing function for the paired delay test ({t.get('reason', '')})")
-        return None, t.get("reason", "motion test unavailable")
+        # Why, in the record's terms: no lines at all is a broadband forcing (the JSBSim
+        # pipeline's random wind); a few is a multisine cut short of one period.
+        n = int(t.get("n_lines", -1))
+        why = (" (a broadband forcing, as a random wind)" if n == 0 else
+               " (a multisine record shorter than one period of its forcing finds few lines)" if n > 0 else "")
+        return None, t.get("reason", "motion test unavailable") + why
     named = bool(t["p_value"] < cfg.motion_alpha)
     mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,

@@ -86,9 +86,8 @@ def _untested(reason: str) -> str:
     # (half a period of the forcing) read "remnant named" and nothing about motion.
     if not reason:
         return ""
-    return (f"motion feedback, extra delay and remnant not tested on the describing function: {reason} "
-            "(a multisine record shorter than one period of its forcing finds too few lines; the "
-            "control-spectrum rounds below still ran)")
+    return (f"motion feedback, extra delay and remnant not tested on the describing function: {reason}; "
+            "the control-spectrum rounds below still ran")
 
 
 def _veto(step: "Step", gap_now: float, check: PlantCheck) -> str:
