@@ -35,7 +35,9 @@ def test_frf_says_its_crossover_rests_on_few_lines(cut):
     run, plants = cut
     frf = estimate_frf(run, plants)
     assert frf.feedback.freq_rad_s.size < 4
-    # (Which part of a record without a whole period is analysed is arbitrary; the note is not.)
+    # (Which part of a record without a whole period is analysed is arbitrary; the note is not,
+    # and it never claims whole periods.)
+    assert not any("whole periods" in n for n in frf.notes), frf.notes
     assert any(n.startswith("only ") and " forcing line(s) found in " in n and
                "shorter than one period" in n for n in frf.notes), frf.notes
 

@@ -510,6 +510,11 @@ def test_a_column_headed_target_is_the_reference(tmp_path):
         got = read_run(_csv(tmp_path / "b.csv", header, both if header[-1] != "err" else
                             [row[:5] + (f"{float(row[4]) - float(row[2]):.9g}",) for row in rows]), columns=mapping)
         assert not any("read as the target" in n for n in got.notes), header
+        assert any(n.startswith(f"column '{header[4]}' not read: the ") for n in got.notes), (header, got.notes)
+    # Mapped to the target column itself: read, and nothing to say about it.
+    got = read_run(_csv(tmp_path / "m.csv", ("time", "disturbance", "output", "control", "Target [deg]"), rows),
+                   columns="reference=Target")
+    assert not any("Target" in n and "not read" in n for n in got.notes)
     # Two columns headed "target" are not guessed between.
     two = read_run(_csv(tmp_path / "2.csv", ("time", "disturbance", "output", "control", "target", "Target [rad]"),
                         both))

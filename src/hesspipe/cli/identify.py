@@ -134,8 +134,8 @@ def format_table(result) -> str:
     if edges:
         lines.append("on the box's edge   " + ", ".join(f"{n} = {result.parameters[n]:.4g} ({e['side']} bound "
                                                         f"{e['bound']:.4g})" for n, e in edges.items())
-                     + ": the optimum may lie beyond it (plants in other units than the run, or a pilot "
-                       "the model cannot follow)")
+                     + ": the optimum may lie beyond it (Ke and Km grow with 1 + K1 K2 where 1/T1 lies below "
+                       "the forcing; plants in other units than the run; a pilot the model cannot follow)")
     # The tracking crossover first, as every table prints it; SPEC's last fall only where it differs.
     last = result.crossover
     c = result.primary_crossover if result.primary_crossover is not None else last

@@ -35,19 +35,23 @@ def target_column(headers, mapping: Mapping[str, str]) -> tuple[str | None, tupl
     Returns
     -------
     (str or None, tuple of str)
-        The header, and the note saying so; (None, ()) where the reference or the error is
-        mapped, a column is named ``reference`` or ``error``, or no single column is named
-        the target. Left unread, a target reads as "no target": its lines are taken for
+        The header, and the note saying so; None where no single column is named the target,
+        or where the reference or the error is mapped or a column is named ``reference`` or
+        ``error`` (then with a note that the target column is not read, unless the mapping
+        reads it). Left unread, a target reads as "no target": its lines are taken for
         remnant and the motion test cannot separate the two paths.
     """
-    if {"reference", "error"} & set(mapping):
-        return None, ()
     bare = [_split_unit(str(h))[0].lower() for h in headers]
-    if {"reference", "error"} & set(bare):
-        return None, ()
     found = [h for h, b in zip(headers, bare) if b in TARGET_NAMES]
     if len(found) != 1:
         return None, ()
+    mapped = {_split_unit(str(mapping[r]).lstrip("-"))[0].lower() for r in ("reference", "error") if r in mapping}
+    if mapped & ({str(found[0]).lower(), *TARGET_NAMES}):
+        return None, ()   # the mapping reads it
+    if mapped or {"reference", "error"} & set(bare):
+        # Said, as a reviewer's zero 'reference' column read beside the real 'Target' was not.
+        return None, (f"column '{found[0]}' not read: the {'mapping' if mapped else 'file'} names the "
+                      f"reference (or the displayed error); map reference={found[0]} if it is the target",)
     return found[0], (f"column '{found[0]}' read as the target (reference); map reference=NAME to "
                       f"read another",)
 

@@ -397,8 +397,11 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
     cross = (nonparametric_crossover(fb, yc, seed=seed) if yc is not None else
              FrfCrossover(*(float("nan"),) * 4, "no plants given"))
     leaky = period_note([d, r], purity, dt)
+    found = int(np.union1d(d_lines, r_lines).size)
     if start:
-        notes.append(f"first {start} sample(s) left out" + (" so that the window holds whole periods" if leaky is None
+        # "Whole periods" only where the lines say so: a record cut to 30 % of a period read it.
+        whole = leaky is None and found >= MIN_LINES
+        notes.append(f"first {start} sample(s) left out" + (" so that the window holds whole periods" if whole
                                                             else ": the lines leak least over the rest"))
     if start + length < d.size:
         notes.append(f"last {d.size - start - length} sample(s) left out: the forcing stops repeating there")
@@ -407,7 +410,6 @@ def estimate_frf(run, plants=None, *, seed: int = 0) -> Frf:
                      "straight-line trend")
     if leaky is not None:
         notes.append(leaky)
-    found = int(np.union1d(d_lines, r_lines).size)
     if found < MIN_LINES:
         notes.append(f"only {found} forcing line(s) found in {length * dt:.4g} s: the crossover rests on "
                      f"them; a multisine record shorter than one period of its forcing (a run cut short) "

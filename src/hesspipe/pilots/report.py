@@ -101,8 +101,9 @@ def format_table(comparison) -> str:
                 edges[key] = edges.get(key, 0) + 1
     if edges:
         out.append("on the search box's edge: " + ", ".join(f"{k} in {c}" for k, c in edges.items())
-                   + f" of {2 * len(comparison.pilots)} identifications: there the optimum may lie beyond "
-                   "the box (plants in other units than the runs, or pilots the model cannot follow)")
+                   + f" of {2 * len(comparison.pilots)} identifications (which: comparison.json's at_box_edge): "
+                   "there the optimum may lie beyond the box (Ke and Km grow with 1 + K1 K2 where 1/T1 lies "
+                   "below the forcing; plants in other units than the runs; pilots the model cannot follow)")
     out.append(f"expanded_fixed: original's parameters with Km = {_fmt(comparison.km_fixed_value(), 'g')}, "
                "not re-identified; x = not in the model")
     out.append("Km/|Ke|: the vestibular gain relative to the visual one. Where 1/T1 lies below the "
