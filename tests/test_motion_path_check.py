@@ -40,6 +40,7 @@ def test_a_negated_motion_path_is_named_by_diagnose(twins):
     mv = d.motion_verdict
     assert "motion_feedback" not in d.named_effects, mv      # the wrong path hides it ...
     assert mv["path_check"]["better"] == "negated", mv["path_check"]   # ... and the check finds it
+    assert "negated" in mv["path_check"]["named"]
     assert set(mv["path_check"]["p_values"]) == set(PATH_VARIANTS)
     text = format_report(d)
     assert "CHECK motion_path: motion is not named with the path given, but it is with the path negated (p=" in text

@@ -87,7 +87,7 @@ class RunDiagnoses:
         undecided = sum(_cannot_tell(d) for d in self.diagnoses)
         out += f"; motion cannot be told on {undecided} of {n} runs (one forcing function)" if undecided else ""
         # A run whose describing function could not be tested is not a run without motion.
-        untested = sum(bool(getattr(d, "untested", "")) for d in self.diagnoses)
+        untested = sum(bool(d.untested) for d in self.diagnoses)
         out += f"; motion not tested on {untested} of {n} runs (too few forcing lines)" if untested else ""
         return out + (f" ({len(self.failures)} run(s) failed)" if self.failures else "")
 
@@ -109,7 +109,7 @@ class RunDiagnoses:
             p = motion.get("p_value")
             tail = (f" (motion test p = {p:.2g}{'; cannot tell: one forcing function' if _cannot_tell(d) else ''})"
                     if isinstance(p, float) else
-                    f" (motion not tested: {d.untested})" if getattr(d, "untested", "") else "")
+                    f" (motion not tested: {d.untested})" if d.untested else "")
             out.append(f"{d.run_id}: {', '.join(d.named_effects) or 'nothing'} named{tail}")
         out += [f"FAILED {where}: {message}" for where, message in self.failures if failures]
         out.append(f"SUMMARY: {self.summary()}")

@@ -178,7 +178,7 @@ def path_words(check: dict | None) -> str:
     check : dict or None
         :class:`MotionVerdict`'s ``path_check``.
     """
-    if not check or not check.get("better"):
+    if not check or not check.get("named"):
         return ""
     p, n = check["p_values"], len(check["p_values"])
     # Every variant that names motion, not only the best: with the Km alternative alone a
@@ -187,7 +187,7 @@ def path_words(check: dict | None) -> str:
     # mistake was made is the user's to check.
     # In a fixed order, not by p: a reviewer read the first as the fix, and on a negated path the
     # differentiated variant came first on 3 of 4 runs.
-    found = " and ".join(f"{name} (p={p[name]:.2g})" for name in p if p[name] * n < check["level"])
+    found = " and ".join(f"{name} (p={p[name]:.2g})" for name in check["named"])
     return (f"motion is not named with the path given, but it is with the path {found} (p before the x {n} "
             f"for the variants tried; each without the test's vestibular delay): check motion_path's sign "
             f"and whether it differentiates the output (SPEC: output -> cab angular velocity)")

@@ -227,11 +227,11 @@ def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, lev
     for name, cab in cabs.items():
         rss_v, _, _ = _fit(expanded, base_e, free_e, lo_e, hi_e, starts, cab, *data[1:], w, keep=EXPANDED_KEEP)
         p[name] = _nested_f(rss_o, min(rss_v, rss_o), 1, dof)[1]
-    best = min(p, key=p.get)
     # Bonferroni over the variants: on records without motion feedback a variant is then
     # found with probability at most `level`, as motion itself is.
-    found = best if p[best] * len(p) < level else None
-    return {"p_values": p, "better": found, "level": float(level)}
+    named = [name for name in p if p[name] * len(p) < level]
+    return {"p_values": p, "named": named, "better": min(named, key=p.get) if named else None,
+            "level": float(level)}
 
 
 def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, max_delay: float | None,
@@ -452,7 +452,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         with one forcing function the test rests on the model's shapes of the two paths
         alone, and no motion found is "cannot tell", not "no"); ``path_check`` (None unless
         asked and run; else ``p_values``, variant → p of motion with that path,
-        ``better``, the variant found or None, and ``level``).
+        ``named``, the variants whose p times their number is below ``level`` (in
+        :data:`PATH_VARIANTS`' order), ``better``, the one of them with the smallest p or None,
+        and ``level``).
     """
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")

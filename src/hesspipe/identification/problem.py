@@ -270,7 +270,7 @@ class Identification:
         Within :data:`BOX_EDGE` of the box's width counts as on it.
         """
         if self.fields:
-            box = {n: (o, o + (2 ** b - 1) / s) for n, (b, s, o) in self.fields.items()}
+            box = {f.name: (f.lo, f.hi) for f in (Field(n, *spec) for n, spec in self.fields.items())}
         else:
             box = model_from_name(self.model).bounds(self.gain_scale)
         out = {}
