@@ -189,6 +189,51 @@ def test_time_must_increase(tmp_path):
         read_run(path)
 
 
+def test_a_stalled_stamp_is_left_out_when_resampled_but_a_clock_reset_is_refused(tmp_path):
+    header = ("time", "disturbance", "output", "control")
+    rows = _rows(n=400)
+    rows[200] = (rows[199][0],) + rows[200][1:]    # the clock missed a tick: the sample is sound
+    path = _csv(tmp_path / "s.csv", header, rows)
+    with pytest.raises(HesspipeError, match=r"s.csv: column 'time': expected strictly increasing time, not at "
+                                            r"data row 201; set resample to leave out a row whose time"):
+        read_run(path)
+    run = read_run(path, resample=True)
+    assert len(run) == 400
+    np.testing.assert_allclose(run.time, 0.02 * np.arange(400), atol=1e-12)
+    np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(400), atol=1e-9)   # row 200 refilled
+    assert any("1 row(s) whose time does not pass the one before left out (the first at data row 201)" in n
+               for n in run.notes), run.notes
+    # Two logs joined (the clock reset by a second): no stall, refused with or without resample.
+    rows = _rows(n=400)
+    rows[200:] = [(r[0] - 1.0,) + r[1:] for r in rows[200:]]
+    _csv(path, header, rows)
+    for resample in (False, True):
+        with pytest.raises(HesspipeError, match=r"expected strictly increasing time, not at data row 201$"):
+            read_run(path, resample=resample)
+
+
+def test_times_written_more_coarsely_than_they_advance_are_read_as_uniform_samples(tmp_path):
+    # A 500 Hz logger writing its times to 0.01 s repeats each about five times; that was
+    # refused ("expected strictly increasing time") even with the sample rate given.
+    k = np.arange(2000)
+    rows = [(f"{i / 500:.2f}", 0.5 * i, 0.01 * i, -0.2 * i) for i in k]
+    path = _csv(tmp_path / "c.csv", ("time", "disturbance", "output", "control"), rows)
+    for rate in (None, 500.0):
+        run = read_run(path, sample_rate=rate)
+        assert run.dt == pytest.approx(0.002, rel=1e-5) and len(run) == 2000   # 3e-6 off over 4 s
+        np.testing.assert_allclose(run.time, k / 500, atol=0.005)
+        np.testing.assert_allclose(np.diff(run.time), run.dt, rtol=1e-9)
+        note = next(n for n in run.notes if "repeat the one before" in n)
+        assert "1599 times repeat" in note and re.search(r"uniform samples at (500|499\.99\d) Hz", note), note
+    # Not rounding: a time that goes back, or one a whole stamp off the grid.
+    for i, bad in ((700, "1.38"), (700, "1.45")):
+        wrong = list(rows)
+        wrong[i] = (bad,) + rows[i][1:]
+        _csv(path, ("time", "disturbance", "output", "control"), wrong)
+        with pytest.raises(HesspipeError, match=r"c.csv: column 'time': expected strictly increasing time"):
+            read_run(path)
+
+
 def test_too_few_samples_for_spectra(tmp_path):
     path = _csv(tmp_path / "h.csv", ("time", "disturbance", "output", "control"), _rows(n=50))
     with pytest.raises(HesspipeError, match=r"50 samples; expected at least 1024"):
@@ -202,7 +247,8 @@ def test_too_few_samples_for_spectra(tmp_path):
     (None, "file not found"),
     (b"\xff\xfe\x00\x81binary", "not a text file"),
     (bytes(range(256)) * 4, "not a text file"),
-    (b"", "not a readable CSV"),
+    (b"", "no header row and no data rows; expected a header"),   # was pandas' "No columns to parse"
+    (b"# exported by a logger\n\n", "no header row and no data rows"),
 ])
 def test_unreadable_files(tmp_path, content, words):
     path = tmp_path / "x.csv"

@@ -212,6 +212,9 @@ def _text_frame(path: Path, text: str, notes: list, separator_said: bool = True)
         if isinstance(exc, pd.errors.ParserWarning):
             raise HesspipeError(f"{path}: data rows hold more values than the header has names; "
                                 "expected one value per named column") from None
+        if isinstance(exc, pd.errors.EmptyDataError):   # nothing but blank or comment lines
+            raise HesspipeError(f"{path}: no header row and no data rows; expected a header naming the "
+                                "columns and rows of numbers (an empty export?)") from None
         raise HesspipeError(f"{path}: not a readable CSV ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip() for c in df.columns]
     as_written = None

@@ -8,6 +8,7 @@ the writing explains (SPEC.md "Time").
 from __future__ import annotations
 
 import numpy as np
+from scipy.signal import resample_poly
 
 from .errors import HesspipeError
 
@@ -19,8 +20,13 @@ UNIFORM_RTOL = 1e-4
 #: milliseconds at 50-100 Hz give 10-20 s.
 MAX_INTERVAL_S = 0.1
 #: Shortest sample interval of a plausible tracking run, s (10 kHz; seconds labelled as
-#: milliseconds give 1e-5 s). A run of the longest length accepted lasts 26 s there.
+#: milliseconds give 1e-5 s).
 MIN_INTERVAL_S = 1e-4
+#: Lowest rate a record too long to analyse at its logged rate is decimated to, Hz: the
+#: forcing lines and the neuromuscular mode lie below 4 Hz (25 rad/s), the paper's fitness
+#: band below 5 Hz, so 50 Hz (SPEC.md's recording rate) keeps all of them well inside the
+#: anti-alias filter's pass band.
+MIN_DECIMATED_HZ = 50.0
 
 
 def _check_plausible(path, column: str, dt: float, t: np.ndarray | None = None, *, headed: bool = True) -> None:
@@ -66,6 +72,68 @@ def _intercept(t: np.ndarray, dt: float) -> float:
     return float(np.mean(rel - dt * np.arange(t.size)))
 
 
+def coarse_interval(rel: np.ndarray, resolution: np.ndarray) -> float | None:
+    """The sample interval of times written more coarsely than they advance, or None.
+
+    A logger at 500 Hz that writes its times to 0.01 s repeats each stamp about five times
+    (0.00, 0.00, 0.00, 0.01, ...). Such times are uniform samples rounded: the interval is
+    the slope of time against sample number, and every written time lies within half its
+    last digit of that grid. Times that decrease, or that leave the grid by more than the rounding
+    explains (a clock that stalled, samples dropped), are not.
+
+    Parameters
+    ----------
+    rel : ndarray
+        Times relative to the first, s.
+    resolution : ndarray
+        Place value of the last digit each time was written with, s.
+
+    Returns
+    -------
+    float or None
+        The interval, s, or None where the times are not coarsely written uniform samples.
+    """
+    steps = np.diff(rel)
+    res = float(np.median(resolution))
+    if rel.size < 3 or np.any(steps < 0) or rel[-1] <= 0:
+        return None
+    k = np.arange(rel.size, dtype=float)
+    # The least-squares slope: the rounding averages out over the record (the span over
+    # the samples is off by up to a last digit: 499.983 Hz for 500 Hz written to 0.01 s).
+    kc = k - k.mean()
+    dt = float(np.dot(kc, rel - rel.mean()) / np.dot(kc, kc))
+    if not 0.0 < dt < res:   # written finely enough to advance: a repeated time is a fault
+        return None
+    off = rel - dt * k
+    centre = 0.5 * (off.max() + off.min())
+    tol = 0.5 * res * (1.0 + 1e-6) + 4.0 * np.spacing(abs(rel[-1]) + res)
+    return dt if float(np.max(np.abs(off - centre))) <= tol else None
+
+
+def coarse_note(t: np.ndarray, column: str, dt: float) -> tuple[str, ...]:
+    """The note for times :func:`sample_interval` read as coarsely written (repeated), or ().
+
+    Parameters
+    ----------
+    t : ndarray
+        The times as written, s.
+    column : str
+        The time column's name.
+    dt : float
+        The sample interval read, s.
+
+    Returns
+    -------
+    tuple of str
+        One note where a time repeats the one before, else empty.
+    """
+    repeats = int(np.sum(np.diff(np.asarray(t, dtype=float)) <= 0))
+    if not repeats:
+        return ()
+    return (f"column '{column}': {repeats} times repeat the one before (written more coarsely than "
+            f"the samples advance): read as uniform samples at {1.0 / dt:.6g} Hz",)
+
+
 def sample_interval(path, t: np.ndarray, column: str = "time", *,
                     rtol: float = UNIFORM_RTOL, resolution=None) -> tuple[float, bool]:
     """Sample interval of `t` and whether the sampling is uniform.
@@ -108,15 +176,18 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     t = np.asarray(t, dtype=float)
     rel = t - t[0]
     steps = np.diff(rel)
-    if np.any(steps <= 0):
-        row = int(np.argmax(steps <= 0)) + 1
-        raise HesspipeError(f"{path}: column '{column}': expected strictly increasing time, "
-                            f"not at data row {row + 1}")
     # What writing the times to text explains: half a last digit on each end, plus the
     # float64 spacing of the absolute times (epoch stamps) and of their difference.
     res = _written_resolution(t) if resolution is None else np.asarray(resolution, dtype=float)
     if res.shape != t.shape or not np.all(np.isfinite(res)):
         res = _written_resolution(t)
+    if np.any(steps <= 0):
+        coarse = coarse_interval(rel, res)
+        if coarse is not None:
+            return coarse, True
+        row = int(np.argmax(steps <= 0)) + 1
+        raise HesspipeError(f"{path}: column '{column}': expected strictly increasing time, "
+                            f"not at data row {row + 1}")
     rounding = 0.5 * (res[1:] + res[:-1]) + 2.0 * np.spacing(np.abs(t[1:]) + np.abs(t[:-1]))
     # The interval over the whole record (rounded intervals are biased: with 6 digits most
     # 1/60 s steps read 0.0167, so their median is not the interval).
@@ -131,6 +202,98 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     # 1000 s after a logger's start gave 0.98 ms for 1 ms, and 34 spurious lines.
     med = float(np.median(steps))
     return float(rel[-1] / np.sum(np.maximum(1.0, np.round(steps / med)))), False
+
+
+def decimated(path, data: dict, dt: float, limit: int) -> tuple[dict, float, tuple[str, ...]]:
+    """A run's signals with at most `limit` samples: a longer record decimated by the
+    smallest whole factor that fits, through a zero-phase anti-alias filter.
+
+    A laboratory logging at 500-1000 Hz writes 300,000 samples in five to ten minutes, more
+    than the analyses hold (:data:`hesspipe.core.formats.MAX_SAMPLES`); nothing a pilot
+    model or a describing function uses lies above a few hertz. The filter is a symmetric
+    FIR (:func:`scipy.signal.resample_poly`), so the decimated signals keep their timing
+    (a delay a filter with phase lag added would be identified as the pilot's), and each
+    kept sample stands at its original time.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file the run comes from (for messages).
+    data : dict of str to ndarray
+        Role → samples on a uniform grid, ``"time"`` in s among them.
+    dt : float
+        Sample interval, s.
+    limit : int
+        Most samples kept.
+
+    Returns
+    -------
+    data : dict of str to ndarray
+        At most `limit` samples each (`data` itself when it holds no more).
+    dt : float
+        Sample interval of the result, s.
+    notes : tuple of str
+        What was done (empty when nothing was).
+
+    Raises
+    ------
+    HesspipeError
+        When the factor needed would take the rate below :data:`MIN_DECIMATED_HZ`.
+    """
+    n = data["time"].size
+    if n <= limit:
+        return data, dt, ()
+    q = -(-n // limit)
+    if q * dt * MIN_DECIMATED_HZ > 1.0 + 1e-9:
+        raise HesspipeError(f"{path}: {n} samples at {1.0 / dt:.6g} Hz; expected at most {limit} per run "
+                            f"at {MIN_DECIMATED_HZ:g} Hz or more ({limit / MIN_DECIMATED_HZ:g} s; "
+                            "split the record)")
+    out = {role: (v[::q] if role == "time" else resample_poly(v, 1, q, padtype="line"))
+           for role, v in data.items()}
+    note = (f"{n} samples at {1.0 / dt:.6g} Hz decimated by {q} to {1.0 / (q * dt):.6g} Hz through a "
+            f"zero-phase anti-alias filter (at most {limit} samples per run are analysed)")
+    return out, q * dt, (note,)
+
+
+def advancing(data: dict, resolution: np.ndarray | None, column: str
+              ) -> tuple[dict, np.ndarray | None, tuple[str, ...]] | None:
+    """A run's rows with those whose time does not pass every earlier one left out, for a
+    record that is to be resampled; None where that is no logger's stall.
+
+    A logger whose clock missed a tick writes a row with the time of the one before (or a
+    hair earlier); the samples are sound, only the stamp is not, and resampling onto the
+    uniform grid fills the row left out. A time that goes back by more than an interval
+    (two logs joined, a clock reset), or stalls on more than 1 % of the rows, is no such
+    stall: None, and the caller refuses the record.
+
+    Parameters
+    ----------
+    data : dict of str to ndarray
+        Role → values, ``"time"`` (s) among them.
+    resolution : ndarray or None
+        Place value of each time's last written digit, s (kept in step with the rows).
+    column : str
+        The time column's name (for the note).
+
+    Returns
+    -------
+    (data, resolution, notes) or None
+    """
+    t = np.asarray(data["time"], dtype=float)
+    ahead = np.maximum.accumulate(t)
+    stalled = np.zeros(t.size, dtype=bool)
+    stalled[1:] = t[1:] <= ahead[:-1]
+    steps = np.diff(t)
+    if not stalled.any() or not (steps > 0).any() or stalled.sum() > 0.01 * t.size:
+        return None
+    if float(np.max(ahead[:-1][stalled[1:]] - t[1:][stalled[1:]])) > float(np.median(steps[steps > 0])):
+        return None
+    keep = ~stalled
+    first = int(np.argmax(stalled))
+    note = (f"column '{column}': {int(stalled.sum())} row(s) whose time does not pass the one before "
+            f"left out (the first at data row {first + 1}), then resampled")
+    return ({role: v[keep] for role, v in data.items()},
+            None if resolution is None else resolution[keep], (note,))
 
 
 def fill_missing(data: dict, columns: dict) -> tuple[dict, tuple[str, ...]]:

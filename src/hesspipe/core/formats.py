@@ -47,6 +47,9 @@ from ._time import (
     UNIFORM_RTOL,
     _check_plausible,
     _intercept,
+    advancing,
+    coarse_note,
+    decimated,
     fill_missing,
     sample_interval,
 )
@@ -70,9 +73,12 @@ OPTIONAL_COLUMNS = ("reference", "error")
 
 #: Largest magnitude of a signal whose power spectrum is finite in float64 with room to spare.
 MAX_MAGNITUDE = 1e100
-#: Most samples of one run: the simulator's padded FFT grid holds up to 16 times this in
-#: complex numbers per spectrum, so longer records exhaust memory before they are useful.
+#: Most samples of one run analysed: the simulator's padded FFT grid holds up to 16 times
+#: this in complex numbers per spectrum. A longer record read from a file is decimated to
+#: fit (:func:`hesspipe.core._time.decimated`, at 50 Hz or more).
 MAX_SAMPLES = 1 << 18
+#: Most samples of one run read from a file at all (a sample per row: 16.7 million rows).
+MAX_READ_SAMPLES = 1 << 24
 
 
 @dataclass(frozen=True)
@@ -415,8 +421,8 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
     n = len(data["output"])
     if n < max(min_samples, 2):
         raise HesspipeError(f"{path}: {n} samples; expected at least {max(min_samples, 2)}")
-    if n > MAX_SAMPLES:
-        raise HesspipeError(f"{path}: {n} samples; expected at most {MAX_SAMPLES} per run "
+    if n > MAX_READ_SAMPLES:
+        raise HesspipeError(f"{path}: {n} samples; expected at most {MAX_READ_SAMPLES} per run "
                             "(split the record)")
     for role, values in data.items():
         big = float(np.max(np.abs(values)))
@@ -435,7 +441,17 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
     resolution = table.resolution.get("time")
     if resolution is not None and resolution.size != t.size:   # rows without a time left out
         resolution = resolution[np.isfinite(table.data["time"])]
-    dt, uniform = sample_interval(path, t, tcol, rtol=rtol, resolution=resolution)
+    try:
+        dt, uniform = sample_interval(path, t, tcol, rtol=rtol, resolution=resolution)
+    except HesspipeError as err:
+        kept = advancing(data, resolution, tcol)
+        if kept is None:
+            raise
+        if not resample:
+            raise HesspipeError(f"{err}; set resample to leave out a row whose time does not advance") from None
+        data, resolution, more = kept
+        t, n, notes = data["time"], len(data["time"]), notes + more
+        dt, uniform = sample_interval(path, t, tcol, rtol=rtol, resolution=resolution)
     if sample_rate is not None and abs(dt * sample_rate - 1.0) > 1e-3:
         raise HesspipeError(f"{path}: column '{tcol}': samples at {1.0 / dt:.6g} Hz; expected the sample rate "
                             f"given, {sample_rate:g} Hz (a file's own times are used where it has them)")
@@ -457,12 +473,16 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
                   f"linearly onto a uniform {dt:.9g} s grid ({n} samples read, {grid.size} kept)",)
     else:
         data["time"] = t[0] + dt * np.arange(n, dtype=float) + _intercept(t, dt)
+        notes += coarse_note(t, tcol, dt)
     _check_plausible(path, tcol, dt, t, headed=Path(path).suffix.lower() not in BINARY_SUFFIXES)
     return _run(path, data, comments, notes, dt)
 
 
 def _run(path: Path, data: dict, comments: tuple, notes: tuple, dt: float) -> Run:
-    """The :class:`Run` of checked columns, named after `path`."""
+    """The :class:`Run` of checked columns on a uniform grid, named after `path` (decimated
+    to :data:`MAX_SAMPLES` where longer)."""
+    data, dt, more = decimated(path, data, dt, MAX_SAMPLES)
+    notes = notes + more
     ref = data.get("reference", np.zeros_like(data["time"]))
     return Run(time=data["time"], disturbance=data["disturbance"], output=data["output"],
                control=data["control"], reference=ref, id=path.stem,

@@ -165,6 +165,8 @@ def read_record(path: str | Path, input_column: str, output_column: str, *,
         steps = np.diff(t)
         raise HesspipeError(f"{path}: column 'time': expected uniform sampling (interval {dt:g} s), "
                             f"found intervals from {steps.min():g} to {steps.max():g} s")
+    if np.any(np.diff(t) <= 0):   # times written more coarsely than they advance: their grid
+        t = t[0] + dt * np.arange(t.size, dtype=float)
     return Record(time=t, input=data[input_column], output=data[output_column], path=str(path),
                   comments=comments)
 
