@@ -46,6 +46,9 @@ def test_actuator_lag_behind_a_good_fit_is_named(tmp_path):
     assert 0.03 < f.parameters["tau_a"] < 0.2, f.parameters
     fits = {e.id: e.fit_percent for e in f.explanations}
     assert fits["nominal"] >= 90.0 and fits["actuator_lag"] > fits["nominal"] + 5
+    # ... and what it cannot be told from: the output logged that much late (a reviewer's
+    # skewed channels were named a lag of exactly the skew, without a word).
+    assert f"or the output logged {f.parameters['tau_a']:.2g} s after the control" in f.message
 
 
 @pytest.mark.parametrize("plant,output", [("roll", "angle"), ("paper", "rate"), ("K/s2", "angle")])

@@ -68,6 +68,26 @@ def test_wrong_columns_are_a_finding_with_evidence(clean, how):
     assert "WRONG PLANTS FILE" in f.message and f.fit_percent < 50
 
 
+def test_a_stick_logged_with_the_opposite_sign_is_diagnosed_as_logged_the_right_way(tmp_path_factory):
+    # A newcomer's lab file with the stick's sign flipped: the finding was right (the control
+    # path's sign), but the correction flipped the plants, no pilot of Ke's sign closed the
+    # loop, and diagnose stopped at "no stable original pilot found".
+    folder = tmp_path_factory.mktemp("flipped")
+    spec = draw_trial("1/s", 3, task="both", pilot="precision", effects=("motion_feedback",),
+                      output="angle", tau_m=0.15)
+    run = read_run(write_trial(folder, simulate_trial(spec)))
+    plants = read_plants(folder / "plants.json")
+    flipped = replace(run, control=-run.control)
+    fixed, fixed_plants = corrected(flipped, plants, plant_finding(flipped, plants, plant_check(flipped, plants)))
+    np.testing.assert_allclose(fixed.control, run.control)           # the sign back on the column
+    assert abs(fixed_plants.control_to_output(1j) / plants.control_to_output(1j)) == pytest.approx(1.0, rel=0.05)
+    d, d0 = diagnose(flipped, plants, seed=1), diagnose(run, plants, seed=1)
+    assert d.plant_finding["verdict"] == "wrong_file" and d.plant_finding["named"] == "sign"
+    assert d.named_effects == d0.named_effects and "motion_feedback" in d.named_effects
+    assert d.motion_verdict["p_value"] == pytest.approx(d0.motion_verdict["p_value"], rel=1e-3)
+    assert d.motion_verdict["Km_per_Ke"] == pytest.approx(d0.motion_verdict["Km_per_Ke"], rel=1e-3)
+
+
 @pytest.mark.parametrize("how", ["stick", "output"])
 def test_a_column_in_another_unit_is_a_wrong_file_finding(clean, how):
     # A stick in per cent where the plants take degrees, an output in radians beside inputs in

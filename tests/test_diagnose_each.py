@@ -94,3 +94,21 @@ def test_runs_diagnosed_in_worker_processes_are_the_same(runs):
     two = diagnose_each(rs, plants, seed=5, mapper=lambda f, items: run_batch(f, items, workers=2))
     assert [to_json(d.to_dict()) for d in two.diagnoses] == [to_json(d.to_dict()) for d in one.diagnoses]
     assert two.tally() == one.tally()
+
+
+def test_a_failed_plant_check_and_a_flagged_motion_path_show_on_the_run_line(runs):
+    # A reviewer's --each lines said only the names; the failed plant check and the
+    # CHECK motion_path line were in the single-run report and the JSON alone.
+    import dataclasses
+
+    plants, rs = runs
+    each = diagnose_each(rs[:1], plants, seed=5)
+    d = each.diagnoses[0]
+    assert not any("[" in line for line in each.lines()[1:-1])          # nothing to flag
+    failing = dataclasses.replace(
+        d, plant_finding={"verdict": "unexplained", "fit_percent": -159.0, "named": None},
+        motion_verdict={**(d.motion_verdict or {}), "path_check": {"named": ["negated"], "p_values": {}}})
+    flagged = dataclasses.replace(each, diagnoses=[failing, d])
+    line = flagged.lines()[1]
+    assert line.endswith("[plant check fails: fit -159.0 %; CHECK motion_path: motion is named with it negated]")
+    assert "plant check failed on 1 of 2 runs; CHECK motion_path flagged on 1 of 2 runs" in flagged.summary()

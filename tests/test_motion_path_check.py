@@ -57,6 +57,20 @@ def test_the_path_check_is_quiet_where_the_path_is_right(twins):
     assert motion_test(run0, plants, {}, k=1)["path_check"] is None     # not asked
 
 
+def test_the_path_check_is_not_run_on_one_forcing_function(tmp_path):
+    # Target only: "not named" is "cannot tell", and a negated path fitted such a static
+    # run better (p ~ 1e-6): the check flagged it, and the negated path then named motion.
+    spec = draw_trial("1/s", 1, task="tracking", pilot="hess", effects=(), output="angle", fs=50.0,
+                      T_m=70.0, style="plain", name="pilot")
+    run, plants = read_run(write_trial(tmp_path, simulate_trial(spec))), read_plants(tmp_path / "plants.json")
+    t = motion_test(run, plants, {}, k=1, path_check=ALPHA)
+    assert t["forcing"] == "target only" and t["p_value"] >= ALPHA
+    assert t["path_check"] is None, t["path_check"]
+    d = diagnose(run, plants, seed=1)
+    assert d.motion_verdict["path_check"] is None and "CHECK motion_path" not in format_report(d)
+    assert "cannot tell" in d.motion_verdict["verdict"]
+
+
 def test_the_report_says_which_fit_holds_the_named_motion_gain(twins):
     # A reader took the final model's Km (parameters_after, the control-spectrum refit) for the
     # describing function's: 0.03 against 0.17 in Km/|Ke| on a lab stand-in run.

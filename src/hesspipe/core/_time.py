@@ -7,6 +7,8 @@ the writing explains (SPEC.md "Time").
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.signal import resample_poly
 
@@ -52,6 +54,33 @@ def _check_plausible(path, column: str, dt: float, t: np.ndarray | None = None, 
         raise HesspipeError(f"{path}: column '{column}': sample interval {dt:g} s "
                             f"({1.0 / dt:.3g} Hz) is implausible for a tracking run; expected "
                             f"seconds with an interval of at most {MAX_INTERVAL_S:g} s{hint}")
+
+
+def check_sample_rate(sample_rate) -> float | None:
+    """`sample_rate` (Hz) checked: None, or a finite number whose interval a tracking run can
+    have (:data:`MIN_INTERVAL_S` to :data:`MAX_INTERVAL_S`).
+
+    Parameters
+    ----------
+    sample_rate : float or None
+        Hz.
+
+    Returns
+    -------
+    float or None
+
+    Raises
+    ------
+    HesspipeError
+        Naming ``sample_rate`` and what was expected.
+    """
+    if sample_rate is None:
+        return None
+    if isinstance(sample_rate, bool) or not isinstance(sample_rate, (int, float)) or not math.isfinite(sample_rate) \
+            or sample_rate * MAX_INTERVAL_S < 1.0 or sample_rate * MIN_INTERVAL_S > 1.0:
+        raise HesspipeError(f"sample_rate: expected a number of Hz from {1.0 / MAX_INTERVAL_S:g} to "
+                            f"{1.0 / MIN_INTERVAL_S:g}, got {sample_rate!r}")
+    return float(sample_rate)
 
 
 def _written_resolution(t: np.ndarray) -> np.ndarray:

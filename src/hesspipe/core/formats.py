@@ -29,6 +29,7 @@ import pandas as pd
 
 from ._long import KEY_COLUMNS, row_groups
 from ._plants import Plants, as_plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
+from ._quality import quality_notes
 from ._roles import (  # noqa: F401
     ERROR_AGREES,
     target_column,
@@ -42,12 +43,11 @@ from ._table import BINARY_SUFFIXES, RUN_NUMBER, read_frame, read_table, run_col
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
 from ._tf import tf_coefficients as tf_coefficients  # re-exported: the plants report and the flight use it
 from ._time import (
-    MAX_INTERVAL_S,
-    MIN_INTERVAL_S,
     UNIFORM_RTOL,
     _check_plausible,
     _intercept,
     advancing,
+    check_sample_rate,
     coarse_note,
     decimated,
     fill_missing,
@@ -377,7 +377,7 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
 
     def one(source, run_names: Mapping[str, str], where: Path) -> Run:
         # One run's columns from the file (or a long table's rows), checked, named after `where`.
-        kw = dict(hint="columns", also=also, gaps=resample, gaps_hint="; set resample to interpolate over a missing sample")
+        kw = dict(hint="columns", also=also, gaps=resample, gaps_hint="; set resample to interpolate over missing samples")
         table = read_table(source, run_names, optional=optional + untracked, **kw)
         if "disturbance" not in table.data and not {"reference", "error"} & set(table.data):
             read_table(source, run_names, optional=optional, **kw)   # raises: no forcing at all
@@ -435,7 +435,7 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
     if "time" not in data:   # a file without times, read at the sample rate given
         data["time"] = np.arange(n, dtype=float) / sample_rate
         notes += (f"no time column: sample k at k / {sample_rate:g} Hz",)
-        return _run(path, data, comments, notes, 1.0 / sample_rate)
+        return _run(path, data, comments, notes, 1.0 / sample_rate, table.columns)
     t = data["time"]
     tcol = table.columns["time"]
     resolution = table.resolution.get("time")
@@ -475,12 +475,14 @@ def _run_from_table(path: Path, table, *, resample: bool, min_samples: int, rtol
         data["time"] = t[0] + dt * np.arange(n, dtype=float) + _intercept(t, dt)
         notes += coarse_note(t, tcol, dt)
     _check_plausible(path, tcol, dt, t, headed=Path(path).suffix.lower() not in BINARY_SUFFIXES)
-    return _run(path, data, comments, notes, dt)
+    return _run(path, data, comments, notes, dt, table.columns)
 
 
-def _run(path: Path, data: dict, comments: tuple, notes: tuple, dt: float) -> Run:
-    """The :class:`Run` of checked columns on a uniform grid, named after `path` (decimated
-    to :data:`MAX_SAMPLES` where longer)."""
+def _run(path: Path, data: dict, comments: tuple, notes: tuple, dt: float, columns: Mapping[str, str]) -> Run:
+    """The :class:`Run` of checked columns on a uniform grid, named after `path`, with the
+    notes of what its samples show (:func:`~hesspipe.core._quality.quality_notes`), decimated
+    to :data:`MAX_SAMPLES` where longer."""
+    notes = notes + quality_notes(data, columns, dt)
     data, dt, more = decimated(path, data, dt, MAX_SAMPLES)
     notes = notes + more
     ref = data.get("reference", np.zeros_like(data["time"]))
@@ -488,34 +490,6 @@ def _run(path: Path, data: dict, comments: tuple, notes: tuple, dt: float) -> Ru
                control=data["control"], reference=ref, id=path.stem,
                synthetic=says_synthetic(comments),
                comments=comments, source=str(path), interval=dt, notes=notes)
-
-
-def check_sample_rate(sample_rate) -> float | None:
-    """`sample_rate` (Hz) checked: None, or a finite number whose interval a tracking run can
-    have (:data:`hesspipe.core._time.MIN_INTERVAL_S` to
-    :data:`hesspipe.core._time.MAX_INTERVAL_S`).
-
-    Parameters
-    ----------
-    sample_rate : float or None
-        Hz.
-
-    Returns
-    -------
-    float or None
-
-    Raises
-    ------
-    HesspipeError
-        Naming ``sample_rate`` and what was expected.
-    """
-    if sample_rate is None:
-        return None
-    if isinstance(sample_rate, bool) or not isinstance(sample_rate, (int, float)) or not math.isfinite(sample_rate) \
-            or sample_rate * MAX_INTERVAL_S < 1.0 or sample_rate * MIN_INTERVAL_S > 1.0:
-        raise HesspipeError(f"sample_rate: expected a number of Hz from {1.0 / MAX_INTERVAL_S:g} to "
-                            f"{1.0 / MIN_INTERVAL_S:g}, got {sample_rate!r}")
-    return float(sample_rate)
 
 
 def record_samples(duration_s, dt_s, *, names=("duration_s", "dt_s"), min_samples: int = WELCH_SEGMENT,

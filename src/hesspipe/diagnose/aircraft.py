@@ -270,9 +270,16 @@ def _with_evidence(out, residuals, nominal_residual, dt):
 
 
 def _terms(e: Explanation) -> str:
-    """``(how; name=value, ...)`` of an explanation, for a finding's message."""
-    return (f"({e.how}; " + ", ".join(f"{k}={v:.3g}" for k, v in e.parameters.items() if isinstance(v, float))
-            + ")")
+    """``(how; name=value, ...)`` of an explanation, for a finding's message, with what else
+    the data cannot tell it from."""
+    out = (f"({e.how}; " + ", ".join(f"{k}={v:.3g}" for k, v in e.parameters.items() if isinstance(v, float))
+           + ")")
+    if e.id == "actuator_lag":
+        # The output logged two samples late was named a 0.02 s lag on 6 of 6 runs of a
+        # reviewer's (the lab stand-in, SYNTHETIC): the two are one and the same to the data.
+        out += (f"; or the output logged {e.parameters['tau_a']:.2g} s after the control (a skew between "
+                "the logger's channels looks the same)")
+    return out
 
 
 def _file_candidates(p: _Paths, plants) -> list[Explanation]:
@@ -503,7 +510,13 @@ def corrected(run, plants, finding: PlantFinding):
     if finding.verdict == "wrong_file":
         u_k, w_k, y_k = q["columns"]
         k = q.get("output_scale", 1.0)
-        run = replace(run, control=getattr(run, u_k), disturbance=getattr(run, w_k), output=k * getattr(run, y_k))
-        plants = replace(plants, control_to_output=k * q["gain_control"] * plants.control_to_output,
-                         disturbance_to_output=k * q["gain_disturbance"] * plants.disturbance_to_output)
+        g_c, g_d = k * q["gain_control"], k * q["gain_disturbance"]
+        # A path's negative gain is its column's sign (a stick convention), flipped on the
+        # run: flipped in the plants instead, no pilot of Ke's sign closed the loop and
+        # diagnose stopped at "no stable original pilot found" (newcomer review).
+        s_c, s_d = (-1.0 if g_c < 0 else 1.0), (-1.0 if g_d < 0 else 1.0)
+        run = replace(run, control=s_c * getattr(run, u_k), disturbance=s_d * getattr(run, w_k),
+                      output=k * getattr(run, y_k))
+        plants = replace(plants, control_to_output=abs(g_c) * plants.control_to_output,
+                         disturbance_to_output=abs(g_d) * plants.disturbance_to_output)
     return run, plants

@@ -89,6 +89,10 @@ class RunDiagnoses:
         # A run whose describing function could not be tested is not a run without motion.
         untested = sum(bool(d.untested) for d in self.diagnoses)
         out += f"; motion not tested on {untested} of {n} runs (too few forcing lines)" if untested else ""
+        # What a run's own report says beside its names (a reviewer read only the names).
+        for what, verb in (("plant check", "failed"), ("CHECK motion_path", "flagged"), ("data check", "noted")):
+            k = sum(any(f.startswith(what) for f in _flags(d)) for d in self.diagnoses)
+            out += f"; {what} {verb} on {k} of {n} runs" if k else ""
         return out + (f" ({len(self.failures)} run(s) failed)" if self.failures else "")
 
     def lines(self, failures: bool = True) -> list[str]:
@@ -110,7 +114,9 @@ class RunDiagnoses:
             tail = (f" (motion test p = {p:.2g}{'; cannot tell: one forcing function' if _cannot_tell(d) else ''})"
                     if isinstance(p, float) else
                     f" (motion not tested: {d.untested})" if d.untested else "")
-            out.append(f"{d.run_id}: {', '.join(d.named_effects) or 'nothing'} named{tail}")
+            flags = _flags(d)
+            out.append(f"{d.run_id}: {', '.join(d.named_effects) or 'nothing'} named{tail}"
+                       + (f" [{'; '.join(flags)}]" if flags else ""))
         out += [f"FAILED {where}: {message}" for where, message in self.failures if failures]
         out.append(f"SUMMARY: {self.summary()}")
         return out
@@ -125,6 +131,26 @@ class RunDiagnoses:
         return {"synthetic": self.synthetic, "runs": len(self.diagnoses), "named": self.tally(),
                 "summary": self.summary(), "diagnoses": [d.to_dict() for d in self.diagnoses],
                 "failures": [{"source": w, "error": m} for w, m in self.failures]}
+
+
+def _flags(d: Diagnosis) -> list[str]:
+    """What a run's report says beside its names that the one line must not hide: plants that
+    do not reproduce the output (no aircraft-side candidate closes the gap, or the file looks
+    wrong), a motion path that names motion only when changed, and the record's own faults
+    (:mod:`hesspipe.core._quality`: a clipped, spiked or frozen column)."""
+    out = []
+    pf = d.plant_finding or {}
+    if pf.get("verdict") in ("unexplained", "wrong_file"):
+        out.append(f"plant check fails: fit {pf.get('fit_percent', float('nan')):.1f} %"
+                   + (f", the file looks wrong ({pf['named']})" if pf.get("verdict") == "wrong_file" else ""))
+    check = (d.motion_verdict or {}).get("path_check") or {}
+    if check.get("named"):
+        out.append(f"CHECK motion_path: motion is named with it {' or '.join(check['named'])}")
+    faults = [kind for kind, word in (("clipped", "clipped"), ("spikes", "spike"), ("frozen", "froze"))
+              if any(n.startswith("data check") and word in n for n in d.notes)]
+    if faults:
+        out.append(f"data check: {', '.join(faults)}")
+    return out
 
 
 def _cannot_tell(d: Diagnosis) -> bool:

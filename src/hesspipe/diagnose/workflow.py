@@ -349,6 +349,9 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         motion_verdict=None if ev is None else ev.motion.to_dict(),
         delay_verdict=None if ev is None else ev.delay,
         remnant_verdict=None if ev is None else ev.remnant,
-        notes=tuple(n for n in (window_note(run) if ev is not None else None, _untested(no_df),
+        # The record's own faults first (hesspipe.core._quality): a clipped stick was named
+        # a rate limit or a Dutch roll without a word in the report.
+        notes=tuple(n for n in (*(m for m in run.notes if m.startswith("data check")),
+                                window_note(run) if ev is not None else None, _untested(no_df),
                                 *problem.run.notes[len(run.notes):]) if n),
         untested=no_df)

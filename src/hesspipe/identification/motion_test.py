@@ -417,8 +417,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         if it is so with and without that path (an intersection-union test; the reported
         result is the one with the larger p, and ``display_p`` gives both).
     path_check : float, optional
-        A level: where the test's p is not below it and the plants give a ``motion_path``,
-        the Km alternative is refitted with the path's likely mistakes in its place
+        A level: where the test's p is not below it, the record has target and disturbance
+        lines and the plants give a ``motion_path``, the Km alternative is refitted with the path's likely mistakes in its place
         (:data:`PATH_VARIANTS`: negated, differentiated once more, integrated once more),
         and one is reported where its p, times their number, is below the level.
 
@@ -460,8 +460,14 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
     runs = as_runs(run)
     ld = line_data(runs[0], band_hz) if len(runs) == 1 else pooled_line_data(runs, band_hz)
-    kw = dict(k=k, max_delay=max_delay, path_check=path_check)
     forcing = {"forcing": forcing_sets(runs[0], band_hz)}
+    if forcing["forcing"] != SEPARABLE:
+        # With one forcing function "not named" is "cannot tell", so a variant that names
+        # motion says nothing of the path: target-only runs of the generator with the right
+        # path were flagged "negated" on 8 of 8 (static pilots, seeds 1-4), and the negated
+        # path then named motion on static runs (newcomer review on the lab stand-in).
+        path_check = None
+    kw = dict(k=k, max_delay=max_delay, path_check=path_check)
     if display != "either":
         return {**_with_interval(*_one_display(ld, plants, start, display=display, **kw), interval), **forcing}
     # An intersection-union test (Berger 1982): significant only if significant with the

@@ -1,0 +1,130 @@
+"""What a logged record shows of its logger's and its subject's faults (private; the readers
+call :func:`quality_notes`).
+
+A lab's files are valid and still hold faults no model of the pilot or the aircraft has: a
+stick clipped at its stop or at the converter's range, a logger that froze, single-sample
+spikes. Read without a word, a newcomer review found them
+named as aircraft-side effects (a clipped stick as a rate limit or a Dutch roll on a yaw
+task, spikes as a rate limit on 5 of 6 runs) or moving a person's Km/|Ke| by a factor of 2
+(SYNTHETIC: the lab stand-in's runs with the faults written in). The notes say what the
+record shows and what it can be taken for; nothing is changed or refused.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+#: A column's samples held at its own maximum or minimum, in stretches of at least
+#: :data:`HELD` samples: this many stretches, or this share of the samples, reads as
+#: clipped. (A quantised signal's peak can sit on its top code for a few samples once; a
+#: clipped one sits there at every large excursion.)
+CLIPPED_STRETCHES = 3
+CLIPPED_SHARE = 0.01
+HELD = 3
+#: Every signal unchanged for at least this long (s, and :data:`FROZEN_SAMPLES` samples)
+#: reads as a logger that froze (a simulator logged at a multiple of its own rate repeats
+#: each value a few times, well below it).
+FROZEN_S = 0.1
+FROZEN_SAMPLES = 5
+#: The control or the output alone unchanged for this long, s: a channel that froze (or a
+#: stick let go onto a dead zone). A held channel at the converter's resolution moves
+#: within a second while a person tracks.
+HELD_ALONE_S = 1.0
+#: A sample this many robust standard deviations off the mean of its two neighbours, where
+#: the neighbours agree, reads as a spike (the lab stand-in's 72 clean runs: none above 12).
+SPIKE_SIGMAS = 30.0
+
+
+def _stretches(mask: np.ndarray) -> np.ndarray:
+    """Lengths of the stretches of consecutive True in `mask`."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
+    return edges[1::2] - edges[::2]
+
+
+def _clipped(x: np.ndarray) -> list[tuple[str, float, float]]:
+    """(side, value, share of samples) where `x` is held at its maximum or minimum."""
+    out = []
+    for side, v in (("maximum", float(x.max())), ("minimum", float(x.min()))):
+        at = x == v
+        held = _stretches(at)
+        held = held[held >= HELD]
+        if held.size >= CLIPPED_STRETCHES or held.sum() >= CLIPPED_SHARE * x.size:
+            out.append((side, v, float(at.mean())))
+    return out
+
+
+def _spikes(x: np.ndarray) -> int:
+    """Samples of `x` far off the mean of their two neighbours while those agree."""
+    if x.size < 5:
+        return 0
+    off = x[1:-1] - 0.5 * (x[:-2] + x[2:])
+    scale = 1.4826 * float(np.median(np.abs(off - np.median(off))))
+    if scale <= 0:
+        return 0
+    big = np.abs(off) > SPIKE_SIGMAS * scale
+    # A spike's neighbours agree with each other; a step's do not.
+    agree = np.abs(x[2:] - x[:-2]) < 0.5 * np.abs(off)
+    return int(np.sum(big & agree))
+
+
+def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt: float) -> tuple[str, ...]:
+    """Notes on a record's logging and subject faults: clipped, frozen or spiked columns.
+
+    Parameters
+    ----------
+    data : mapping of str to ndarray
+        Role → samples on a uniform grid (``time`` in s among them), in SPEC.md's units.
+    columns : mapping of str to str
+        Role → the column's name in the file (a role not read from the file is not judged).
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    tuple of str
+        Each starting "data check:", empty where the record shows none of them.
+    """
+    notes = []
+    signals = {r: np.asarray(v, dtype=float) for r, v in data.items() if r != "time" and r in columns}
+    longest = 0
+    if len(signals) >= 2:
+        still = np.all(np.stack([np.diff(x) == 0 for x in signals.values()]), axis=0)
+        runs = _stretches(still)
+        longest = int(runs.max()) + 1 if runs.size else 0
+        if longest >= max(FROZEN_SAMPLES, FROZEN_S / dt):
+            first = int(np.flatnonzero(np.diff(np.concatenate(([0], still.astype(np.int8)))) == 1)[
+                int(np.argmax(runs))])
+            notes.append(f"data check: every column holds its value for {longest} samples "
+                         f"({longest * dt:.3g} s) from {first * dt:.6g} s into the record: the logger froze? A frozen stretch "
+                         "is no pilot's response and moves the fits (Km/|Ke| by up to 2 times in a "
+                         "reviewer's runs)")
+    for role, x in signals.items():
+        name = columns[role]
+        if x.size and float(np.ptp(x)) == 0.0:
+            # A forcing column of zeros is SPEC's way of writing a task without it, and the
+            # motion verdict names the one forcing function: no note.
+            continue
+        ends = _clipped(x)
+        if ends:
+            where = " and its ".join(f"{side} {v:.6g}" for side, v, _ in ends)
+            share = sum(sh for _, _, sh in ends)
+            notes.append(f"data check: column '{name}' ({role}) sits at its {where} (SPEC.md's units) on "
+                         f"{100 * share:.1f} % "
+                         "of the samples, in stretches: clipped (the stick's stop, the logger's range?); "
+                         "an aircraft-side name (a rate limit, a Dutch roll) or a changed delay may be "
+                         "the clipping's")
+        if role in ("control", "output"):
+            runs = _stretches(np.diff(x) == 0)
+            # Beyond what every column holds (said above): the channel alone.
+            if runs.size and int(runs.max()) + 1 > longest and (int(runs.max()) + 1) * dt >= HELD_ALONE_S:
+                notes.append(f"data check: column '{name}' ({role}) holds one value for "
+                             f"{(int(runs.max()) + 1) * dt:.3g} s: a channel that froze, or a stick let "
+                             "go? No pilot model here holds such a stretch; the fits move with it")
+        n = _spikes(x)
+        if n:
+            notes.append(f"data check: column '{name}' ({role}) has {n} single-sample spike(s) far off "
+                         "their neighbours (a logger's glitch?); a rate limit named on this run may be "
+                         "theirs")
+    return tuple(notes)

@@ -1,0 +1,81 @@
+"""A record's own faults are noted on read (:mod:`hesspipe.core._quality`; SYNTHETIC data).
+
+Runs of the independent generator (:mod:`hesspipe.humanlike`) written with a lab's faults:
+a clipped stick, single-sample spikes, a logger that froze, a stick held still. A newcomer
+review found the first two named as aircraft-side effects (a rate limit, a Dutch roll) with
+nothing said; clean runs and a quantised stick must stay without a note.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hesspipe.core.formats import read_plants, read_run, write_run
+from hesspipe.diagnose.each import diagnose_each
+from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
+
+
+@pytest.fixture(scope="module")
+def trial(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("q")
+    spec = draw_trial("1/s", 3, task="both", pilot="precision", effects=("motion_feedback",),
+                      output="angle", tau_m=0.15, fs=100.0, T_m=40.96)
+    return read_run(write_trial(folder, simulate_trial(spec, fine_ratio=2))), read_plants(folder / "plants.json")
+
+
+def _checks(tmp_path, run, name="r.csv"):
+    return [n for n in read_run(write_run(tmp_path / name, run)).notes if n.startswith("data check")]
+
+
+@pytest.mark.parametrize("plant,task,fs", [("1/s", "both", 100.0), ("paper", "disturbance", 50.0),
+                                           ("K/s2", "both", 50.0)])
+def test_clean_runs_have_no_data_check(tmp_path, plant, task, fs):
+    kw = dict(disturbance="wind") if plant == "paper" else {}
+    spec = draw_trial(plant, 5, task=task, pilot="hess", fs=fs, T_m=40.96, **kw)
+    run = read_run(write_trial(tmp_path, simulate_trial(spec, fine_ratio=2)))
+    assert not [n for n in run.notes if n.startswith("data check")], run.notes
+
+
+def test_a_quantised_stick_has_no_data_check(tmp_path, trial):
+    run, _ = trial
+    code = 2.4 * np.max(np.abs(run.control)) / 2 ** 8     # an 8-bit converter over +-1.2 x the range
+    assert _checks(tmp_path, replace(run, control=code * np.round(run.control / code))) == []
+
+
+def test_a_clipped_stick_is_noted_with_its_ends_and_share(tmp_path, trial):
+    run, _ = trial
+    top = 0.5 * np.max(np.abs(run.control))
+    (note,) = _checks(tmp_path, replace(run, control=np.clip(run.control, -top, top)))
+    assert "column 'control' (control) sits at its maximum" in note and "and its minimum" in note
+    assert "clipped" in note and "a rate limit, a Dutch roll" in note
+    share = float(note.split(" on ")[1].split(" %")[0]) / 100
+    assert share == pytest.approx(np.mean(np.abs(run.control) >= top), abs=0.002)
+
+
+def test_spikes_a_frozen_logger_and_a_held_stick_are_noted(tmp_path, trial):
+    run, _ = trial
+    u = run.control.copy()
+    u[[500, 1300, 2100, 2900, 3700]] += 5 * np.std(u)            # single-sample glitches
+    (note,) = _checks(tmp_path, replace(run, control=u), "s.csv")
+    assert "has 5 single-sample spike(s)" in note
+    frozen = {k: getattr(run, k).copy() for k in ("disturbance", "output", "control", "reference")}
+    for v in frozen.values():
+        v[1000:1200] = v[999]                                     # every channel held 2 s
+    notes = _checks(tmp_path, replace(run, **frozen), "f.csv")
+    assert any("every column holds its value for 201 samples (2.01 s) from 9.99 s into the record" in n for n in notes), notes
+    held = run.control.copy()
+    held[2000:2150] = held[1999]                                  # the stick alone, 1.5 s
+    (note,) = _checks(tmp_path, replace(run, control=held), "h.csv")
+    assert "column 'control' (control) holds one value for 1.51 s" in note
+
+
+def test_diagnose_carries_the_data_check_into_its_report_and_run_line(tmp_path, trial):
+    run, plants = trial
+    top = 0.5 * np.max(np.abs(run.control))
+    clipped = read_run(write_run(tmp_path / "c.csv", replace(run, control=np.clip(run.control, -top, top))))
+    each = diagnose_each([clipped], plants, seed=1)
+    assert any(n.startswith("data check") and "clipped" in n for n in each.diagnoses[0].notes)
+    assert each.lines()[-2].endswith("data check: clipped]") and "data check noted on 1 of 1 runs" in each.summary()
