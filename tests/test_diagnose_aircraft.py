@@ -68,15 +68,20 @@ def test_wrong_columns_are_a_finding_with_evidence(clean, how):
     assert "WRONG PLANTS FILE" in f.message and f.fit_percent < 50
 
 
-def test_a_stick_logged_with_the_opposite_sign_is_diagnosed_as_logged_the_right_way(tmp_path_factory):
+@pytest.fixture(scope="module")
+def yaw_motion(tmp_path_factory):
+    """A precision pilot's yaw-angle run with motion, target and disturbance, as logged."""
+    folder = tmp_path_factory.mktemp("yaw")
+    spec = draw_trial("1/s", 3, task="both", pilot="precision", effects=("motion_feedback",),
+                      output="angle", tau_m=0.15)
+    return read_run(write_trial(folder, simulate_trial(spec))), read_plants(folder / "plants.json")
+
+
+def test_a_stick_logged_with_the_opposite_sign_is_diagnosed_as_logged_the_right_way(yaw_motion):
     # A newcomer's lab file with the stick's sign flipped: the finding was right (the control
     # path's sign), but the correction flipped the plants, no pilot of Ke's sign closed the
     # loop, and diagnose stopped at "no stable original pilot found".
-    folder = tmp_path_factory.mktemp("flipped")
-    spec = draw_trial("1/s", 3, task="both", pilot="precision", effects=("motion_feedback",),
-                      output="angle", tau_m=0.15)
-    run = read_run(write_trial(folder, simulate_trial(spec)))
-    plants = read_plants(folder / "plants.json")
+    run, plants = yaw_motion
     flipped = replace(run, control=-run.control)
     fixed, fixed_plants = corrected(flipped, plants, plant_finding(flipped, plants, plant_check(flipped, plants)))
     np.testing.assert_allclose(fixed.control, run.control)           # the sign back on the column
@@ -104,15 +109,11 @@ def test_a_column_in_another_unit_is_a_wrong_file_finding(clean, how):
     assert "output_scale" not in f.parameters   # no target: the plants are rescaled instead
 
 
-def test_an_output_in_another_unit_than_the_target_is_rescaled(tmp_path_factory):
+def test_an_output_in_another_unit_than_the_target_is_rescaled(yaw_motion):
     # The logger's header said 'Yaw [deg]' (converted to radians) and nothing for the target,
     # the disturbance and the stick (read in degrees): the describing function of r - y was
     # nonsense and the motion test found nothing (F 0.5 against 37.9 as logged).
-    folder = tmp_path_factory.mktemp("mixed")
-    spec = draw_trial("1/s", 3, task="both", pilot="precision", effects=("motion_feedback",),
-                      output="angle", tau_m=0.15)
-    run = read_run(write_trial(folder, simulate_trial(spec)))
-    plants = read_plants(folder / "plants.json")
+    run, plants = yaw_motion
     bad = replace(run, control=np.degrees(run.control), disturbance=np.degrees(run.disturbance),
                   reference=np.degrees(run.reference))
     f = plant_finding(bad, plants, plant_check(bad, plants))
