@@ -225,6 +225,19 @@ def test_times_written_more_coarsely_than_they_advance_are_read_as_uniform_sampl
         np.testing.assert_allclose(np.diff(run.time), run.dt, rtol=1e-9)
         note = next(n for n in run.notes if "repeat the one before" in n)
         assert "1599 times repeat" in note and re.search(r"uniform samples at (500|499\.99\d) Hz", note), note
+    # Where a sample time falls on half a digit (0.005 s at 1 kHz, 0.025 s at 120 Hz) its
+    # rounding goes either way: the grid leaving the smallest spread is found (a review of
+    # this rule had both refused); a dropped sample at 1 kHz is not hidden by the rounding.
+    for fs in (1000.0, 120.0):
+        kk = np.arange(3000)
+        t_rows = [(f"{i / fs:.2f}", 0.5 * i, 0.01 * i, -0.2 * i) for i in kk]
+        run = read_run(_csv(tmp_path / "t.csv", ("time", "disturbance", "output", "control"), t_rows))
+        assert run.dt == pytest.approx(1.0 / fs, rel=1e-6) and len(run) == 3000
+        del t_rows[1500]
+        _csv(tmp_path / "t.csv", ("time", "disturbance", "output", "control"), t_rows)
+        with pytest.raises(HesspipeError, match=r"times written to 0.01 s repeat .* but no uniform sampling "
+                                                r"explains them within that rounding"):
+            read_run(tmp_path / "t.csv")
     # Not rounding: a time that goes back, or one a whole stamp off the grid.
     for i, bad in ((700, "1.38"), (700, "1.45")):
         wrong = list(rows)

@@ -70,4 +70,5 @@ def test_a_run_that_would_fall_below_the_lowest_rate_is_refused_in_one_line(logg
         formats.read_run(logged)
     msg = str(err.value)
     assert "\n" not in msg and str(logged) in msg and "8192 samples at 200 Hz" in msg
-    assert f"{MIN_DECIMATED_HZ:g} Hz" in msg and "split the record" in msg
+    assert "(40.96 s); expected at most 40 s at this rate" in msg   # by 4 at most: 50 Hz
+    assert f"no less than {MIN_DECIMATED_HZ:g} Hz" in msg and "split the record" in msg

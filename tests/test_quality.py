@@ -49,7 +49,7 @@ def test_a_clipped_stick_is_noted_with_its_ends_and_share(tmp_path, trial):
     run, _ = trial
     top = 0.5 * np.max(np.abs(run.control))
     (note,) = _checks(tmp_path, replace(run, control=np.clip(run.control, -top, top)))
-    assert "column 'control' (control) sits at its maximum" in note and "and its minimum" in note
+    assert "column 'control' (control) sits at its maximum and its minimum value on" in note
     assert "clipped" in note and "a rate limit, a Dutch roll" in note
     share = float(note.split(" on ")[1].split(" %")[0]) / 100
     assert share == pytest.approx(np.mean(np.abs(run.control) >= top), abs=0.002)
@@ -66,10 +66,28 @@ def test_spikes_a_frozen_logger_and_a_held_stick_are_noted(tmp_path, trial):
         v[1000:1200] = v[999]                                     # every channel held 2 s
     notes = _checks(tmp_path, replace(run, **frozen), "f.csv")
     assert any("every column holds its value for 201 samples (2.01 s) from 9.99 s into the record" in n for n in notes), notes
+    assert not any("holds one value" in n for n in notes)        # said once, not per column
     held = run.control.copy()
-    held[2000:2150] = held[1999]                                  # the stick alone, 1.5 s
+    held[2000:2250] = held[1999]                                  # the stick alone, 2.5 s
     (note,) = _checks(tmp_path, replace(run, control=held), "h.csv")
-    assert "column 'control' (control) holds one value for 1.51 s" in note
+    assert "column 'control' (control) holds one value for 2.51 s inside the record" in note
+
+
+def test_valid_records_a_second_review_found_noted_are_not(tmp_path, trial):
+    # A record that starts at rest, a subject holding still 1.2 s, a step target, a target
+    # written to whole units: each was told its data was broken (a review of this check).
+    run, _ = trial
+    rest = {k: getattr(run, k).copy() for k in ("disturbance", "output", "control", "reference")}
+    for v in rest.values():
+        v[:200] = 0.0                                             # 2 s at rest before the forcing
+    assert _checks(tmp_path, replace(run, **rest), "rest.csv") == []
+    still = run.control.copy()
+    still[2000:2120] = still[1999]                                # 1.2 s held still
+    assert _checks(tmp_path, replace(run, control=still), "still.csv") == []
+    step = np.where(np.sin(2 * np.pi * run.time / 8.0) >= 0, 1.0, -1.0) * np.max(np.abs(run.reference))
+    assert _checks(tmp_path, replace(run, reference=step), "step.csv") == []
+    unit = np.max(np.abs(run.reference)) / 60                     # the target to 1/60 of its range
+    assert _checks(tmp_path, replace(run, reference=unit * np.round(run.reference / unit)), "int.csv") == []
 
 
 def test_diagnose_carries_the_data_check_into_its_report_and_run_line(tmp_path, trial):

@@ -24,14 +24,18 @@ CLIPPED_STRETCHES = 3
 CLIPPED_SHARE = 0.01
 HELD = 3
 #: Every signal unchanged for at least this long (s, and :data:`FROZEN_SAMPLES` samples)
-#: reads as a logger that froze (a simulator logged at a multiple of its own rate repeats
-#: each value a few times, well below it).
+#: inside the record reads as a logger that froze (a simulator logged at a multiple of its
+#: own rate repeats each value a few times, well below it; a record that starts or ends at
+#: rest, before the forcing or after it, is not judged).
 FROZEN_S = 0.1
 FROZEN_SAMPLES = 5
-#: The control or the output alone unchanged for this long, s: a channel that froze (or a
-#: stick let go onto a dead zone). A held channel at the converter's resolution moves
-#: within a second while a person tracks.
-HELD_ALONE_S = 1.0
+#: The control or the output alone unchanged for this long inside the record, s: a channel
+#: that froze, or a stick let go (a subject holding a digital stick still for 1.2 s was
+#: flagged at 1 s by a reviewer).
+HELD_ALONE_S = 2.0
+#: A spike stands this many of the column's smallest steps off its neighbours (a signal
+#: written to whole degrees turns by one step, which its robust scale of 0 made a spike).
+SPIKE_STEPS = 5.0
 #: A sample this many robust standard deviations off the mean of its two neighbours, where
 #: the neighbours agree, reads as a spike (the lab stand-in's 72 clean runs: none above 12).
 SPIKE_SIGMAS = 30.0
@@ -41,6 +45,18 @@ def _stretches(mask: np.ndarray) -> np.ndarray:
     """Lengths of the stretches of consecutive True in `mask`."""
     edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
     return edges[1::2] - edges[::2]
+
+
+def _inner_longest(mask: np.ndarray) -> tuple[int, int]:
+    """(length, start) of the longest stretch of True in `mask` that touches neither end
+    (a record's rest before or after the forcing is not a fault); (0, 0) if none."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
+    starts, ends = edges[::2], edges[1::2]
+    inner = (starts > 0) & (ends < mask.size)
+    if not inner.any():
+        return 0, 0
+    i = int(np.argmax(np.where(inner, ends - starts, -1)))
+    return int(ends[i] - starts[i]), int(starts[i])
 
 
 def _clipped(x: np.ndarray) -> list[tuple[str, float, float]]:
@@ -61,9 +77,11 @@ def _spikes(x: np.ndarray) -> int:
         return 0
     off = x[1:-1] - 0.5 * (x[:-2] + x[2:])
     scale = 1.4826 * float(np.median(np.abs(off - np.median(off))))
-    if scale <= 0:
+    steps = np.abs(np.diff(x))
+    step = float(np.min(steps[steps > 1e-9 * float(np.ptp(x))], initial=np.inf))
+    if not np.isfinite(step):
         return 0
-    big = np.abs(off) > SPIKE_SIGMAS * scale
+    big = np.abs(off) > max(SPIKE_SIGMAS * scale, SPIKE_STEPS * step)
     # A spike's neighbours agree with each other; a step's do not.
     agree = np.abs(x[2:] - x[:-2]) < 0.5 * np.abs(off)
     return int(np.sum(big & agree))
@@ -90,38 +108,37 @@ def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt
     signals = {r: np.asarray(v, dtype=float) for r, v in data.items() if r != "time" and r in columns}
     longest = 0
     if len(signals) >= 2:
-        still = np.all(np.stack([np.diff(x) == 0 for x in signals.values()]), axis=0)
-        runs = _stretches(still)
-        longest = int(runs.max()) + 1 if runs.size else 0
+        longest, first = _inner_longest(np.all(np.stack([np.diff(x) == 0 for x in signals.values()]), axis=0))
+        longest += 1 if longest else 0
         if longest >= max(FROZEN_SAMPLES, FROZEN_S / dt):
-            first = int(np.flatnonzero(np.diff(np.concatenate(([0], still.astype(np.int8)))) == 1)[
-                int(np.argmax(runs))])
             notes.append(f"data check: every column holds its value for {longest} samples "
-                         f"({longest * dt:.3g} s) from {first * dt:.6g} s into the record: the logger froze? A frozen stretch "
-                         "is no pilot's response and moves the fits (Km/|Ke| by up to 2 times in a "
-                         "reviewer's runs)")
+                         f"({longest * dt:.3g} s) from {first * dt:.6g} s into the record: the logger "
+                         "froze? Such a stretch is no pilot's response and moves the fits; leave it out "
+                         "(cut the record) if it is not the pilot's")
     for role, x in signals.items():
         name = columns[role]
-        if x.size and float(np.ptp(x)) == 0.0:
+        if x.size < 3 or float(np.ptp(x)) == 0.0:
             # A forcing column of zeros is SPEC's way of writing a task without it, and the
             # motion verdict names the one forcing function: no note.
             continue
-        ends = _clipped(x)
+        # The pilot's and the aircraft's signals only: a designed forcing (a step or a
+        # staircase target) sits at its ends by design.
+        ends = _clipped(x) if role in ("control", "output") else []
         if ends:
-            where = " and its ".join(f"{side} {v:.6g}" for side, v, _ in ends)
+            which = " and its ".join(side for side, _, _ in ends)
             share = sum(sh for _, _, sh in ends)
-            notes.append(f"data check: column '{name}' ({role}) sits at its {where} (SPEC.md's units) on "
-                         f"{100 * share:.1f} % "
-                         "of the samples, in stretches: clipped (the stick's stop, the logger's range?); "
-                         "an aircraft-side name (a rate limit, a Dutch roll) or a changed delay may be "
-                         "the clipping's")
+            notes.append(f"data check: column '{name}' ({role}) sits at its {which} value on "
+                         f"{100 * share:.1f} % of the samples, in stretches: clipped at the stick's stop "
+                         "or the logger's range? An aircraft-side name on this run (a rate limit, a "
+                         "Dutch roll) or a changed delay may come from the clipping")
         if role in ("control", "output"):
-            runs = _stretches(np.diff(x) == 0)
+            held, _ = _inner_longest(np.diff(x) == 0)
+            held += 1 if held else 0
             # Beyond what every column holds (said above): the channel alone.
-            if runs.size and int(runs.max()) + 1 > longest and (int(runs.max()) + 1) * dt >= HELD_ALONE_S:
-                notes.append(f"data check: column '{name}' ({role}) holds one value for "
-                             f"{(int(runs.max()) + 1) * dt:.3g} s: a channel that froze, or a stick let "
-                             "go? No pilot model here holds such a stretch; the fits move with it")
+            if held > longest and held * dt >= HELD_ALONE_S:
+                notes.append(f"data check: column '{name}' ({role}) holds one value for {held * dt:.3g} s "
+                             "inside the record: a channel that froze, or a stick let go? No pilot "
+                             "model here holds such a stretch; leave it out if it is not the pilot's")
         n = _spikes(x)
         if n:
             notes.append(f"data check: column '{name}' ({role}) has {n} single-sample spike(s) far off "

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 from scipy.signal import resample_poly
 
 from .errors import HesspipeError
@@ -105,10 +106,13 @@ def coarse_interval(rel: np.ndarray, resolution: np.ndarray) -> float | None:
     """The sample interval of times written more coarsely than they advance, or None.
 
     A logger at 500 Hz that writes its times to 0.01 s repeats each stamp about five times
-    (0.00, 0.00, 0.00, 0.01, ...). Such times are uniform samples rounded: the interval is
-    the slope of time against sample number, and every written time lies within half its
-    last digit of that grid. Times that decrease, or that leave the grid by more than the rounding
-    explains (a clock that stalled, samples dropped), are not.
+    (0.00, 0.00, 0.00, 0.01, ...). Such times are uniform samples rounded: there is a grid
+    ``t0 + dt k`` from which every written time lies at most half its last digit away (a
+    time exactly between two digits may be rounded either way, so the written times spread
+    over a whole digit about the grid). The interval is the one whose grid leaves the
+    smallest spread; where even that spread is wider than a digit (samples dropped beyond
+    what the rounding hides, a clock that drifts) or a time goes back, None. One sample
+    dropped among stamps five samples coarse cannot show and is read as uniform.
 
     Parameters
     ----------
@@ -127,16 +131,24 @@ def coarse_interval(rel: np.ndarray, resolution: np.ndarray) -> float | None:
     if rel.size < 3 or np.any(steps < 0) or rel[-1] <= 0:
         return None
     k = np.arange(rel.size, dtype=float)
-    # The least-squares slope: the rounding averages out over the record (the span over
-    # the samples is off by up to a last digit: 499.983 Hz for 500 Hz written to 0.01 s).
     kc = k - k.mean()
-    dt = float(np.dot(kc, rel - rel.mean()) / np.dot(kc, kc))
-    if not 0.0 < dt < res:   # written finely enough to advance: a repeated time is a fault
+    ls = float(np.dot(kc, rel - rel.mean()) / np.dot(kc, kc))
+    if not 0.0 < ls < res:   # written finely enough to advance: a repeated time is a fault
         return None
-    off = rel - dt * k
-    centre = 0.5 * (off.max() + off.min())
-    tol = 0.5 * res * (1.0 + 1e-6) + 4.0 * np.spacing(abs(rel[-1]) + res)
-    return dt if float(np.max(np.abs(off - centre))) <= tol else None
+
+    base = rel - ls * k   # searched as a correction to the slope: dt itself has too few digits
+
+    def spread(u: float) -> float:
+        off = base - u * k
+        return float(off.max() - off.min())
+
+    # The spread is convex in the slope (a maximum of linear functions less a minimum); the
+    # least-squares slope is within a digit over the record of its minimum.
+    span = 2.0 * res / (rel.size - 1)
+    best = minimize_scalar(spread, bounds=(-span, span), method="bounded", options={"xatol": 1e-9 * span})
+    u = float(best.x) if spread(float(best.x)) <= spread(0.0) else 0.0
+    tol = res * (1.0 + 1e-6) + 8.0 * np.spacing(abs(rel[-1]) + res)
+    return ls + u if spread(u) <= tol else None
 
 
 def coarse_note(t: np.ndarray, column: str, dt: float) -> tuple[str, ...]:
@@ -215,6 +227,14 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
         if coarse is not None:
             return coarse, True
         row = int(np.argmax(steps <= 0)) + 1
+        written = float(np.median(res))
+        if np.all(steps >= 0) and rel[-1] > 0 and written * (rel.size - 1) > rel[-1]:
+            # Repeats of stamps written more coarsely than the samples advance, not a fault
+            # of the order: say why they were not read as uniform samples.
+            raise HesspipeError(f"{path}: column '{column}': times written to {written:g} s repeat (more "
+                                "coarsely than the samples advance), but no uniform sampling explains "
+                                "them within that rounding (a sample dropped, or a clock whose rate "
+                                "drifts?); expected uniform samples")
         raise HesspipeError(f"{path}: column '{column}': expected strictly increasing time, "
                             f"not at data row {row + 1}")
     rounding = 0.5 * (res[1:] + res[:-1]) + 2.0 * np.spacing(np.abs(t[1:]) + np.abs(t[:-1]))
@@ -274,9 +294,12 @@ def decimated(path, data: dict, dt: float, limit: int) -> tuple[dict, float, tup
         return data, dt, ()
     q = -(-n // limit)
     if q * dt * MIN_DECIMATED_HZ > 1.0 + 1e-9:
-        raise HesspipeError(f"{path}: {n} samples at {1.0 / dt:.6g} Hz; expected at most {limit} per run "
-                            f"at {MIN_DECIMATED_HZ:g} Hz or more ({limit / MIN_DECIMATED_HZ:g} s; "
-                            "split the record)")
+        # The longest record this rate allows: the limit at the largest factor that keeps
+        # the rate at MIN_DECIMATED_HZ or more (1 below 100 Hz: no decimation at all).
+        most = max(1, int(math.floor(1.0 / (dt * MIN_DECIMATED_HZ) + 1e-9)))
+        raise HesspipeError(f"{path}: {n} samples at {1.0 / dt:.6g} Hz ({n * dt:.6g} s); expected at most "
+                            f"{limit * most * dt:.6g} s at this rate ({limit} samples analysed, decimated "
+                            f"to no less than {MIN_DECIMATED_HZ:g} Hz); split the record")
     out = {role: (v[::q] if role == "time" else resample_poly(v, 1, q, padtype="line"))
            for role, v in data.items()}
     note = (f"{n} samples at {1.0 / dt:.6g} Hz decimated by {q} to {1.0 / (q * dt):.6g} Hz through a "

@@ -178,7 +178,11 @@ def _window(d: np.ndarray, r: np.ndarray | None):
     if lines.size == 0:   # no lines stand out: broadband forcing, or an exact multisine unfound
         return best[1], best[2], best[0]
     k = int(min(lines.size, 400))
-    coarse = np.arange(n, n // 2, -4)
+    # About 1024 candidates at most: every 4th sample of a 100 Hz lab record, but each an
+    # FFT of up to n samples, so a fixed step made a 1 kHz record of 100 s take 107 s here
+    # and one of 262 s over ten minutes (a reviewer's cut records, not whole periods).
+    step = max(4, n // 2048)
+    coarse = np.arange(n, n // 2, -step)
     for at_end in (True, False):
         # Ending at the record's end (a run-in before the window), and starting at its
         # beginning, taken where purer: a logger started with the measurement and run on
@@ -189,7 +193,7 @@ def _window(d: np.ndarray, r: np.ndarray | None):
         m0 = int(coarse[int(np.argmax(scores))])
         # The top-k share of the sum peaked up to 9 samples off a lab record's period (its k
         # from the leaky whole record: 5 of 20 lines); the forcings' own purity is 1 there.
-        fine = np.arange(min(n, m0 + 16), max(n // 2, m0 - 16) - 1, -1)
+        fine = np.arange(min(n, m0 + max(16, step)), max(n // 2, m0 - max(16, step)) - 1, -1)
         first = (lambda m: n - m) if at_end else (lambda m: 0)
         m = int(fine[int(np.argmax([purity(first(int(m)), int(m)) for m in fine]))])
         pur = purity(first(m), m)
