@@ -149,6 +149,18 @@ def test_quantised_stamps_are_resampled_onto_their_true_interval(tmp_path):
     assert any("resampled linearly onto a uniform 0.00100000" in n for n in run.notes), run.notes
 
 
+def _refused_then_linear(path, match: str, n: int):
+    """The built record at `path` (:func:`_rows`: linear in time) refused as read, matching
+    `match`, and read with resample onto its n samples exactly (interpolation of a line)."""
+    with pytest.raises(HesspipeError, match=match):
+        read_run(path)
+    run = read_run(path, resample=True)
+    assert len(run) == n
+    np.testing.assert_allclose(run.time, 0.02 * np.arange(n), atol=1e-12)
+    np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(n), atol=1e-9)
+    return run
+
+
 def test_a_missed_frame_is_refused_unless_resampled_then_interpolated(tmp_path):
     # A logger that misses a frame leaves empty cells (or NaN) between complete rows; a
     # row may lose its time too. Built records, linear in time: interpolation is exact.
@@ -158,13 +170,8 @@ def test_a_missed_frame_is_refused_unless_resampled_then_interpolated(tmp_path):
     rows[31] = (rows[31][0], "", rows[31][2], rows[31][3])
     rows[60] = ("", rows[60][1], rows[60][2], rows[60][3])
     path = _csv(tmp_path / "g.csv", header, rows)
-    with pytest.raises(HesspipeError, match=r"g.csv: column 'disturbance': expected finite numbers, got an "
-                                            r"empty or NaN cell in data row 31; set resample to interpolate"):
-        read_run(path)
-    run = read_run(path, resample=True)
-    assert len(run) == 101
-    np.testing.assert_allclose(run.time, 0.02 * np.arange(101), atol=1e-12)
-    np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(101), atol=1e-9)
+    run = _refused_then_linear(path, r"g.csv: column 'disturbance': expected finite numbers, got an "
+                                     r"empty or NaN cell in data row 31; set resample to interpolate", 101)
     np.testing.assert_allclose(run.output, 0.01 * np.arange(101), atol=1e-9)
     note = next(n for n in run.notes if n.startswith("missing samples"))
     assert "1 row(s) without a time left out" in note, note
@@ -194,13 +201,8 @@ def test_a_stalled_stamp_is_left_out_when_resampled_but_a_clock_reset_is_refused
     rows = _rows(n=400)
     rows[200] = (rows[199][0],) + rows[200][1:]    # the clock missed a tick: the sample is sound
     path = _csv(tmp_path / "s.csv", header, rows)
-    with pytest.raises(HesspipeError, match=r"s.csv: column 'time': expected strictly increasing time, not at "
-                                            r"data row 201; set resample to leave out a row whose time"):
-        read_run(path)
-    run = read_run(path, resample=True)
-    assert len(run) == 400
-    np.testing.assert_allclose(run.time, 0.02 * np.arange(400), atol=1e-12)
-    np.testing.assert_allclose(run.disturbance, 0.5 * np.arange(400), atol=1e-9)   # row 200 refilled
+    run = _refused_then_linear(path, r"s.csv: column 'time': expected strictly increasing time, not at data "
+                                     r"row 201; set resample to leave out a row whose time", 400)   # row 200 refilled
     assert any("1 row(s) whose time does not pass the one before left out (the first at data row 201)" in n
                for n in run.notes), run.notes
     # Two logs joined (the clock reset by a second): no stall, refused with or without resample.
