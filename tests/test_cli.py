@@ -25,6 +25,20 @@ def test_unknown_command_is_one_line_exit_2(capsys):
     assert len(err.splitlines()) == 1 and "invalid choice" in err
 
 
+def test_a_misspelt_required_option_is_named_not_reported_missing(capsys):
+    # "--plnats" read "the following arguments are required: --plants", naming neither the
+    # misspelling nor the fix.
+    with pytest.raises(SystemExit) as exc:
+        main(["diagnose", "run.csv", "--plnats", "p.json"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert err == ("hesspipe diagnose: error: unrecognized option --plnats (did you mean --plants?) "
+                   "(see 'hesspipe diagnose --help')")
+    with pytest.raises(SystemExit):
+        main(["diagnose", "run.csv"])                           # really missing: said as before
+    assert "the following arguments are required: --plants" in capsys.readouterr().err
+
+
 def test_bad_config_is_one_line_exit_1(tmp_path, capsys):
     cfg = tmp_path / "c.toml"
     cfg.write_text("[wind]\nspeed = 3\n")

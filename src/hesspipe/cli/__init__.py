@@ -22,7 +22,29 @@ from .commands import COMMANDS
 
 
 class _Parser(argparse.ArgumentParser):
+    _argv: list = []
+
+    def parse_known_args(self, args=None, namespace=None):
+        self._argv = list(sys.argv[1:] if args is None else args)
+        return super().parse_known_args(args, namespace)
+
+    def _unknown(self) -> str | None:
+        """The first option given that this parser does not know, with the nearest it does."""
+        import difflib
+
+        known = [o for o in self._option_string_actions if o.startswith("--")]
+        for token in self._argv:
+            flag = token.split("=", 1)[0]
+            if flag.startswith("--") and not any(o.startswith(flag) for o in known):
+                near = difflib.get_close_matches(flag, known, n=1)
+                return f"unrecognized option {flag}" + (f" (did you mean {near[0]}?)" if near else "")
+        return None
+
     def error(self, message):  # one line, not the whole usage block
+        # A misspelt option leaves its option "required": name the misspelling instead
+        # ("--plnats" read "the following arguments are required: --plants").
+        if message.startswith("the following arguments are required"):
+            message = self._unknown() or message
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
