@@ -16,6 +16,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from ._time import stretches
+
 #: A column's samples held at its own maximum or minimum, in stretches of at least
 #: :data:`HELD` samples: this many stretches, or this share of the samples, reads as
 #: clipped. (A quantised signal's peak can sit on its top code for a few samples once; a
@@ -41,17 +43,10 @@ SPIKE_STEPS = 5.0
 SPIKE_SIGMAS = 30.0
 
 
-def _stretches(mask: np.ndarray) -> np.ndarray:
-    """Lengths of the stretches of consecutive True in `mask`."""
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
-    return edges[1::2] - edges[::2]
-
-
 def _inner_longest(mask: np.ndarray) -> tuple[int, int]:
     """(length, start) of the longest stretch of True in `mask` that touches neither end
     (a record's rest before or after the forcing is not a fault); (0, 0) if none."""
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
-    starts, ends = edges[::2], edges[1::2]
+    starts, ends = stretches(mask)
     inner = (starts > 0) & (ends < mask.size)
     if not inner.any():
         return 0, 0
@@ -64,8 +59,8 @@ def _clipped(x: np.ndarray) -> list[tuple[str, float, float]]:
     out = []
     for side, v in (("maximum", float(x.max())), ("minimum", float(x.min()))):
         at = x == v
-        held = _stretches(at)
-        held = held[held >= HELD]
+        starts, ends = stretches(at)
+        held = (ends - starts)[ends - starts >= HELD]
         if held.size >= CLIPPED_STRETCHES or held.sum() >= CLIPPED_SHARE * x.size:
             out.append((side, v, float(at.mean())))
     return out

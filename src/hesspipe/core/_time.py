@@ -348,6 +348,21 @@ def advancing(data: dict, resolution: np.ndarray | None, column: str
             None if resolution is None else resolution[keep], (note,))
 
 
+def stretches(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(starts, ends) of the stretches of consecutive True in `mask`: indices, end exclusive.
+
+    Parameters
+    ----------
+    mask : ndarray of bool
+
+    Returns
+    -------
+    starts, ends : ndarray of int
+    """
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], np.asarray(mask).astype(np.int8), [0]))))
+    return edges[::2], edges[1::2]
+
+
 def fill_missing(data: dict, columns: dict) -> tuple[dict, tuple[str, ...]]:
     """A run's missing samples filled, and what was done, in a note.
 
@@ -386,8 +401,8 @@ def fill_missing(data: dict, columns: dict) -> tuple[dict, tuple[str, ...]]:
         data[role] = v.copy()
         data[role][~ok] = np.interp(x[~ok], x[ok], v[ok])
         filled.append(f"'{columns[role]}' {int((~ok).sum())}")
-        edges = np.flatnonzero(np.diff(np.concatenate(([0], (~ok).astype(int), [0]))))
-        longest = max(longest, int(np.max(edges[1::2] - edges[::2])))
+        starts, ends = stretches(~ok)
+        longest = max(longest, int(np.max(ends - starts)))
     if filled:
         notes.append(f"cells empty or not a number between complete rows interpolated linearly "
                      f"({', '.join(filled)}; at most {longest} in a row)")

@@ -90,8 +90,9 @@ class RunDiagnoses:
         untested = sum(bool(d.untested) for d in self.diagnoses)
         out += f"; motion not tested on {untested} of {n} runs (too few forcing lines)" if untested else ""
         # What a run's own report says beside its names (a reviewer read only the names).
+        flags = [_flags(d) for d in self.diagnoses]
         for what, verb in (("plant check", "failed"), ("CHECK motion_path", "flagged"), ("data check", "noted")):
-            k = sum(any(f.startswith(what) for f in _flags(d)) for d in self.diagnoses)
+            k = sum(any(f.startswith(what) for f in fl) for fl in flags)
             out += f"; {what} {verb} on {k} of {n} runs" if k else ""
         return out + (f" ({len(self.failures)} run(s) failed)" if self.failures else "")
 
