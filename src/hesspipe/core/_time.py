@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 from scipy.optimize import minimize_scalar
-from scipy.signal import resample_poly
+from scipy.signal import decimate
 
 from .errors import HesspipeError
 
@@ -253,6 +253,27 @@ def sample_interval(path, t: np.ndarray, column: str = "time", *,
     return float(rel[-1] / np.sum(np.maximum(1.0, np.round(steps / med)))), False
 
 
+def decimate_signal(x: np.ndarray, q: int) -> np.ndarray:
+    """`x` kept at every `q`-th sample through a zero-phase FIR anti-alias filter
+    (:func:`scipy.signal.decimate`): no delay is added, sample k of the result stands at
+    sample k q of `x`. The one decimation of a record's signals (long records on reading,
+    the control-spectrum criteria's fast records).
+
+    Parameters
+    ----------
+    x : ndarray
+        Samples.
+    q : int
+        Factor (> 1).
+
+    Returns
+    -------
+    ndarray
+        ``ceil(len(x) / q)`` samples.
+    """
+    return decimate(np.asarray(x, dtype=float), q, ftype="fir", zero_phase=True)
+
+
 def decimated(path, data: dict, dt: float, limit: int) -> tuple[dict, float, tuple[str, ...]]:
     """A run's signals with at most `limit` samples: a longer record decimated by the
     smallest whole factor that fits, through a zero-phase anti-alias filter.
@@ -260,7 +281,7 @@ def decimated(path, data: dict, dt: float, limit: int) -> tuple[dict, float, tup
     A laboratory logging at 500-1000 Hz writes 300,000 samples in five to ten minutes, more
     than the analyses hold (:data:`hesspipe.core.formats.MAX_SAMPLES`); nothing a pilot
     model or a describing function uses lies above a few hertz. The filter is a symmetric
-    FIR (:func:`scipy.signal.resample_poly`), so the decimated signals keep their timing
+    FIR (:func:`decimate_signal`), so the decimated signals keep their timing
     (a delay a filter with phase lag added would be identified as the pilot's), and each
     kept sample stands at its original time.
 
@@ -300,8 +321,7 @@ def decimated(path, data: dict, dt: float, limit: int) -> tuple[dict, float, tup
         raise HesspipeError(f"{path}: {n} samples at {1.0 / dt:.6g} Hz ({n * dt:.6g} s); expected at most "
                             f"{limit * most * dt:.6g} s at this rate ({limit} samples analysed, decimated "
                             f"to no less than {MIN_DECIMATED_HZ:g} Hz); split the record")
-    out = {role: (v[::q] if role == "time" else resample_poly(v, 1, q, padtype="line"))
-           for role, v in data.items()}
+    out = {role: (v[::q] if role == "time" else decimate_signal(v, q)) for role, v in data.items()}
     note = (f"{n} samples at {1.0 / dt:.6g} Hz decimated by {q} to {1.0 / (q * dt):.6g} Hz through a "
             f"zero-phase anti-alias filter (at most {limit} samples per run are analysed)")
     return out, q * dt, (note,)

@@ -24,6 +24,7 @@ import numpy as np
 import scipy.fft
 import scipy.signal
 
+from ..core._time import decimate_signal
 from ..core.errors import HesspipeError
 from ..core.paper import WELCH_CORRECTION, WELCH_OVERLAP, WELCH_SEGMENT
 
@@ -223,7 +224,7 @@ logged at 100, 500 and 1000 Hz read four bands, four and none as disagreeing, wi
 def spectral_view(run):
     """`run` as the control-spectrum criteria see it: a record logged faster than
     :data:`SPECTRAL_RATE` is decimated by the smallest integer that brings it to that rate
-    or below (a zero-phase FIR anti-alias filter, :func:`scipy.signal.decimate`), so that the
+    or below (a zero-phase FIR anti-alias filter, :func:`hesspipe.core._time.decimate_signal`), so that the
     paper's segments span the same 8-20 s at every logging rate. Slower records are returned
     as they are.
 
@@ -240,9 +241,7 @@ def spectral_view(run):
     q = int(np.ceil(run.fs / SPECTRAL_RATE - 1e-9))
     if q <= 1:
         return run
-    cut = {name: scipy.signal.decimate(np.asarray(getattr(run, name), dtype=float), q, ftype="fir",
-                                       zero_phase=True)
-           for name in ("disturbance", "output", "control", "reference")}
+    cut = {name: decimate_signal(getattr(run, name), q) for name in ("disturbance", "output", "control", "reference")}
     n = min(v.size for v in cut.values())
     return dataclasses.replace(
         run, time=np.asarray(run.time, dtype=float)[::q][:n], interval=run.dt * q,
