@@ -73,6 +73,24 @@ def test_spikes_a_frozen_logger_and_a_held_stick_are_noted(tmp_path, trial):
     assert "column 'control' (control) holds one value for 2.51 s inside the record" in note
 
 
+def test_a_stick_let_go_is_noted_where_it_rests_for_two_seconds(tmp_path, trial):
+    # Let go, a centring spring holds the stick at rest but for its sensor's noise: no value
+    # repeats, so the held-value check cannot see it (a review's "passes without a note").
+    run, _ = trial
+    rng = np.random.default_rng(1)
+    notes = {}
+    for rest_s in (1.5, 3.0):
+        u = run.control.copy()
+        n = int(rest_s / run.dt)
+        u[1500:1500 + n] = 0.002 * np.std(u) * rng.standard_normal(n)
+        notes[rest_s] = _checks(tmp_path, replace(run, control=u), f"go{rest_s}.csv")
+    assert notes[1.5] == []
+    (note,) = notes[3.0]
+    assert "column 'control' (control) barely moves for" in note and "the stick let go?" in note
+    span, start = float(note.split("for ")[1].split(" s")[0]), float(note.split("from ")[1].split(" s")[0])
+    assert span == pytest.approx(3.0, abs=0.3) and start == pytest.approx(1500 * run.dt, abs=0.3)
+
+
 def test_valid_records_a_second_review_found_noted_are_not(tmp_path, trial):
     # A record that starts at rest, a subject holding still 1.2 s, a step target, a target
     # written to whole units: each was told its data was broken (a review of this check).

@@ -35,6 +35,11 @@ FROZEN_SAMPLES = 5
 #: that froze, or a stick let go (a subject holding a digital stick still for 1.2 s was
 #: flagged at 1 s by a reviewer).
 HELD_ALONE_S = 2.0
+#: The stick's activity (its RMS about the local mean over 1 s) below this share of its
+#: median over the record, for :data:`HELD_ALONE_S` inside the record while the forcing
+#: goes on, reads as a stick let go: a centring spring holds it still but for sensor noise,
+#: which no exact repeat shows. (A subject's remnant alone is 10-40 % of the control's power.)
+LET_GO_SHARE = 0.1
 #: A spike stands this many of the column's smallest steps off its neighbours (a signal
 #: written to whole degrees turns by one step, which its robust scale of 0 made a spike).
 SPIKE_STEPS = 5.0
@@ -66,6 +71,35 @@ def _clipped(x: np.ndarray) -> list[tuple[str, float, float]]:
     return out
 
 
+def _moving_rms(x: np.ndarray, w: int) -> np.ndarray:
+    """RMS of `x` about its mean over each window of `w` samples (``x.size - w + 1`` of them)."""
+    c1 = np.concatenate(([0.0], np.cumsum(x - x.mean())))
+    c2 = np.concatenate(([0.0], np.cumsum((x - x.mean()) ** 2)))
+    m = (c1[w:] - c1[:-w]) / w
+    return np.sqrt(np.maximum((c2[w:] - c2[:-w]) / w - m * m, 0.0))
+
+
+def _let_go(x: np.ndarray, forcing: list[np.ndarray], dt: float) -> tuple[float, float]:
+    """(length, start), s, of the longest stretch inside the record where `x` barely moves
+    while every forcing in `forcing` goes on; (0, 0) if none is as long as :data:`HELD_ALONE_S`."""
+    w = max(3, int(round(1.0 / dt)))
+    if x.size < 4 * w:
+        return 0.0, 0.0
+    rms = _moving_rms(x, w)
+    quiet = rms < LET_GO_SHARE * float(np.median(rms))
+    for f in forcing:
+        f_rms = _moving_rms(f, w)
+        quiet &= f_rms > LET_GO_SHARE * float(np.median(f_rms))
+    starts, ends = stretches(quiet)
+    inner = (starts > 0) & (ends < quiet.size)
+    if not inner.any():
+        return 0.0, 0.0
+    # Each window of a stretch lies wholly inside the rest: the rest is the windows' span.
+    span = np.where(inner, ends - starts + w - 1, 0)
+    i = int(np.argmax(span))
+    return (float(span[i] * dt), float(starts[i] * dt)) if span[i] * dt >= HELD_ALONE_S else (0.0, 0.0)
+
+
 def _spikes(x: np.ndarray) -> int:
     """Samples of `x` far off the mean of their two neighbours while those agree."""
     if x.size < 5:
@@ -83,7 +117,8 @@ def _spikes(x: np.ndarray) -> int:
 
 
 def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt: float) -> tuple[str, ...]:
-    """Notes on a record's logging and subject faults: clipped, frozen or spiked columns.
+    """Notes on a record's logging and subject faults: clipped, frozen or spiked columns, a
+    stick let go.
 
     Parameters
     ----------
@@ -134,6 +169,14 @@ def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt
                 notes.append(f"data check: column '{name}' ({role}) holds one value for {held * dt:.3g} s "
                              "inside the record: a channel that froze, or a stick let go? No pilot "
                              "model here holds such a stretch; leave it out if it is not the pilot's")
+            elif role == "control" and longest * dt < HELD_ALONE_S:
+                forcing = [v for r, v in signals.items() if r in ("disturbance", "reference") and np.ptp(v) > 0]
+                span, start = _let_go(x, forcing, dt)
+                if span:
+                    notes.append(f"data check: column '{name}' (control) barely moves for {span:.3g} s from "
+                                 f"{start:.6g} s into the record while the forcing goes on (below "
+                                 f"{100 * LET_GO_SHARE:g} % of its usual activity): the stick let go? No "
+                                 "pilot model here rests so; leave the stretch out if the subject let go")
         n = _spikes(x)
         if n:
             notes.append(f"data check: column '{name}' ({role}) has {n} single-sample spike(s) far off "
