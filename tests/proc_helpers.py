@@ -57,8 +57,9 @@ def alive(pid: int) -> bool:
 
 
 def sigterm_when_ready(argv: list[str], err_file: Path, ready, *, timeout_s: float = 60.0,
-                       settle_s: float = 0.0) -> tuple[int, list[int]]:
-    """Run `argv`, send SIGTERM once ``ready(workers, stderr_text)`` holds; (exit code, orphans).
+                       settle_s: float = 0.0, sig=None) -> tuple[int, list[int]]:
+    """Run `argv`, send SIGTERM (or `sig`) once ``ready(workers, stderr_text)`` holds; (exit
+    code, orphans).
 
     stderr goes to `err_file` (a file, not a pipe: orphans must not block the test). Orphans
     are the worker processes still alive 5 s after the command exited; whatever this call
@@ -81,7 +82,7 @@ def sigterm_when_ready(argv: list[str], err_file: Path, ready, *, timeout_s: flo
         if settle_s:
             time.sleep(settle_s)
             workers = descendants(proc.pid)
-        proc.send_signal(signal.SIGTERM)
+        proc.send_signal(signal.SIGTERM if sig is None else sig)
         code = proc.wait(timeout=30)
         deadline = time.monotonic() + 5
         while any(alive(p) for p in workers) and time.monotonic() < deadline:

@@ -599,7 +599,9 @@ def test_scheduler_that_is_not_dask_times_out(monkeypatch):
 # -- item 7: SIGTERM leaves no worker behind ---------------------------------------------------
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc to list child processes")
-def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
+def test_a_stopped_command_leaves_no_worker(inputs, tmp_path, sig):
+    # SIGKILL: the command cannot stop its pool; the workers see their parent gone.
     runs = tmp_path / "runs"
     runs.mkdir()
     base = read_run(inputs / "runs" / "p0.csv")
@@ -610,12 +612,13 @@ def test_sigterm_stops_the_worker_pool(inputs, tmp_path):
     code, orphans = sigterm_when_ready(
         [sys.executable, "-m", "hesspipe.cli", "pilots", str(runs), "--plants",
          str(inputs / "plants.json"), "--workers", "2", "--json", str(tmp_path / "c.json")],
-        err_file, lambda workers, err: len(workers) >= 2, settle_s=0.3)
+        err_file, lambda workers, err: len(workers) >= 2, settle_s=0.3, sig=getattr(signal, sig))
     err = err_file.read_text()
     assert not orphans, "worker processes outlived the command"
-    assert code == 128 + signal.SIGTERM, err
-    assert err.strip().splitlines()[-1] == "hesspipe: terminated" and "Traceback" not in err, err
     assert not (tmp_path / "c.json").exists()
+    if sig == "SIGTERM":
+        assert code == 128 + signal.SIGTERM, err
+        assert err.strip().splitlines()[-1] == "hesspipe: terminated" and "Traceback" not in err, err
 
 
 @pytest.mark.parametrize("where", ["read-only", "file"])
@@ -671,3 +674,29 @@ def test_an_output_folder_of_an_older_hesspipe_is_still_recognised(tmp_path):
     assert (tmp_path / "a" / "out.txt").read_text() == "{'v': 2}"
     assert (tmp_path / "a" / "mine.txt").read_text() == "user"
     assert (tmp_path / MARKER).exists() and (tmp_path / "a" / MARKER).exists()
+
+
+@pytest.mark.parametrize("argv, status", [
+    (["plants", "--analytic", "roskam", "--out", "{t}/out"], 0),
+    # python-control loads matplotlib: checking a folder's outputs loads it before any work.
+    (["pilots", "{t}/empty", "--plants", "{t}/p.json", "--json", "{t}/out/c.json"], 1),
+])
+def test_a_command_writes_nothing_outside_its_output_folder(tmp_path, argv, status):
+    """matplotlib's configuration and font list (~/.config, ~/.cache) go to a folder of the
+    command's own, removed when it ends: a fresh home and temporary folder stay empty, and a
+    folder a killed command left there (its process gone) is removed."""
+    home, tmp = tmp_path / "home", tmp_path / "tmp"
+    for d in (home, tmp, tmp_path / "empty"):
+        d.mkdir()
+    left = tmp / "hesspipe-matplotlib-999999999-abcd"
+    left.mkdir()
+    (left / "fontlist.json").write_text("{}")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("MPL", "XDG_"))}
+    env.update(HOME=str(home), TMPDIR=str(tmp))
+    proc = subprocess.run([sys.executable, "-m", "hesspipe.cli", *[a.format(t=tmp_path) for a in argv]],
+                          capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
+    assert proc.returncode == status, proc.stderr
+    if status == 0:
+        assert (tmp_path / "out" / "analytic_bode.png").is_file()
+    assert list(home.iterdir()) == [] and list(tmp.iterdir()) == []
+    assert {p.name for p in tmp_path.iterdir()} == {"empty", "home", "tmp"} | ({"out"} if status == 0 else set())

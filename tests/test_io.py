@@ -36,6 +36,91 @@ def test_staged_output_publishes_all_or_nothing(tmp_path):
     assert not [p for p in out.iterdir() if p.name.startswith(".hesspipe-staging")]
 
 
+class _Killed(BaseException):
+    """What SIGKILL does to a publication, as far as the folder can tell: it stops."""
+
+
+def _publish_two_runs(out, monkeypatch, *, stop_after=None, signal_at=None):
+    """Make the next publications stop (or send this process a signal) after their
+    `stop_after`-th file moved into place (the marker's writes not counted)."""
+    import os
+
+    from hesspipe.core import io
+
+    moved = []
+    real = os.replace
+
+    def replace(src, dst):
+        real(src, dst)
+        if str(dst).endswith(io.MARKER):
+            return
+        moved.append(dst)
+        if stop_after is not None and len(moved) == stop_after:
+            raise _Killed
+        if signal_at is not None and len(moved) == signal_at[0]:
+            os.kill(os.getpid(), signal_at[1])
+    monkeypatch.setattr(io.os, "replace", replace)
+    return moved
+
+
+def test_a_publication_killed_midway_is_refused_as_input_until_published_whole(tmp_path, monkeypatch):
+    from hesspipe.core.io import read_bytes
+
+    out = tmp_path / "out"
+    with staged_output(out, "flight") as stage:
+        for name in "abc":
+            (stage / f"{name}.txt").write_text("run 1")
+    _publish_two_runs(out, monkeypatch, stop_after=2)
+    with pytest.raises(_Killed):
+        with staged_output(out, "flight") as stage:
+            for name in "abc":
+                (stage / f"{name}.txt").write_text("run 2")
+    assert [(out / f"{n}.txt").read_text() for n in "abc"] == ["run 2", "run 2", "run 1"]
+    with pytest.raises(HesspipeError, match=r"c.txt: its folder holds a hesspipe flight output whose "
+                                             r"writing was stopped midway .* run the command that wrote it again"):
+        read_bytes(out / "c.txt", "a text file")
+    monkeypatch.undo()
+    with staged_output(out, "flight") as stage:
+        for name in "abc":
+            (stage / f"{name}.txt").write_text("run 3")
+    assert read_bytes(out / "c.txt", "a text file") == b"run 3"
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_a_signal_during_publication_waits_for_the_whole_folder(tmp_path, monkeypatch, sig):
+    import signal
+
+    out = tmp_path / "out"
+
+    class Stopped(BaseException):
+        pass
+
+    def stop(signum, frame):
+        raise Stopped
+    previous = signal.signal(getattr(signal, sig), stop)
+    try:
+        _publish_two_runs(out, monkeypatch, signal_at=(1, getattr(signal, sig)))
+        with pytest.raises(Stopped):
+            with staged_output(out, "cohort") as stage:
+                for name in "abc":
+                    (stage / f"{name}.txt").write_text("run 1")
+    finally:
+        signal.signal(getattr(signal, sig), previous)
+    assert [(out / f"{n}.txt").read_text() for n in "abc"] == ["run 1"] * 3
+    assert "publishing" not in json.loads((out / ".hesspipe-output").read_text())
+
+
+def test_a_killed_write_of_a_file_leaves_nothing_for_long(tmp_path):
+    # A --json file's folder is the user's: the temporary file of a write killed before its
+    # rename (a dead process's id in its name) goes with the next write of that file.
+    dead = tmp_path / ".hesspipe-tmp-999999999-abcd-c.json"
+    other = tmp_path / ".hesspipe-tmp-999999999-abcd-d.json"
+    dead.write_text("{")
+    other.write_text("{")
+    write_json(tmp_path / "c.json", {"a": 1})
+    assert not dead.exists() and other.exists()
+
+
 def test_json_handles_numpy_and_nonfinite(tmp_path):
     obj = {"a": np.float64(1.5), "b": np.arange(3), "c": math.nan, "d": [np.inf]}
     assert json.loads(to_json(obj)) == {"a": 1.5, "b": [0, 1, 2], "c": None, "d": [None]}

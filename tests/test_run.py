@@ -99,6 +99,25 @@ def test_editing_the_wind_profile_reruns_flight_and_downstream_only(reference, t
     assert _ran(capsys) == ["flight", "plants", "pilots", "diagnose", "report"]
 
 
+def test_workers_change_how_not_what(reference, tmp_path, capsys):
+    # Two worker processes give the same bytes as one, so changing the number leaves every
+    # stage up to date (it re-ran the pilots stage and all after it, "configuration changed").
+    cfg, out, files = reference
+    work = tmp_path / "out"
+    shutil.copytree(out, work)
+    two = tmp_path / "two.toml"
+    two.write_text(SMALL.replace("workers = 1", "workers = 2"))
+    capsys.readouterr()
+    assert main(["status", "--config", str(two), "--out", str(work)]) == 0
+    assert [line.split()[1] for line in capsys.readouterr().out.splitlines()] == ["fresh"] * len(STAGES)
+    assert main(["run", "--config", str(two), "--out", str(work), "--from", "pilots"]) == 0
+    assert _ran(capsys) == ["pilots", "diagnose", "report"]
+    # The same bytes but for where the run and its configuration are (paths in the outputs).
+    moved = {k: v.replace(str(work).encode(), str(out).encode()).replace(str(two).encode(), str(cfg).encode())
+             for k, v in _outputs(work).items()}
+    assert moved == files
+
+
 def test_from_stage_regenerates_the_wind_model(reference, capsys):
     cfg, out, files = reference
     capsys.readouterr()

@@ -11,6 +11,8 @@ from __future__ import annotations
 # Imports sit inside the functions: `hesspipe --help` and argument errors load no numpy
 # (tests/test_api.py), and each command loads only its own stage.
 import argparse
+import contextlib
+import os
 import signal
 import sys
 import threading
@@ -70,14 +72,49 @@ def _on_sigterm(signum, frame):
     raise Terminated
 
 
+#: matplotlib's folder of a command's own (:func:`_matplotlib_folder_of_its_own`), with the
+#: process id after it.
+MATPLOTLIB_PREFIX = "hesspipe-matplotlib-"
+
+
+@contextlib.contextmanager
+def _matplotlib_folder_of_its_own():
+    """Give matplotlib a configuration folder of this command's own, removed when it ends.
+
+    Imported for a figure, matplotlib creates ``~/.config/matplotlib`` and writes its font
+    list to ``~/.cache/matplotlib``: outside the output folder the user chose. A folder the
+    user chose (``MPLCONFIGDIR``) is kept, and so is a matplotlib already loaded (a caller's
+    process). Building the font list again costs about 0.2 s per command that draws.
+    """
+    if "MPLCONFIGDIR" in os.environ or "matplotlib" in sys.modules:
+        yield
+        return
+    import shutil
+    import tempfile
+
+    from ..core.io import remove_leftovers
+
+    # A command killed outright (SIGKILL) left its folder; the next one removes it.
+    remove_leftovers(tempfile.gettempdir(), prefix=MATPLOTLIB_PREFIX)
+    folder = tempfile.mkdtemp(prefix=f"{MATPLOTLIB_PREFIX}{os.getpid()}-")
+    os.environ["MPLCONFIGDIR"] = folder
+    try:
+        yield
+    finally:
+        os.environ.pop("MPLCONFIGDIR", None)
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     in_main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
     try:
-        check_outputs_apart(args)  # before any work, for every command
-        return int(args.func(args) or 0)
+        # Before anything loads python-control, which loads matplotlib.
+        with _matplotlib_folder_of_its_own():
+            check_outputs_apart(args)  # before any work, for every command
+            return int(args.func(args) or 0)
     except HesspipeError as exc:
         from ._options import cli_message  # library setting names -> this command's options
 

@@ -50,6 +50,7 @@ def read_bytes(path: str | os.PathLike, what: str) -> bytes:
         Missing, a folder, or unreadable.
     """
     path = Path(path)
+    check_published(path)
     try:
         return path.read_bytes()
     except FileNotFoundError:
@@ -58,6 +59,31 @@ def read_bytes(path: str | os.PathLike, what: str) -> bytes:
         raise HesspipeError(f"{path}: is a folder, expected {what}") from None
     except OSError as exc:
         raise HesspipeError(f"{path}: cannot be read ({exc.strerror or exc}); expected {what}") from None
+
+
+def check_published(path: str | os.PathLike) -> None:
+    """Raise if `path` lies in a hesspipe output folder whose publication never finished.
+
+    A command killed while it moved its files into place (SIGKILL, a power cut: Ctrl-C and
+    SIGTERM wait for the move) leaves the folder's files of two runs side by side; the
+    folder's marker says so until a run publishes it whole.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        An input file.
+
+    Raises
+    ------
+    HesspipeError
+        Naming the file and what to do.
+    """
+    path = Path(path)
+    marker = _read_marker(path.parent)
+    if marker is not None and marker.get("publishing"):
+        raise HesspipeError(f"{path}: its folder holds a hesspipe {marker['hesspipe_output']} output whose "
+                            "writing was stopped midway (its files may come from two runs); expected a "
+                            "complete output: run the command that wrote it again")
 
 
 def _cannot_write(path, exc: OSError) -> HesspipeError:
@@ -80,6 +106,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         The final file; its folder is created if needed.
     """
     path = Path(path)
+    # A write of this very file that was killed left its temporary file beside it.
+    remove_leftovers(path.parent, only=f"-{path.name}")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{os.getpid()}-", suffix=f"-{path.name}",
@@ -253,8 +281,10 @@ def _ours(entry: Path) -> bool:
     return entry.name.startswith((TMP_PREFIX, STAGING_PREFIX)) or entry.name == MARKER
 
 
-def _pid_of(entry: Path) -> int | None:
-    rest = entry.name.removeprefix(TMP_PREFIX).removeprefix(STAGING_PREFIX)
+def _pid_of(entry: Path, prefixes=(TMP_PREFIX, STAGING_PREFIX)) -> int | None:
+    rest = entry.name
+    for prefix in prefixes:
+        rest = rest.removeprefix(prefix)
     head = rest.split("-", 1)[0]
     return int(head) if head.isdigit() else None
 
@@ -269,7 +299,8 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def remove_leftovers(folder: str | os.PathLike) -> list[Path]:
+def remove_leftovers(folder: str | os.PathLike, *, only: str | None = None,
+                     prefix: str | None = None) -> list[Path]:
     """Remove the temporary files and staging folders a killed hesspipe run left in `folder`.
 
     Only entries named with hesspipe's prefixes whose process is gone are removed;
@@ -279,15 +310,23 @@ def remove_leftovers(folder: str | os.PathLike) -> list[Path]:
     ----------
     folder : str or PathLike
         The output folder to clean (nothing happens if it does not exist).
+    only : str, optional
+        Only temporary files whose name ends so (those of one file's writes).
+    prefix : str, optional
+        Only entries named with this prefix of hesspipe's and a process id (a folder of
+        hesspipe's own outside an output folder, in the system's temporary folder).
     """
     folder = Path(folder)
     removed = []
     if not folder.is_dir():
         return removed
+    prefixes = (TMP_PREFIX, STAGING_PREFIX) if prefix is None else (prefix,)
     for entry in folder.iterdir():
-        if not entry.name.startswith((TMP_PREFIX, STAGING_PREFIX)):
+        if not entry.name.startswith(prefixes):
             continue
-        pid = _pid_of(entry)
+        if only is not None and not (entry.name.startswith(TMP_PREFIX) and entry.name.endswith(only)):
+            continue
+        pid = _pid_of(entry, prefixes)
         if pid is None or _alive(pid):
             continue
         if entry.is_dir() and not entry.is_symlink():
@@ -389,12 +428,39 @@ def check_output_file(path: str | os.PathLike) -> Path:
     return path
 
 
-def _write_marker(folder: Path, kind: str, files) -> None:
+def _write_marker(folder: Path, kind: str, files, *, publishing: bool = False) -> None:
     write_json(folder / MARKER, {
         "hesspipe_output": kind,
         "note": "written by hesspipe: this folder is its output; the files listed are replaced "
                 "or removed when it publishes again, nothing else is",
+        **({"publishing": True} if publishing else {}),
         "files": sorted(files)})
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM until the block ends, then act on them as they would have.
+
+    A publication moves its files one at a time; stopped between two moves the folder would
+    hold two runs' files. The moves take milliseconds, so the signal waits for them. (SIGKILL
+    cannot wait: the marker's ``publishing`` says what it left, :func:`check_published`.)
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held: list[int] = []
+    previous = {sig: signal.signal(sig, lambda signum, frame: held.append(signum))
+                for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(held):
+            signal.raise_signal(sig)
 
 
 def mark_output_dir(path: str | os.PathLike, kind: str) -> Path:
@@ -438,8 +504,9 @@ def _publish(stage: Path, out_dir: Path, kind: str) -> None:
             raise HesspipeError(f"{clash[0]}: exists and was not written by hesspipe; move it away "
                                 "or choose another output folder")
     try:
-        # Marker first: from here on every file this publication may leave is listed.
-        _write_marker(out_dir, kind, owned | set(files))
+        # Marker first: from here on every file this publication may leave is listed, and
+        # the folder says it is being written until the last marker.
+        _write_marker(out_dir, kind, owned | set(files), publishing=True)
         for rel in files:
             dst = out_dir / rel
             dst.parent.mkdir(parents=True, exist_ok=True)
@@ -485,7 +552,8 @@ def staged_output(out_dir: str | os.PathLike, kind: str = "output") -> Iterator[
         raise _cannot_write(out_dir, exc) from None
     try:
         yield stage
-        _publish(stage, out_dir, kind)
+        with _signals_held():
+            _publish(stage, out_dir, kind)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
         if created and out_dir.exists() and not any(out_dir.iterdir()):

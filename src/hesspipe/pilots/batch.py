@@ -21,11 +21,15 @@ import os
 import re
 import signal
 import threading
+import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Sequence
 
 from ..core.errors import HesspipeError
 from ..core.progress import progress_bar
+
+#: How often a worker looks for the process that started it, s.
+PARENT_POLL_S = 0.5
 
 
 def default_workers() -> int:
@@ -131,8 +135,18 @@ def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
 
 def _worker_init() -> None:
     """Worker processes die quietly on SIGTERM (a forked worker inherits the CLI's
-    handler, which would print a traceback)."""
+    handler, which would print a traceback), and with the process that started them."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    # Killed outright (SIGKILL), the parent cannot stop its pool: the workers, blocked on a
+    # queue whose other end they hold themselves, would wait for ever and keep its stdout open.
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="hesspipe-parent-watch", daemon=True).start()
 
 
 def _terminate(pool: ProcessPoolExecutor) -> None:

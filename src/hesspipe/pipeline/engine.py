@@ -41,6 +41,11 @@ MANIFEST = "manifest.json"
 #: Kind of output (see hesspipe.core.io) of a pipeline run's root folder.
 ROOT_KIND = "run"
 
+#: Settings that say how a stage computes, not what: its outputs do not depend on them
+#: (``tests/test_run.py::test_workers_change_how_not_what``), so changing them leaves the
+#: stage up to date.
+HOW_NOT_WHAT = frozenset({"workers", "scheduler"})
+
 
 @dataclass(frozen=True)
 class StageContext:
@@ -288,7 +293,7 @@ class Pipeline:
         return [s.name for s in self.stages if s.name in hit]
 
     def _fingerprint_parts(self, stage: Stage) -> dict:
-        section = self.config.get(stage.name, {})
+        section = {k: v for k, v in self.config.get(stage.name, {}).items() if k not in HOW_NOT_WHAT}
         upstream = {}
         for need in stage.needs:
             manifest = _read_manifest(self.folder(need)) or {}
