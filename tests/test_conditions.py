@@ -13,7 +13,7 @@ from scipy import stats
 
 from hesspipe.cli import main
 from hesspipe.core.errors import HesspipeError
-from hesspipe.core.formats import read_run, write_run
+from hesspipe.core.formats import read_plants, read_run, write_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.humanlike.pilots import loop_metrics, parts
@@ -121,6 +121,22 @@ def test_paired_tests_are_scipys_t_test_holm_adjusted_over_the_primary_metrics()
     verdict = conditions_verdict(tests, ("static", "motion"), 6)
     assert verdict.startswith("the conditions differ: motion against static: disturbance-loop crossover higher")
     assert "error variance lower (x0.6" in verdict and "phase margin" not in verdict
+
+
+def test_a_forcing_that_differs_between_the_conditions_leaves_the_variances_out_of_the_verdict(cohort):
+    # The same runs at half the forcing (a linear loop: every column halves): the loop is the
+    # same, the error's variance a quarter. It read "the conditions differ: error variance
+    # lower (x0.25)" (a review's same persons at half the forcing: x0.255).
+    static = [read_run(p) for p in sorted((cohort / "static").glob("p*.csv"))]
+    half = [replace(r, reference=0.5 * r.reference, disturbance=0.5 * r.disturbance, output=0.5 * r.output,
+                    control=0.5 * r.control) for r in static]
+    result = compare_conditions(static, half, read_plants(cohort / "static" / "plants.json"), labels=("full", "half"))
+    assert result.verdict.startswith("no difference found between full and half"), result.verdict
+    ev = result.tests["error_variance"]
+    assert ev["confounded"] and ev["p_holm"] is None and ev["effect"] == pytest.approx(0.25)
+    (note,) = [n for n in result.notes if "forcing differs" in n]
+    assert "half against full: reference power x0.25, disturbance power x0.25" in note
+    assert "left out of the verdict" in note
 
 
 def test_too_few_persons_or_no_difference_say_so():

@@ -109,6 +109,23 @@ def test_a_column_in_another_unit_is_a_wrong_file_finding(clean, how):
     assert "output_scale" not in f.parameters   # no target: the plants are rescaled instead
 
 
+def test_a_plants_file_that_puts_the_disturbance_elsewhere_is_a_wrong_file_finding(yaw_motion):
+    # A review's output disturbance read with an input-disturbance plants file was named a
+    # Dutch roll on 24 of 24 yaw runs; here the mirror: the disturbance entered at the
+    # plant's input, the file says at its output.
+    import control as ct
+
+    run, plants = yaw_motion
+    wrong = replace(plants, disturbance_to_output=ct.tf([1.0], [1.0]))
+    f = plant_finding(run, wrong, plant_check(run, wrong))
+    assert f.verdict == "wrong_file" and f.named == "disturbance_entry", f.message
+    assert "the disturbance enters at the controlled element's input" in f.message
+    assert f.fit_percent < 50 and max(e.fit_percent for e in f.explanations) >= 90
+    _, fixed = corrected(run, wrong, f)
+    for path in ("control_to_output", "disturbance_to_output"):
+        assert abs(getattr(fixed, path)(1j) / getattr(plants, path)(1j)) == pytest.approx(1.0, rel=0.05)
+
+
 def test_an_output_in_another_unit_than_the_target_is_rescaled(yaw_motion):
     # The logger's header said 'Yaw [deg]' (converted to radians) and nothing for the target,
     # the disturbance and the stick (read in degrees): the describing function of r - y was

@@ -91,6 +91,20 @@ def test_a_stick_let_go_is_noted_where_it_rests_for_two_seconds(tmp_path, trial)
     assert span == pytest.approx(3.0, abs=0.3) and start == pytest.approx(1500 * run.dt, abs=0.3)
 
 
+def test_a_loop_that_went_unstable_is_noted(tmp_path, trial):
+    # A review's run grew to 480,000 deg of yaw and settled again: analysed without a word
+    # (named "remnant", and Km/|Ke| of its person moved by a third).
+    run, _ = trial
+    t = run.time - run.time[0]
+    grow = 1.0 + 99.0 * np.exp(-0.5 * ((t - 20.0) / 3.0) ** 2)   # x100 around 20 s
+    (note,) = _checks(tmp_path, replace(run, output=run.output * grow, control=run.control * grow), "u.csv")
+    assert "column 'output' (output) swings" in note and "the loop went unstable" in note
+    ratio, at = float(note.split("swings ")[1].split(" times")[0]), float(note.split("from ")[1].split(" s")[0])
+    assert ratio > 50 and 15.0 <= at <= 20.0
+    grown = 1.0 + 4.0 * np.exp(-0.5 * ((t - 20.0) / 3.0) ** 2)     # x5: a hard stretch, no note
+    assert _checks(tmp_path, replace(run, output=run.output * grown, control=run.control * grown), "g.csv") == []
+
+
 def test_valid_records_a_second_review_found_noted_are_not(tmp_path, trial):
     # A record that starts at rest, a subject holding still 1.2 s, a step target, a target
     # written to whole units: each was told its data was broken (a review of this check).

@@ -40,6 +40,13 @@ HELD_ALONE_S = 2.0
 #: goes on, reads as a stick let go: a centring spring holds it still but for sensor noise,
 #: which no exact repeat shows. (A subject's remnant alone is 10-40 % of the control's power.)
 LET_GO_SHARE = 0.1
+#: The output's or the control's swings (RMS over :data:`SWING_WINDOW_S`) growing to this
+#: many times their smallest within the record, while the forcing holds steady, read as a
+#: loop that went unstable (control lost, a pilot-induced oscillation). Clean runs: at most
+#: 18 (294 runs: the lab stand-in's, generator trials, flown pilots, a review's design
+#: variants); a generator run that diverged and recovered, 1384.
+SWING_WINDOW_S = 5.0
+SWING_LIMIT = 50.0
 #: A spike stands this many of the column's smallest steps off its neighbours (a signal
 #: written to whole degrees turns by one step, which its robust scale of 0 made a spike).
 SPIKE_STEPS = 5.0
@@ -100,6 +107,43 @@ def _let_go(x: np.ndarray, forcing: list[np.ndarray], dt: float) -> tuple[float,
     return (float(span[i] * dt), float(starts[i] * dt)) if span[i] * dt >= HELD_ALONE_S else (0.0, 0.0)
 
 
+def swing_ratio(x: np.ndarray, forcing: list[np.ndarray], dt: float) -> tuple[float, float]:
+    """How far `x`'s swings grow within a record: (largest over smallest RMS over windows of
+    :data:`SWING_WINDOW_S` a second apart, time of the largest window's start, s).
+
+    Only windows where every forcing in `forcing` swings at least half its median are
+    compared (a record that starts at rest is not a loop that grew). (1, 0) for a record
+    shorter than four windows.
+
+    Parameters
+    ----------
+    x : ndarray
+        The output or the control.
+    forcing : list of ndarray
+        The forcing columns (none: every window compared).
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    ratio : float
+    at : float
+        Seconds from the record's start to the largest window.
+    """
+    w, hop = max(3, int(round(SWING_WINDOW_S / dt))), max(1, int(round(1.0 / dt)))
+    if x.size < 4 * w:
+        return 1.0, 0.0
+    rms = _moving_rms(x, w)[::hop]
+    keep = np.ones(rms.size, dtype=bool)
+    for f in forcing:
+        f_rms = _moving_rms(f, w)[::hop]
+        keep &= f_rms >= 0.5 * float(np.median(f_rms))
+    if keep.sum() < 4:
+        return 1.0, 0.0
+    i = int(np.flatnonzero(keep)[np.argmax(rms[keep])])
+    return float(rms[i] / max(float(rms[keep].min()), 1e-300)), float(i * hop * dt)
+
+
 def _spikes(x: np.ndarray) -> int:
     """Samples of `x` far off the mean of their two neighbours while those agree."""
     if x.size < 5:
@@ -118,7 +162,7 @@ def _spikes(x: np.ndarray) -> int:
 
 def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt: float) -> tuple[str, ...]:
     """Notes on a record's logging and subject faults: clipped, frozen or spiked columns, a
-    stick let go.
+    stick let go, a loop that went unstable.
 
     Parameters
     ----------
@@ -177,7 +221,18 @@ def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt
                                  f"{start:.6g} s into the record while the forcing goes on (below "
                                  f"{100 * LET_GO_SHARE:g} % of its usual activity): the stick let go? No "
                                  "pilot model here rests so; leave the stretch out if the subject let go")
-        n = _spikes(x)
+        # Once: the loop's output and control grow together.
+        if role in ("control", "output") and not any("swings" in n for n in notes):
+            forcing = [v for r, v in signals.items() if r in ("disturbance", "reference") and np.ptp(v) > 0]
+            ratio, at = swing_ratio(x, forcing, dt)
+            if ratio > SWING_LIMIT:
+                notes.append(f"data check: column '{name}' ({role}) swings {ratio:.3g} times wider from "
+                             f"{at:.6g} s into the record than where it is calmest, while the forcing holds "
+                             "steady: the loop went unstable (control lost, a pilot-induced oscillation)? "
+                             "No linear pilot model describes such a run; leave it out")
+        # A loop that grew a hundredfold makes its calm stretch the scale every larger sample
+        # is a "spike" against: said once, as the growth.
+        n = 0 if role in ("control", "output") and any("swings" in n for n in notes) else _spikes(x)
         if n:
             notes.append(f"data check: column '{name}' ({role}) has {n} single-sample spike(s) far off "
                          "their neighbours (a logger's glitch?); a rate limit named on this run may be "

@@ -23,8 +23,10 @@ comparing fits:
   paths mis-scaled (both fitted by linear least squares on the two path responses:
   a negative gain is a sign error, a gain outside [1/``scale_ratio``, ``scale_ratio``] a
   units error) and swapped columns (every assignment of the three columns to the
-  control, disturbance and output roles). Only a sign, a units-size scale or a swap
-  that fits the output better than every aircraft candidate is a wrong-file verdict.
+  control, disturbance and output roles), and the disturbance entering where the file
+  does not say (at the controlled element's input, or at its output). Only a sign, a
+  units-size scale, a swap or a disturbance's entry that fits the output better than every
+  aircraft candidate is a wrong-file verdict.
 
 Everything is a finding in the result, never an exception. The responses are computed
 once on the shifted FFT contour of :func:`hesspipe.diagnose.checks.forced_response`, so
@@ -43,7 +45,8 @@ import scipy.optimize
 import scipy.signal
 import scipy.stats
 
-from ..pilot.blocks import tf
+from ..core._tf import siso_coefficients
+from ..pilot.blocks import from_tf, tf
 from ..pilot.effects import actuator_lag_factor, roll_mode_factor
 from ..plants.consistency import UNITS_SIZE, radians_hint
 from ._refit import (  # noqa: F401 (DRIFT_HZ, EVIDENCE_BAND_HZ: re-exported, named by the README and tests)
@@ -317,7 +320,36 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
                                {"columns": list(perm), "gain_control": float(g[0]),
                                 "gain_disturbance": float(g[1]), "swapped": swapped},
                                "; ".join(what) or f"path gains refitted ({g[0]:.3g}, {g[1]:.3g})"))
+    # Where the disturbance enters: at the controlled element's input (Yd = Yc) or at its
+    # output (Yd = 1), the two places a lab injects it. A review's output disturbance read
+    # with an input-disturbance plants file was named a Dutch roll on 24 of 24 yaw runs.
+    yc = plants.control_to_output
+    for where, yd in (("input", yc), ("output", ct.tf([1.0], [1.0]))):
+        if _same_tf(yd, plants.disturbance_to_output):
+            continue
+        a_c = p.time(p.yc * p.spec["control"])
+        a_d = p.time(from_tf(yd).response(p.s) * p.spec["disturbance"])
+        free_w = p.free(_poles(yc, yd))
+        A = np.concatenate([np.stack([a_c[p.sl], a_d[p.sl]], axis=1), free_w], axis=1)
+        y = p.cols["output"][p.sl]
+        g, *_ = np.linalg.lstsq(A, y, rcond=None)
+        fit = float(100.0 * (1.0 - np.linalg.norm(y - A @ g) / max(np.linalg.norm(y - y.mean()), 1e-300)))
+        num, den = siso_coefficients(yd)
+        out.append(Explanation(
+            "disturbance_entry" + "+sign" * bool(min(g[0], g[1]) < 0), "file", fit,
+            {"columns": list(roles), "gain_control": float(g[0]), "gain_disturbance": float(g[1]), "swapped": False,
+             "disturbance_to_output": {"num": [float(v) for v in num], "den": [float(v) for v in den]}},
+            f"the disturbance enters at the controlled element's {where} (disturbance_to_output "
+            f"{'= control_to_output' if where == 'input' else '= 1'}) and not as the plants file says,"
+            + "".join(f"; the {r} path's sign flipped" for r, v in zip(("control", "disturbance"), g) if v < 0)))
     return out
+
+
+def _same_tf(a, b) -> bool:
+    """Whether two SISO transfer functions are one (their responses agree on a few frequencies)."""
+    w = np.array([0.1, 1.0, 10.0]) * 1j
+    ra, rb = from_tf(a).response(w), from_tf(b).response(w)
+    return bool(np.allclose(ra, rb, rtol=1e-6, atol=1e-12))
 
 
 def _common_scale(g_c: float, g_d: float) -> float | None:
@@ -439,9 +471,20 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
     # pair whose free numerator took up a units-size factor) fitted better by its extra
     # parameters alone, and a radians-against-degrees output was "unexplained".
     rival = best_air if best_air in supported else None
-    if best_file is not None and (rival is None or best_file.fit_percent > rival.fit_percent + 5.0):
+
+    def beats(e, rival) -> bool:
+        if rival is None or e.fit_percent > rival.fit_percent + 5.0:
+            return True
+        # The disturbance's entry adds no dynamics: as a simpler aircraft candidate is, it is
+        # preferred while it leaves at most PARSIMONY times the rival's residual power (a
+        # Dutch-roll pair's free numerators mimicked an output disturbance at 94.3 % against
+        # its 95.4 %).
+        return e.id.startswith("disturbance_entry") and \
+            (100.0 - e.fit_percent) ** 2 <= PARSIMONY * (100.0 - rival.fit_percent) ** 2
+    if best_file is not None and beats(best_file, rival):
         msg = (f"{head}; WRONG PLANTS FILE OR COLUMNS: {best_file.how} gives fit {best_file.fit_percent:.1f} % "
-               f"(decided by refitting the path gains for every assignment of the columns; best "
+               f"(decided by refitting the path gains for every assignment of the columns and for the "
+               f"disturbance entering at the controlled element's input or output; best "
                f"aircraft-side candidate {best_air.id}: {best_air.fit_percent:.1f} %"
                f"{'' if rival else ', not supported'})")
         q = dict(best_file.parameters)
@@ -517,6 +560,9 @@ def corrected(run, plants, finding: PlantFinding):
         s_c, s_d = (-1.0 if g_c < 0 else 1.0), (-1.0 if g_d < 0 else 1.0)
         run = replace(run, control=s_c * getattr(run, u_k), disturbance=s_d * getattr(run, w_k),
                       output=k * getattr(run, y_k))
+        if "disturbance_to_output" in q:   # where the disturbance enters, as the finding has it
+            plants = replace(plants, disturbance_to_output=ct.tf(q["disturbance_to_output"]["num"],
+                                                                 q["disturbance_to_output"]["den"]))
         plants = replace(plants, control_to_output=abs(g_c) * plants.control_to_output,
                          disturbance_to_output=abs(g_d) * plants.disturbance_to_output)
     return run, plants

@@ -138,7 +138,7 @@ def _flags(d: Diagnosis) -> list[str]:
     """What a run's report says beside its names that the one line must not hide: plants that
     do not reproduce the output (no aircraft-side candidate closes the gap, or the file looks
     wrong), a motion path that names motion only when changed, and the record's own faults
-    (:mod:`hesspipe.core._quality`: a clipped or spiked column, a logger that froze, a channel held, a stick let go)."""
+    (:mod:`hesspipe.core._quality`: a clipped or spiked column, a logger that froze, a channel held, a stick let go, a loop that went unstable)."""
     out = []
     pf = d.plant_finding or {}
     if pf.get("verdict") in ("unexplained", "wrong_file"):
@@ -148,7 +148,8 @@ def _flags(d: Diagnosis) -> list[str]:
     if check.get("named"):
         out.append(f"CHECK motion_path: motion is named with it {' or '.join(check['named'])}")
     faults = [kind for kind, words in (("clipped", "clipped"), ("spikes", "spike"), ("logger froze", "logger froze"),
-                                        ("held", "holds one value"), ("let go", "barely moves"))
+                                        ("held", "holds one value"), ("let go", "barely moves"),
+                                        ("unstable", "went unstable"))
               if any(n.startswith("data check") and words in n for n in d.notes)]
     if faults:
         out.append(f"data check: {', '.join(faults)}")

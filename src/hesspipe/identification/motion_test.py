@@ -223,14 +223,15 @@ def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, lev
     starts = [[c[n_] for n_ in core] + [km] for c in (p_o, base)
               for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"]))]
     dof = n_res - len(free_e) - 1   # as the test's: the equaliser held at the original's value counts
-    p = {}
+    p, gain = {}, {}
     for name, cab in cabs.items():
         rss_v, _, _ = _fit(expanded, base_e, free_e, lo_e, hi_e, starts, cab, *data[1:], w, keep=EXPANDED_KEEP)
         p[name] = _nested_f(rss_o, min(rss_v, rss_o), 1, dof)[1]
+        gain[name] = float(1.0 - min(rss_v, rss_o) / rss_o) if rss_o > 0 else 0.0
     # Bonferroni over the variants: on records without motion feedback a variant is then
     # found with probability at most `level`, as motion itself is.
     named = [name for name in p if p[name] * len(p) < level]
-    return {"p_values": p, "named": named, "better": min(named, key=p.get) if named else None,
+    return {"p_values": p, "gains": gain, "named": named, "better": min(named, key=p.get) if named else None,
             "level": float(level)}
 
 

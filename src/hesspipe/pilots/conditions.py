@@ -105,12 +105,13 @@ class ConditionComparison:
         The two conditions' names; differences are the second's minus the first's.
     persons : dict
         Person id → ``{label: metrics}`` for every person with runs in a condition; the
-        metrics are those of :data:`METRICS` plus ``runs`` (ids), ``crossover_std`` (rad/s)
-        and ``phase_margin_std_deg``.
+        metrics are those of :data:`METRICS` plus ``runs`` (ids), ``crossover_std`` (rad/s),
+        ``phase_margin_std_deg`` and the forcing's variances.
     tests : dict
         Metric key → ``{"n", "higher", "effect", "t", "p_value", "p_holm"}`` (``effect``: the
         mean difference, or for a log metric the geometric-mean ratio; ``p_holm`` None for a
-        secondary metric); None where fewer than :data:`MIN_PERSONS` persons have the metric
+        secondary metric, and for the variances with ``confounded`` where the forcing differs
+        between the conditions); None where fewer than :data:`MIN_PERSONS` persons have the metric
         in both conditions.
     verdict : str
         In words (:func:`conditions_verdict`).
@@ -158,7 +159,8 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         (deg), ``error_variance`` (output unit², e = reference - output), ``control_variance``
         (control unit²), ``remnant_share`` (0-1), ``output_channel`` (the median |Hpy|/|Hpe| at
         1-5 rad/s, :attr:`~hesspipe.identification.frf_channels.Channels.ratio_median`; NaN
-        without both line sets).
+        without both line sets), ``reference_variance`` and ``disturbance_variance`` (the
+        forcing's, in their columns' units²).
 
     Raises
     ------
@@ -195,12 +197,15 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         # Independent runs: the mean's variance is the sum of theirs over N squared.
         wc_sd, pm_sd = (float(np.sqrt(np.sum(per[:, i] ** 2))) / len(runs) for i in (1, 3))
     cut = [windowed(r) for r in runs]
+
+    def variance(column: str) -> float:
+        return float(np.mean([np.var(np.asarray(getattr(r, column))) for r in cut]))
     return {"runs": [r.id for r in runs], "averaged": averaged,
             "crossover_rad_s": float(wc), "crossover_std": float(wc_sd),
             "phase_margin_deg": float(pm), "phase_margin_std_deg": float(pm_sd),
-            "error_variance": float(np.mean([np.var(np.asarray(r.error)) for r in cut])),
-            "control_variance": float(np.mean([np.var(np.asarray(r.control)) for r in cut])),
-            "remnant_share": float(rem), "output_channel": float(ch)}
+            "error_variance": variance("error"), "control_variance": variance("control"),
+            "remnant_share": float(rem), "output_channel": float(ch),
+            "reference_variance": variance("reference"), "disturbance_variance": variance("disturbance")}
 
 
 def _channel(frf) -> float:
@@ -208,7 +213,8 @@ def _channel(frf) -> float:
     return math.nan if ch is None else ch.ratio_median
 
 
-def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) -> dict:
+def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple, *,
+                 confounded: frozenset = frozenset()) -> dict:
     """Each metric's paired t test across the persons with both conditions, the primary ones
     Holm-adjusted together.
 
@@ -219,6 +225,9 @@ def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) ->
         there leaves the person out of that metric's test).
     labels : (str, str)
         The conditions; a difference is the second's minus the first's.
+    confounded : frozenset of str
+        Metrics whose difference the design explains (:func:`forcing_ratios`): tested and
+        marked ``confounded``, but left out of the primary family and so of the verdict.
 
     Returns
     -------
@@ -237,20 +246,55 @@ def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) ->
             continue
         x, y = np.array(pairs).T
         d = np.log(y) - np.log(x) if m.log else y - x
-        if np.all(d == d[0]):   # no spread: the t statistic is undefined
-            t, p = (0.0, 1.0) if d[0] == 0 else (math.copysign(math.inf, d[0]), 0.0)
+        if np.ptp(d) <= 1e-12 * max(1.0, float(np.max(np.abs(d)))):
+            # No spread (to rounding): the t statistic is undefined (and scipy warns).
+            t, p = (0.0, 1.0) if abs(float(np.mean(d))) <= 1e-12 else (math.copysign(math.inf, float(np.mean(d))), 0.0)
         else:
             t, p = (float(v) for v in stats.ttest_1samp(d, 0.0))
         tests[m.key] = {"n": len(pairs), "higher": int(np.sum(d > 0)),
                         "effect": float(np.exp(np.mean(d))) if m.log else float(np.mean(d)),
-                        "t": t, "p_value": p, "p_holm": None}
-    primary = {m.key for m in METRICS if m.primary}
+                        "t": t, "p_value": p, "p_holm": None,
+                        **({"confounded": True} if m.key in confounded else {})}
+    primary = {m.key for m in METRICS if m.primary and m.key not in confounded}
     done = sorted((k for k, v in tests.items() if v is not None and k in primary), key=lambda k: tests[k]["p_value"])
     running = 0.0
     for i, key in enumerate(done):   # Holm's step-down, kept monotone
         running = max(running, min(1.0, (len(done) - i) * tests[key]["p_value"]))
         tests[key]["p_holm"] = running
     return tests
+
+
+#: The forcing's power may differ between the conditions by this factor (median over the
+#: persons) before the error and control variances, which scale with it, leave the verdict.
+FORCING_TOLERANCE = 1.25
+
+
+def forcing_ratios(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) -> dict:
+    """The forcing's power in the second condition over the first's, median over the persons
+    who flew both, per forcing column (``reference``, ``disturbance``; a column without power
+    in either condition left out).
+
+    Parameters
+    ----------
+    persons : mapping
+        Person → condition label → :func:`person_metrics`.
+    labels : (str, str)
+        The conditions.
+
+    Returns
+    -------
+    dict
+        Column → ratio of variances.
+    """
+    a, b = labels
+    out = {}
+    for column in ("reference", "disturbance"):
+        key = f"{column}_variance"
+        r = [c[b][key] / c[a][key] for c in persons.values() if a in c and b in c
+             and c[a].get(key, 0.0) > 0 and c[b].get(key, 0.0) > 0]
+        if r:
+            out[column] = float(np.median(r))
+    return out
 
 
 def conditions_verdict(tests: Mapping[str, Mapping | None], labels: tuple, n_both: int) -> str:
@@ -271,7 +315,8 @@ def conditions_verdict(tests: Mapping[str, Mapping | None], labels: tuple, n_bot
         "undetermined: ...", "the conditions differ: ..." or "no difference found: ...".
     """
     a, b = labels
-    done = {m.key: tests[m.key] for m in METRICS if m.primary and tests.get(m.key) is not None}
+    done = {m.key: tests[m.key] for m in METRICS if m.primary and tests.get(m.key) is not None
+            and tests[m.key]["p_holm"] is not None}
     if not done:
         return (f"undetermined: {n_both} person(s) flew both {a} and {b} with the metrics found; "
                 f"a paired test needs at least {MIN_PERSONS}")
@@ -385,7 +430,18 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
     if not any(forcing_sets(r) in (SEPARABLE, "disturbance only") for r in [*runs_a, *runs_b]):
         notes.append("no run has disturbance lines: the crossover and phase margin of this comparison are the target "
                      "loop's (measured at the target's lines), not the disturbance loop's")
-    tests = paired_tests(persons, labels)
+    # A lab that lowers the forcing in the motion condition (the cab's travel) changes the
+    # error and control variances by as much: a review's same persons at half the forcing
+    # read "the conditions differ: error variance lower (x0.255)".
+    ratios = forcing_ratios(persons, labels)
+    confounded = frozenset()
+    if any(not 1 / FORCING_TOLERANCE <= v <= FORCING_TOLERANCE for v in ratios.values()):
+        confounded = frozenset({"error_variance", "control_variance"})
+        notes.append(f"the forcing differs between the conditions ({labels[1]} against {labels[0]}: "
+                     + ", ".join(f"{c} power x{v:.3g}" for c, v in ratios.items())
+                     + ", median over the persons): the error and control variances scale with it, so their "
+                     "tests are reported but left out of the verdict")
+    tests = paired_tests(persons, labels, confounded=confounded)
     return ConditionComparison(labels=labels, persons=persons, tests=tests,
                                verdict=conditions_verdict(tests, labels, len(both)), synthetic=synthetic,
                                notes=tuple(notes))
@@ -411,7 +467,8 @@ def format_conditions(result: ConditionComparison) -> str:
            f"across persons; the primary metrics Holm-adjusted together, alpha {ALPHA:g}):"]
     for m in METRICS:
         t = result.tests.get(m.key)
-        held = "secondary, unadjusted" if t is None or t["p_holm"] is None else f"Holm {t['p_holm']:.2g}"
+        held = ("not in the verdict: the forcing differs" if t is not None and t.get("confounded") else
+                "secondary, unadjusted" if t is None or t["p_holm"] is None else f"Holm {t['p_holm']:.2g}")
         out.append(f"  {m.label:32s} " + (f"fewer than {MIN_PERSONS} persons with it in both" if t is None else
                    f"{'ratio' if m.log else 'mean difference'} {_size(m, t['effect'])}, higher for "
                    f"{t['higher']} of {t['n']}, p = {t['p_value']:.2g} ({held})"))
