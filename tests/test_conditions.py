@@ -137,6 +137,8 @@ def test_a_forcing_that_differs_between_the_conditions_leaves_the_variances_out_
     (note,) = [n for n in result.notes if "forcing differs" in n]
     assert "half against full: reference power x0.25, disturbance power x0.25" in note
     assert "left out of the verdict" in note
+    assert result.verdict.endswith("; the error and control variances are not compared: the forcing differs "
+                                   "(reference power x0.25, disturbance power x0.25)")
 
 
 def test_too_few_persons_or_no_difference_say_so():

@@ -2,6 +2,7 @@
 
 import json
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -76,9 +77,20 @@ def test_a_publication_killed_midway_is_refused_as_input_until_published_whole(t
             for name in "abc":
                 (stage / f"{name}.txt").write_text("run 2")
     assert [(out / f"{n}.txt").read_text() for n in "abc"] == ["run 2", "run 2", "run 1"]
-    with pytest.raises(HesspipeError, match=r"c.txt: its folder holds a hesspipe flight output whose "
-                                             r"writing was stopped midway .* run the command that wrote it again"):
+    with pytest.raises(HesspipeError, match=r"c.txt: .*out holds a hesspipe flight output whose writing was "
+                                             r"stopped midway \(its .hesspipe-output file says so.* run the "
+                                             r"command that wrote it again"):
         read_bytes(out / "c.txt", "a text file")
+    # A file in a sub-folder of it, one with a complete marker of its own too (a cohort in
+    # pilots/cohort/), is refused; a file beside it reached through it is not.
+    (out / "sub").mkdir()
+    (out / "sub" / "d.txt").write_text("run 2")
+    (out / "sub" / ".hesspipe-output").write_text(json.dumps({"hesspipe_output": "cohort", "files": ["d.txt"]}))
+    with pytest.raises(HesspipeError, match="stopped midway"):
+        read_bytes(out / "sub" / "d.txt", "a text file")
+    (tmp_path / "own.txt").write_text("mine")
+    assert read_bytes(out / ".." / "own.txt", "a text file") == b"mine"
+    shutil.rmtree(out / "sub")
     monkeypatch.undo()
     with staged_output(out, "flight") as stage:
         for name in "abc":

@@ -100,9 +100,19 @@ def test_a_loop_that_went_unstable_is_noted(tmp_path, trial):
     (note,) = _checks(tmp_path, replace(run, output=run.output * grow, control=run.control * grow), "u.csv")
     assert "column 'output' (output) swings" in note and "the loop went unstable" in note
     ratio, at = float(note.split("swings ")[1].split(" times")[0]), float(note.split("from ")[1].split(" s")[0])
-    assert ratio > 50 and 15.0 <= at <= 20.0
+    assert ratio > 100 and 15.0 <= at <= 20.0
     grown = 1.0 + 4.0 * np.exp(-0.5 * ((t - 20.0) / 3.0) ** 2)     # x5: a hard stretch, no note
     assert _checks(tmp_path, replace(run, output=run.output * grown, control=run.control * grown), "g.csv") == []
+    # Calm is no smaller swing of a stable loop: a square-wave target the output follows, with
+    # rests between its steps (a review: "unstable" at 88 times), and a stick let go for 8 s.
+    square = np.where(np.sin(2 * np.pi * t / 30.0) >= 0, 1.0, -1.0) * 5 * np.std(run.output)
+    settled = square + 0.05 * (run.output - np.mean(run.output))
+    assert not [n for n in _checks(tmp_path, replace(run, reference=square, output=settled), "sq.csv")
+                if "unstable" in n]
+    u = run.control.copy()
+    u[1000:1800] = 0.002 * np.std(u) * np.random.default_rng(2).standard_normal(800)
+    notes = _checks(tmp_path, replace(run, control=u), "go8.csv")
+    assert [n for n in notes if "let go" in n] and not [n for n in notes if "unstable" in n]
 
 
 def test_valid_records_a_second_review_found_noted_are_not(tmp_path, trial):

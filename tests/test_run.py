@@ -86,12 +86,17 @@ def test_second_run_reruns_nothing(reference, capsys):
     assert [line.split()[1] for line in lines] == ["fresh"] * len(STAGES)
 
 
+def _copy_with_config(reference, tmp_path, text: str):
+    """A copy of the reference run's folder and a configuration of `text` beside it."""
+    work, cfg = tmp_path / "out", tmp_path / "edited.toml"
+    shutil.copytree(reference[1], work)
+    cfg.write_text(text)
+    return work, cfg
+
+
 def test_editing_the_wind_profile_reruns_flight_and_downstream_only(reference, tmp_path, capsys):
-    cfg, out, files = reference
-    work = tmp_path / "out"
-    shutil.copytree(out, work)
-    edited = tmp_path / "edited.toml"
-    edited.write_text(SMALL.replace("[flight]\n", "[flight]\nside_wind = { speed_end_fps = 15.0 }\n"))
+    work, edited = _copy_with_config(reference, tmp_path,
+                                     SMALL.replace("[flight]\n", "[flight]\nside_wind = { speed_end_fps = 15.0 }\n"))
     assert main(["status", "--config", str(edited), "--out", str(work)]) == 0
     status = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()}
     assert "configuration changed" in status["flight"] and "fresh" in status["analytic"]
@@ -103,10 +108,7 @@ def test_workers_change_how_not_what(reference, tmp_path, capsys):
     # Two worker processes give the same bytes as one, so changing the number leaves every
     # stage up to date (it re-ran the pilots stage and all after it, "configuration changed").
     cfg, out, files = reference
-    work = tmp_path / "out"
-    shutil.copytree(out, work)
-    two = tmp_path / "two.toml"
-    two.write_text(SMALL.replace("workers = 1", "workers = 2"))
+    work, two = _copy_with_config(reference, tmp_path, SMALL.replace("workers = 1", "workers = 2"))
     capsys.readouterr()
     assert main(["status", "--config", str(two), "--out", str(work)]) == 0
     assert [line.split()[1] for line in capsys.readouterr().out.splitlines()] == ["fresh"] * len(STAGES)

@@ -81,10 +81,11 @@ MATPLOTLIB_PREFIX = "hesspipe-matplotlib-"
 def _matplotlib_folder_of_its_own():
     """Give matplotlib a configuration folder of this command's own, removed when it ends.
 
-    Imported for a figure, matplotlib creates ``~/.config/matplotlib`` and writes its font
-    list to ``~/.cache/matplotlib``: outside the output folder the user chose. A folder the
-    user chose (``MPLCONFIGDIR``) is kept, and so is a matplotlib already loaded (a caller's
-    process). Building the font list again costs about 0.2 s per command that draws.
+    Loaded (by python-control, so by nearly every command), matplotlib creates
+    ``~/.config/matplotlib`` and writes its font list to ``~/.cache/matplotlib``: outside the
+    output folder the user chose. A folder the user chose (``MPLCONFIGDIR``) is kept, and so
+    is a matplotlib already loaded (a caller's process). Building the font list again costs
+    about 0.2 s per command.
     """
     if "MPLCONFIGDIR" in os.environ or "matplotlib" in sys.modules:
         yield
@@ -102,7 +103,14 @@ def _matplotlib_folder_of_its_own():
         yield
     finally:
         os.environ.pop("MPLCONFIGDIR", None)
-        shutil.rmtree(folder, ignore_errors=True)
+        if "matplotlib" in sys.modules:
+            # Loaded, it keeps the folder as its own for the process's life (main() called
+            # from Python): removed when the process ends.
+            import atexit
+
+            atexit.register(shutil.rmtree, folder, True)
+        else:
+            shutil.rmtree(folder, ignore_errors=True)
 
 
 def main(argv: list[str] | None = None) -> int:

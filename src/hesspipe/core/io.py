@@ -79,11 +79,16 @@ def check_published(path: str | os.PathLike) -> None:
         Naming the file and what to do.
     """
     path = Path(path)
-    marker = _read_marker(path.parent)
-    if marker is not None and marker.get("publishing"):
-        raise HesspipeError(f"{path}: its folder holds a hesspipe {marker['hesspipe_output']} output whose "
-                            "writing was stopped midway (its files may come from two runs); expected a "
-                            "complete output: run the command that wrote it again")
+    # Every folder above it: a stage's files lie in sub-folders of the one it publishes, which
+    # may hold a marker of their own (a cohort's runs in pilots/cohort/). Resolved, so that a
+    # path through `..` is judged by where the file is.
+    for folder in path.resolve().parents:
+        if output_publishing(folder):
+            marker = _read_marker(folder)
+            raise HesspipeError(f"{path}: {folder} holds a hesspipe {marker['hesspipe_output']} output whose "
+                                f"writing was stopped midway (its {MARKER} file says so; its files may come "
+                                "from two runs); expected a complete output: run the command that wrote it "
+                                "again")
 
 
 def _cannot_write(path, exc: OSError) -> HesspipeError:
@@ -106,8 +111,10 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         The final file; its folder is created if needed.
     """
     path = Path(path)
-    # A write of this very file that was killed left its temporary file beside it.
-    remove_leftovers(path.parent, only=f"-{path.name}")
+    # A write of this very file that was killed left its temporary file beside it (at best:
+    # a folder one may write to but not list keeps it).
+    with contextlib.suppress(OSError):
+        remove_leftovers(path.parent, only=f"-{path.name}")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f"{TMP_PREFIX}{os.getpid()}-", suffix=f"-{path.name}",
@@ -268,6 +275,18 @@ def output_kind(folder: str | os.PathLike) -> str | None:
     return legacy[0] if legacy else None
 
 
+def output_publishing(folder: str | os.PathLike) -> bool:
+    """Whether `folder`'s marker says its publication was stopped midway.
+
+    Parameters
+    ----------
+    folder : str or PathLike
+        A hesspipe output folder.
+    """
+    marker = _read_marker(Path(folder))
+    return bool(marker is not None and marker.get("publishing"))
+
+
 def _owned(folder: Path) -> set[str]:
     marker = _read_marker(folder)
     if marker is not None:
@@ -290,6 +309,10 @@ def _pid_of(entry: Path, prefixes=(TMP_PREFIX, STAGING_PREFIX)) -> int | None:
 
 
 def _alive(pid: int) -> bool:
+    if os.name == "nt":
+        # os.kill(pid, 0) sends a console Ctrl-C to a process group there, and getting a
+        # process's state needs the Win32 API: every leftover is kept (nothing lost).
+        return True
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -458,7 +481,8 @@ def _signals_held() -> Iterator[None]:
         yield
     finally:
         for sig, handler in previous.items():
-            signal.signal(sig, handler)
+            # None: a handler installed outside Python (an embedding host); the default then.
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
         for sig in dict.fromkeys(held):
             signal.raise_signal(sig)
 

@@ -324,7 +324,9 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
     # output (Yd = 1), the two places a lab injects it. A review's output disturbance read
     # with an input-disturbance plants file was named a Dutch roll on 24 of 24 yaw runs.
     yc = plants.control_to_output
-    for where, yd in (("input", yc), ("output", ct.tf([1.0], [1.0]))):
+    # Not on a record without a disturbance: the candidate would be the control's gain alone.
+    entries = (("input", yc), ("output", ct.tf([1.0], [1.0]))) if np.ptp(p.cols["disturbance"]) > 0 else ()
+    for where, yd in entries:
         if _same_tf(yd, plants.disturbance_to_output):
             continue
         a_c = p.time(p.yc * p.spec["control"])
@@ -335,13 +337,19 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
         g, *_ = np.linalg.lstsq(A, y, rcond=None)
         fit = float(100.0 * (1.0 - np.linalg.norm(y - A @ g) / max(np.linalg.norm(y - y.mean()), 1e-300)))
         num, den = siso_coefficients(yd)
+        # Its sign and scale said as the columns' are: a disturbance also in degrees against
+        # radians (a gain of 0.0174) was fitted and not said (a review).
+        sign = [r for r, v in zip(("control", "disturbance"), g) if v < 0]
+        scale = [(r, abs(v)) for r, v in zip(("control", "disturbance"), g)
+                 if v != 0 and not 1 / SCALE_RATIO <= abs(v) <= SCALE_RATIO]
         out.append(Explanation(
-            "disturbance_entry" + "+sign" * bool(min(g[0], g[1]) < 0), "file", fit,
+            "+".join(["disturbance_entry"] + ["sign"] * bool(sign) + ["scale"] * bool(scale)), "file", fit,
             {"columns": list(roles), "gain_control": float(g[0]), "gain_disturbance": float(g[1]), "swapped": False,
              "disturbance_to_output": {"num": [float(v) for v in num], "den": [float(v) for v in den]}},
-            f"the disturbance enters at the controlled element's {where} (disturbance_to_output "
-            f"{'= control_to_output' if where == 'input' else '= 1'}) and not as the plants file says,"
-            + "".join(f"; the {r} path's sign flipped" for r, v in zip(("control", "disturbance"), g) if v < 0)))
+            "; ".join([f"the disturbance enters at the controlled element's {where} (disturbance_to_output "
+                       f"{'= control_to_output' if where == 'input' else '= 1'}), not where the plants file says"]
+                      + [f"the {r} path's sign flipped" for r in sign]
+                      + [f"the {r} path's scale off by {v:.3g}{radians_hint(v)}" for r, v in scale]) + ","))
     return out
 
 

@@ -190,11 +190,11 @@ def path_words(check: dict | None) -> str:
     # static runs (a review's design variants: 10 of 76, p to 1e-10; a visual lead free in
     # the original did not explain it away), hence the caution.
     found = " and ".join(f"{name} (p={p[name]:.2g})" for name in check["named"])
-    return (f"motion is not named with the path given, but it is with the path {found} (p before the x {n} "
-            f"for the variants tried; each without the test's vestibular delay): check motion_path's sign "
-            f"and whether it differentiates the output (SPEC: output -> cab angular velocity). On a run "
-            f"whose cab did not move this is a misfit a path on the output takes up, not a path to change: "
-            f"believe it where the motion runs flag the same change and the static runs do not")
+    return (f"motion is not named with the path given, but it is with the path {found} (each p before "
+            f"multiplying by the {n} variants tried; each without the test's vestibular delay): check "
+            f"motion_path's sign and whether it differentiates the output (SPEC: output -> cab angular "
+            f"velocity). On a run whose cab did not move, this is the model's misfit, not a wrong path: "
+            f"believe it only where the motion runs flag the same change and the static runs do not")
 
 
 def delay_test(delay_s: float, se_s: float, max_pilot_delay_s: float, alpha: float) -> dict:

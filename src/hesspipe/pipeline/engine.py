@@ -33,7 +33,15 @@ from typing import Callable, Mapping, Sequence
 from .. import __version__
 from ..core.config import Fields, load_toml
 from ..core.errors import HesspipeError
-from ..core.io import STAGING_PREFIX, check_output_dir, mark_output_dir, remove_leftovers, staged_output, write_json
+from ..core.io import (
+    STAGING_PREFIX,
+    check_output_dir,
+    mark_output_dir,
+    output_publishing,
+    remove_leftovers,
+    staged_output,
+    write_json,
+)
 from ..core.provenance import file_hash, versions
 
 MANIFEST = "manifest.json"
@@ -310,6 +318,8 @@ class Pipeline:
         manifest = _read_manifest(folder)
         if manifest is None or "fingerprint" not in manifest:
             return "never completed" if not folder.exists() else "no complete run (interrupted or never run)"
+        if output_publishing(folder):
+            return "no complete run (stopped while its files were moved into place)"
         old = manifest.get("fingerprint_parts", {})
         if old.get("code") != parts["code"]:
             return "code version changed"
