@@ -39,6 +39,20 @@ def test_a_misspelt_required_option_is_named_not_reported_missing(capsys):
     assert "the following arguments are required: --plants" in capsys.readouterr().err
 
 
+def test_a_misspelt_optional_option_is_named_by_its_command(capsys):
+    # "--confg" read "hesspipe: error: unrecognized arguments: --confg x.toml", from the
+    # top-level parser, which knows none of the command's options.
+    with pytest.raises(SystemExit) as exc:
+        main(["run", "--confg", "x.toml"])
+    assert exc.value.code == 2
+    assert capsys.readouterr().err.strip() == ("hesspipe run: error: unrecognized option --confg (did you mean "
+                                               "--config?) (see 'hesspipe run --help')")
+    with pytest.raises(SystemExit):
+        main(["run", "--bogus"])                                # nothing near it: no guess
+    assert capsys.readouterr().err.strip() == ("hesspipe run: error: unrecognized option --bogus "
+                                               "(see 'hesspipe run --help')")
+
+
 def test_bad_config_is_one_line_exit_1(tmp_path, capsys):
     cfg = tmp_path / "c.toml"
     cfg.write_text("[wind]\nspeed = 3\n")

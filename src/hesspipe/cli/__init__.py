@@ -30,24 +30,35 @@ class _Parser(argparse.ArgumentParser):
         self._argv = list(sys.argv[1:] if args is None else args)
         return super().parse_known_args(args, namespace)
 
+    def _command_parser(self) -> argparse.ArgumentParser:
+        """The parser of the command given (argparse reports a command's unknown options
+        from the top-level parser), or this one."""
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for token in self._argv:
+                    if token in action.choices:
+                        return action.choices[token]
+        return self
+
     def _unknown(self) -> str | None:
         """The first option given that this parser does not know, with the nearest it does."""
         import difflib
 
-        known = [o for o in self._option_string_actions if o.startswith("--")]
+        known = [o for o in self._command_parser()._option_string_actions if o.startswith("--")]
         for token in self._argv:
             flag = token.split("=", 1)[0]
             if flag.startswith("--") and not any(o.startswith(flag) for o in known):
-                near = difflib.get_close_matches(flag, known, n=1)
+                near = difflib.get_close_matches(flag, known, n=1, cutoff=0.75)
                 return f"unrecognized option {flag}" + (f" (did you mean {near[0]}?)" if near else "")
         return None
 
     def error(self, message):  # one line, not the whole usage block
         # A misspelt option leaves its option "required": name the misspelling instead
         # ("--plnats" read "the following arguments are required: --plants").
-        if message.startswith("the following arguments are required"):
+        if message.startswith(("the following arguments are required", "unrecognized arguments")):
             message = self._unknown() or message
-        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+        prog = self._command_parser().prog
+        self.exit(2, f"{prog}: error: {message} (see '{prog} --help')\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
