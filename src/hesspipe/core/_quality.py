@@ -80,11 +80,13 @@ def _clipped(x: np.ndarray) -> list[tuple[str, float, float]]:
     return out
 
 
-def _moving_rms(x: np.ndarray, w: int) -> np.ndarray:
-    """RMS of `x` about its mean over each window of `w` samples (``x.size - w + 1`` of them)."""
-    c1 = np.concatenate(([0.0], np.cumsum(x - x.mean())))
-    c2 = np.concatenate(([0.0], np.cumsum((x - x.mean()) ** 2)))
-    m = (c1[w:] - c1[:-w]) / w
+def _moving_rms(x: np.ndarray, w: int, centre: float | None = None) -> np.ndarray:
+    """RMS of `x` over each window of `w` samples (``x.size - w + 1`` of them), about the
+    window's own mean, or about `centre`."""
+    x = x - (x.mean() if centre is None else centre)
+    c1 = np.concatenate(([0.0], np.cumsum(x)))
+    c2 = np.concatenate(([0.0], np.cumsum(x ** 2)))
+    m = (c1[w:] - c1[:-w]) / w if centre is None else 0.0
     return np.sqrt(np.maximum((c2[w:] - c2[:-w]) / w - m * m, 0.0))
 
 
@@ -107,12 +109,6 @@ def _let_go(x: np.ndarray, forcing: list[np.ndarray], dt: float) -> tuple[float,
     span = np.where(inner, ends - starts + w - 1, 0)
     i = int(np.argmax(span))
     return (float(span[i] * dt), float(starts[i] * dt)) if span[i] * dt >= HELD_ALONE_S else (0.0, 0.0)
-
-
-def _rms_about(x: np.ndarray, centre: float, w: int) -> np.ndarray:
-    """RMS of `x` about `centre` over each window of `w` samples."""
-    c = np.concatenate(([0.0], np.cumsum((x - centre) ** 2)))
-    return np.sqrt(np.maximum(c[w:] - c[:-w], 0.0) / w)
 
 
 def swing_ratio(x: np.ndarray, forcing: list[np.ndarray], dt: float) -> tuple[float, float]:
@@ -142,10 +138,10 @@ def swing_ratio(x: np.ndarray, forcing: list[np.ndarray], dt: float) -> tuple[fl
     w, hop = max(3, int(round(SWING_WINDOW_S / dt))), max(1, int(round(1.0 / dt)))
     if x.size < 4 * w:
         return 1.0, 0.0
-    rms = _rms_about(x, float(np.median(x)), w)[::hop]
+    rms = _moving_rms(x, w, float(np.median(x)))[::hop]
     keep = np.ones(rms.size, dtype=bool)
     for f in forcing:
-        f_rms = _rms_about(f, float(np.median(f)), w)[::hop]
+        f_rms = _moving_rms(f, w, float(np.median(f)))[::hop]
         keep &= f_rms >= 0.5 * float(np.median(f_rms))
     if keep.sum() < 4:
         return 1.0, 0.0

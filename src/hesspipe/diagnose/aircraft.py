@@ -293,13 +293,7 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
     free = p.free(_poles(plants.control_to_output, plants.disturbance_to_output))
     for perm in itertools.permutations(roles):
         u_k, w_k, y_k = perm
-        a_c = p.time(p.yc * p.spec[u_k])
-        a_d = p.time(p.yd * p.spec[w_k])
-        y = p.cols[y_k]
-        A = np.concatenate([np.stack([a_c[p.sl], a_d[p.sl]], axis=1), free], axis=1)
-        g, *_ = np.linalg.lstsq(A, y[p.sl], rcond=None)
-        r = y[p.sl] - A @ g
-        fit = float(100.0 * (1.0 - np.linalg.norm(r) / max(np.linalg.norm(y[p.sl] - y[p.sl].mean()), 1e-300)))
+        g, fit = _gains_fit(p, p.time(p.yc * p.spec[u_k]), p.time(p.yd * p.spec[w_k]), p.cols[y_k], free)
         swapped = perm != roles
         bad_sign = [r for r, v in zip(("control", "disturbance"), g) if v < 0]
         bad_scale = [r for r, v in zip(("control", "disturbance"), g)
@@ -329,13 +323,9 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
     for where, yd in entries:
         if _same_tf(yd, plants.disturbance_to_output):
             continue
-        a_c = p.time(p.yc * p.spec["control"])
-        a_d = p.time(from_tf(yd).response(p.s) * p.spec["disturbance"])
-        free_w = p.free(_poles(yc, yd))
-        A = np.concatenate([np.stack([a_c[p.sl], a_d[p.sl]], axis=1), free_w], axis=1)
-        y = p.cols["output"][p.sl]
-        g, *_ = np.linalg.lstsq(A, y, rcond=None)
-        fit = float(100.0 * (1.0 - np.linalg.norm(y - A @ g) / max(np.linalg.norm(y - y.mean()), 1e-300)))
+        g, fit = _gains_fit(p, p.time(p.yc * p.spec["control"]),
+                            p.time(from_tf(yd).response(p.s) * p.spec["disturbance"]), p.cols["output"],
+                            p.free(_poles(yc, yd)))
         num, den = siso_coefficients(yd)
         # Its sign and scale said as the columns' are: a disturbance also in degrees against
         # radians (a gain of 0.0174) was fitted and not said (a review).
@@ -351,6 +341,16 @@ def _file_candidates(p: _Paths, plants) -> list[Explanation]:
                       + [f"the {r} path's sign flipped" for r in sign]
                       + [f"the {r} path's scale off by {v:.3g}{radians_hint(v)}" for r, v in scale]) + ","))
     return out
+
+
+def _gains_fit(p: _Paths, a_c: np.ndarray, a_d: np.ndarray, y: np.ndarray, free: np.ndarray
+               ) -> tuple[np.ndarray, float]:
+    """The two path gains (and the nuisance columns' weights) that fit `y` best from the
+    paths' responses `a_c`, `a_d` over the fitted samples: (gains, fit percent)."""
+    A = np.concatenate([np.stack([a_c[p.sl], a_d[p.sl]], axis=1), free], axis=1)
+    g, *_ = np.linalg.lstsq(A, y[p.sl], rcond=None)
+    r = y[p.sl] - A @ g
+    return g, float(100.0 * (1.0 - np.linalg.norm(r) / max(np.linalg.norm(y[p.sl] - y[p.sl].mean()), 1e-300)))
 
 
 def _same_tf(a, b) -> bool:
