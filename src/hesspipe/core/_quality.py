@@ -165,6 +165,27 @@ def _spikes(x: np.ndarray) -> int:
     return int(np.sum(big & agree))
 
 
+#: Each data check's short name (``diagnose --each`` lines) and the words its note holds.
+CHECK_NAMES = (("clipped", "clipped"), ("spikes", "spike"), ("logger froze", "logger froze"),
+               ("held", "holds one value"), ("let go", "barely moves"), ("unstable", "went unstable"))
+
+
+def check_names(notes) -> list[str]:
+    """The short names of the data checks among a run's `notes`.
+
+    Parameters
+    ----------
+    notes : sequence of str
+        A run's notes (those of :func:`quality_notes` among them).
+
+    Returns
+    -------
+    list of str
+        In :data:`CHECK_NAMES`' order.
+    """
+    return [name for name, words in CHECK_NAMES if any(n.startswith("data check") and words in n for n in notes)]
+
+
 def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt: float) -> tuple[str, ...]:
     """Notes on a record's logging and subject faults: clipped, frozen or spiked columns, a
     stick let go, a loop that went unstable.
@@ -194,6 +215,8 @@ def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt
                          f"({longest * dt:.3g} s) from {first * dt:.6g} s into the record: the logger "
                          "froze? Such a stretch is no pilot's response and moves the fits; leave it out "
                          "(cut the record) if it is not the pilot's")
+    forcing = [v for r, v in signals.items() if r in ("disturbance", "reference") and np.ptp(v) > 0]
+    unstable = False
     for role, x in signals.items():
         name = columns[role]
         if x.size < 3 or float(np.ptp(x)) == 0.0:
@@ -219,7 +242,6 @@ def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt
                              "inside the record: a channel that froze, or a stick let go? No pilot "
                              "model here holds such a stretch; leave it out if it is not the pilot's")
             elif role == "control" and longest * dt < HELD_ALONE_S:
-                forcing = [v for r, v in signals.items() if r in ("disturbance", "reference") and np.ptp(v) > 0]
                 span, start = _let_go(x, forcing, dt)
                 if span:
                     notes.append(f"data check: column '{name}' (control) barely moves for {span:.3g} s from "
@@ -228,16 +250,17 @@ def quality_notes(data: Mapping[str, np.ndarray], columns: Mapping[str, str], dt
                                  "pilot model here rests so; leave the stretch out if the subject let go")
         # The output's: a stick let go or held at a dead zone is calm without the loop growing.
         if role == "output":
-            forcing = [v for r, v in signals.items() if r in ("disturbance", "reference") and np.ptp(v) > 0]
             ratio, at = swing_ratio(x, forcing, dt)
-            if ratio > SWING_LIMIT:
-                notes.append(f"data check: column '{name}' ({role}) swings {ratio:.3g} times wider in the 5 s "
+            unstable = ratio > SWING_LIMIT
+            if unstable:
+                notes.append(f"data check: column '{name}' ({role}) swings {ratio:.3g} times wider in the "
+                             f"{SWING_WINDOW_S:g} s "
                              f"from {at:.6g} s into the record than where it is calmest, while the forcing holds "
                              "steady: the loop went unstable (control lost, a pilot-induced oscillation)? "
                              "No linear pilot model describes such a run; leave it out")
         # A loop that grew a hundredfold makes its calm stretch the scale every larger sample
         # is a "spike" against: said once, as the growth.
-        n = 0 if role in ("control", "output") and any("swings" in n for n in notes) else _spikes(x)
+        n = 0 if unstable and role in ("control", "output") else _spikes(x)
         if n:
             notes.append(f"data check: column '{name}' ({role}) has {n} single-sample spike(s) far off "
                          "their neighbours (a logger's glitch?); a rate limit named on this run may be "

@@ -83,8 +83,8 @@ def check_published(path: str | os.PathLike) -> None:
     # may hold a marker of their own (a cohort's runs in pilots/cohort/). Resolved, so that a
     # path through `..` is judged by where the file is.
     for folder in path.resolve().parents:
-        if output_publishing(folder):
-            marker = _read_marker(folder)
+        marker = _stopped(folder)
+        if marker is not None:
             raise HesspipeError(f"{path}: {folder} holds a hesspipe {marker['hesspipe_output']} output whose "
                                 f"writing was stopped midway (its {MARKER} file says so; its files may come "
                                 "from two runs); expected a complete output: run the command that wrote it "
@@ -283,8 +283,13 @@ def output_publishing(folder: str | os.PathLike) -> bool:
     folder : str or PathLike
         A hesspipe output folder.
     """
-    marker = _read_marker(Path(folder))
-    return bool(marker is not None and marker.get("publishing"))
+    return _stopped(Path(folder)) is not None
+
+
+def _stopped(folder: Path) -> dict | None:
+    """`folder`'s marker where it says its publication was stopped midway, else None."""
+    marker = _read_marker(folder)
+    return marker if marker is not None and marker.get("publishing") else None
 
 
 def _owned(folder: Path) -> set[str]:

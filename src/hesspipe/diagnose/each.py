@@ -11,6 +11,7 @@ import functools
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
+from ..core._quality import check_names
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run, as_runs
 from ..core.provenance import SYNTHETIC_BANNER
@@ -147,10 +148,7 @@ def _flags(d: Diagnosis) -> list[str]:
     check = (d.motion_verdict or {}).get("path_check") or {}
     if check.get("named"):
         out.append(f"CHECK motion_path: motion is named with it {' or '.join(check['named'])}")
-    faults = [kind for kind, words in (("clipped", "clipped"), ("spikes", "spike"), ("logger froze", "logger froze"),
-                                        ("held", "holds one value"), ("let go", "barely moves"),
-                                        ("unstable", "went unstable"))
-              if any(n.startswith("data check") and words in n for n in d.notes)]
+    faults = check_names(d.notes)
     if faults:
         out.append(f"data check: {', '.join(faults)}")
     return out
