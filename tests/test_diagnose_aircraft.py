@@ -199,14 +199,36 @@ def test_baseline_gets_no_pilot_side_name(tmp_path_factory, plant, output, task)
     assert d.motion_verdict is not None and not d.motion_verdict["named"]
 
 
-def test_delay_beyond_a_human_is_named_only_when_significant():
-    from hesspipe.diagnose.motion import delay_test
+def test_a_named_motion_path_tests_the_delay_of_its_own_fit(tmp_path_factory, monkeypatch):
+    # With motion named the delay verdict is the likelihood-ratio test of the expanded fit's
+    # own delay (motion_test's delay_bound_expanded). The z test it replaced set that fit's
+    # delay against the original fit's standard error: on a lab's static roll run (an
+    # independent reviewer's generator) whose expanded fit put the delay on its search bound,
+    # 0.6 s with no standard error, it named extra_delay with p = 0 (the bounded refit: p = 0.03).
+    import math
 
-    far = delay_test(0.45, 0.02, 0.35, 0.01)
-    assert far["named"] and far["extra_s"] == pytest.approx(0.10) and far["p_value"] < 1e-5
-    near = delay_test(0.37, 0.02, 0.35, 0.01)   # z = 1: within a human's delay by chance
-    assert not near["named"] and near["p_value"] == pytest.approx(0.1587, abs=1e-3)
-    assert not delay_test(0.30, 0.01, 0.35, 0.01)["named"]
+    import hesspipe.diagnose.motion as dm
+
+    run, plants = _one_task_trial(tmp_path_factory, "roll", ("motion_feedback",), 911, task="both",
+                                  output="rate", km_ratio=1.0)
+    d = diagnose(run, plants)
+    assert "motion_feedback" in d.named_effects and "extra_delay" not in d.named_effects
+    assert d.delay_verdict["criterion"].startswith("likelihood-ratio")
+    real = dm.safe_motion_test
+
+    def on_its_bound(*args, **kw):
+        t = dict(real(*args, **kw))
+        assert t["delay_bound_expanded"]["bound_s"] == pytest.approx(0.40)
+        t["parameters_expanded"] = {**t["parameters_expanded"], "tau0": 0.6}
+        for fit in ("standard_errors_original", "standard_errors_expanded"):
+            t[fit] = {**t.get(fit, {}), "tau0": math.nan}
+        t["delay_bound_expanded"] = {**t["delay_bound_expanded"], "f": 4.4, "p_value": 0.03}
+        return t
+
+    monkeypatch.setattr(dm, "safe_motion_test", on_its_bound)
+    d = diagnose(run, plants)
+    assert "motion_feedback" in d.named_effects and "extra_delay" not in d.named_effects
+    assert d.delay_verdict["delay_s"] == pytest.approx(0.6) and d.delay_verdict["p_value"] == pytest.approx(0.03)
 
 
 def test_remnant_share_is_the_power_between_the_forcing_lines():

@@ -21,8 +21,8 @@ leave them to those rounds.
 The same fit gives the pilot's own visual delay, neuromuscular mode and lag with the
 phase the control spectrum cannot see: the baseline starts from them (a pilot slower than
 the model's defaults is not a discrepancy), and an extra delay is named only when no pilot
-with a human's delay fits as well (:func:`delay_bound_test`; with a named vestibular
-path, whose model keeps its own delay, the z test :func:`delay_test`). The remnant is the control
+with a human's delay fits as well (:func:`delay_bound_test`, on the model the motion verdict
+keeps: with a named vestibular path the expanded one, which has its own delay). The remnant is the control
 power between the lines (:func:`remnant_share`).
 """
 
@@ -134,7 +134,7 @@ class DFEvidence:
     motion : MotionVerdict
         The motion test's verdict.
     delay : dict
-        :func:`delay_test`'s result.
+        :func:`delay_bound_test`'s or :func:`paired_delay_test`'s result.
     dynamics : dict
         tau0 (s), wn (rad/s), zn, 1/T1, 1/T2 (rad/s) as the describing function gives them.
     remnant : dict
@@ -197,46 +197,18 @@ def path_words(check: dict | None) -> str:
             f"believe it only where the motion runs flag the same change and the static runs do not")
 
 
-def delay_test(delay_s: float, se_s: float, max_pilot_delay_s: float, alpha: float) -> dict:
-    """One-sided test that the visual delay exceeds a human pilot's.
-
-    A delay added by the simulator (display, computation) and the pilot's own visual delay
-    are one delay in the data: only their sum is identifiable. So an extra delay can be
-    named only when the identified delay (s) is significantly beyond the longest a human
-    pilot has, ``max_pilot_delay_s`` (s): ``z = (delay - max) / se``, named when
-    ``P(N(0,1) > z) < alpha``; the extra delay is then ``delay - max`` (a lower bound).
-
-    Parameters
-    ----------
-    delay_s, se_s : float
-        Identified visual delay and its standard error, s.
-    max_pilot_delay_s : float
-        Longest delay a human pilot has, s.
-    alpha : float
-        Significance level.
-    """
-
-    z = (delay_s - max_pilot_delay_s) / se_s if se_s > 0 and math.isfinite(se_s) else \
-        (math.inf if delay_s > max_pilot_delay_s else -math.inf)
-    p = float(scipy.stats.norm.sf(z))
-    return {"named": bool(p < alpha), "delay_s": float(delay_s), "se_s": float(se_s),
-            "max_pilot_delay_s": float(max_pilot_delay_s), "z": float(z), "p_value": p,
-            "alpha": float(alpha), "extra_s": float(max(delay_s - max_pilot_delay_s, 0.0)),
-            "criterion": "one-sided z test of the describing function's visual delay against the "
-                         "longest human visual delay (only the sum of pilot and simulator delay "
-                         "is identifiable)"}
-
-
 def delay_bound_test(delay_s: float, se_s: float, bound: dict, alpha: float) -> dict:
     """Extra-delay verdict from the likelihood-ratio test of "the visual delay is at most a
     human's" (:func:`hesspipe.identification.motion_test._delay_bound`'s result `bound`).
 
     Only the sum of pilot and simulator delay is identifiable, so an extra delay is named
     only when no pilot with a human's delay (``bound["bound_s"]``, s) fits the describing
-    function as well: ``p < alpha``. The delay's z test (:func:`delay_test`) asked the
-    curvature at the optimum, and the delay trades with a visual lag or lead and the
-    neuromuscular mode along a valley it cannot see: on the generator it named
-    `extra_delay` for a precision pilot's 0.47 s lag (0.56 +- 0.01 s for a pilot with 0.26 s).
+    function as well: ``p < alpha``. A z test on the delay's standard error (this module's
+    earlier rule) asked the curvature at the optimum, and the delay trades with a visual lag
+    or lead and the neuromuscular mode along a valley it cannot see: on the generator it
+    named `extra_delay` for a precision pilot's 0.47 s lag (0.56 +- 0.01 s for a pilot with
+    0.26 s), and with a named vestibular path, whose fit's delay went to its search bound of
+    0.6 s (a lab's static roll pilot of 0.26 s), it had no standard error and gave p = 0.
 
     Parameters
     ----------
@@ -324,11 +296,12 @@ def paired_delay_test(joint: dict, retest_sd_s: float, alpha: float) -> dict:
                          "dynamics; the pilot's run-to-run spread allowed)"}
 
 
-def _df_delay(t: dict, named: bool) -> tuple[dict, float]:
-    """(parameters, delay standard error, s) of a motion test's result: the model its verdict
-    keeps (a vestibular lead shifts the delay)."""
-    pars = t["parameters_expanded"] if named else t["parameters_original"]
-    return pars, t["standard_errors_original"].get("tau0", math.nan)
+def _df_delay(t: dict, named: bool) -> tuple[dict, float, dict | None]:
+    """(parameters, delay standard error in s, delay-bound test) of a motion test's result:
+    the model its verdict keeps (a vestibular lead shifts the delay)."""
+    fit = "expanded" if named else "original"
+    return (t[f"parameters_{fit}"], t[f"standard_errors_{fit}"].get("tau0", math.nan),
+            t.get("delay_bound" if fit == "original" else "delay_bound_expanded"))
 
 
 def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float, int]:
@@ -422,13 +395,9 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
                        separable=forcing == SEPARABLE,
                        verdict=motion_words(named, forcing), runs=1 + len(repeat_runs) if pool else 1,
                        Km_per_Ke=float(t.get("Km_per_Ke", math.nan)), path_check=t.get("path_check"))
-    pars, se = _df_delay(t, mv.named)
+    pars, se, bound = _df_delay(t, mv.named)
     if baseline_run is None:
-        bound = t.get("delay_bound")
-        if bound is not None and not mv.named:
-            delay = delay_bound_test(pars["tau0"], se, bound, cfg.alpha)
-        else:   # the vestibular path's model keeps its own delay: the z test on it
-            delay = delay_test(pars["tau0"], se, cfg.max_pilot_delay, cfg.alpha)
+        delay = delay_bound_test(pars["tau0"], se, bound, cfg.alpha)
         own = cfg.max_pilot_delay
     else:
         bases = list(baseline_run)
@@ -483,8 +452,8 @@ def motion_step(ev: DFEvidence, problem, current, cfg):
 
 
 def delay_step(ev: DFEvidence, problem, current, cfg):
-    """(step, fit) of the describing function's extra-delay verdict (:func:`delay_bound_test`,
-    :func:`delay_test` or :func:`paired_delay_test`);
+    """(step, fit) of the describing function's extra-delay verdict (:func:`delay_bound_test`
+    or :func:`paired_delay_test`);
     a named delay enters the model as ``tau_x`` = the delay beyond a human's.
 
     Parameters

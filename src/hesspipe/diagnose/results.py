@@ -147,7 +147,8 @@ class Diagnosis:
     motion_verdict : dict or None
         :class:`hesspipe.diagnose.motion.MotionVerdict` as a dict.
     delay_verdict : dict or None
-        :func:`hesspipe.diagnose.motion.delay_test` result.
+        :func:`hesspipe.diagnose.motion.delay_bound_test` or
+        :func:`~hesspipe.diagnose.motion.paired_delay_test` result.
     remnant_verdict : dict or None
         :func:`hesspipe.diagnose.motion.remnant_share` verdict.
     notes : tuple of str
@@ -185,7 +186,7 @@ class Diagnosis:
     source: str = ""
     plant_finding: dict | None = None   # :class:`hesspipe.diagnose.aircraft.PlantFinding` as a dict
     motion_verdict: dict | None = None  # :class:`hesspipe.diagnose.motion.MotionVerdict` as a dict
-    delay_verdict: dict | None = None   # :func:`hesspipe.diagnose.motion.delay_test`
+    delay_verdict: dict | None = None   # diagnose.motion.delay_bound_test or paired_delay_test
     remnant_verdict: dict | None = None  # :func:`hesspipe.diagnose.motion.remnant_share` verdict
     notes: tuple = ()
     untested: str = ""

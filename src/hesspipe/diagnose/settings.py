@@ -112,7 +112,7 @@ class DiagnoseConfig(Settings):
     #: tracking studies report up to about 0.35 s (SPEC: 0.2-0.3 s typical), and the fitted
     #: delay of a human-like pilot came out up to 0.05 s above the true one (sampling, model
     #: structure; independent generator's baselines, development seeds 100-104). Only delay
-    #: beyond it is named extra_delay (diagnose.motion.delay_test).
+    #: beyond it is named extra_delay (diagnose.motion.delay_bound_test).
     max_pilot_delay: float = 0.40
     #: Spread (standard deviation) of the difference between one pilot's visual delays on
     #: two runs of one condition, s: the paired delay test (a baseline run of the same

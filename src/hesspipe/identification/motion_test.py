@@ -189,7 +189,8 @@ def _nested_f(rss_restricted: float, rss_full: float, q: int, dof: int) -> tuple
 
 
 def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, data, w) -> dict:
-    """Likelihood-ratio test of "the visual delay is at most `bound` (s)" in the original model.
+    """Likelihood-ratio test of "the visual delay is at most `bound` (s)" in `model` (the
+    original, or the expanded where the vestibular path is named).
 
     The model is refitted with tau0 held within [0, bound] (from the given starts and
     optima with their delay clipped to it) and ``F = (RSS_bounded - RSS) / (RSS / dof)``;
@@ -219,7 +220,7 @@ def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, lev
     if not cabs:
         return None
     expanded = PilotModel(("motion_feedback",))
-    _, _, _, (base_e, free_e, lo_e, hi_e) = km_fit
+    _, _, _, (base_e, free_e, lo_e, hi_e), _ = km_fit
     starts = [[c[n_] for n_ in core] + [km] for c in (p_o, base)
               for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"]))]
     dof = n_res - len(free_e) - 1   # as the test's: the equaliser held at the original's value counts
@@ -336,26 +337,35 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
                     for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"])) for tm in delays]
         # Screened: 8-16 starts each to convergence were most of a diagnosis's time (a
         # precision-pilot run: 48 of its 107 searches, 3.9 of 6.1 s).
-        rss_e, p_e, _ = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, ld.w, keep=EXPANDED_KEEP)
+        rss_e, p_e, sol_e = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, ld.w, keep=EXPANDED_KEEP)
         # Exchange of optima: the original searched again from the expanded optimum's core
         # parameters, so that LR measures what Km adds, not a better local optimum the
         # expanded search happened to find for the shared parameters.
         rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], *data, ld.w)
         if rss_o2 < rss_o:
             rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
-        fits.append((extra, rss_e, p_e, (base_e, free_e, lo_e, hi_e)))
+        fits.append((extra, rss_e, p_e, (base_e, free_e, lo_e, hi_e), sol_e))
     tests = []
-    for extra, rss_e, p_e, problem in fits:
+    for extra, rss_e, p_e, problem, sol_e in fits:
         rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
         q, dof_e = len(extra), n_res - len(free) - len(extra)
         lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
-        tests.append((p, lr, rss_e, p_e, extra, problem))
+        tests.append((p, lr, rss_e, p_e, extra, problem, sol_e, dof_e))
     # With both line sets, two pre-planned alternatives - Km alone (the paper's path) and
     # Km with a vestibular delay - and the smaller p, Bonferroni-corrected: the delay alone
     # cost JSBSim-flown motion runs (tau_m = 0) their power, Km alone lost half the
     # generator's runs drawn with tau_m = 0.15 s.
-    p_value, lr, rss_e, p_e, extra, (base_e, free_e, lo_e, hi_e) = min(tests, key=lambda t: t[0])
+    p_value, lr, rss_e, p_e, extra, (base_e, free_e, lo_e, hi_e), sol_e, dof_e = min(tests, key=lambda t: t[0])
     p_value = min(1.0, p_value * len(tests))
+    # The vestibular path's model keeps its own delay, tested as the original's is: the
+    # original's standard error beside the expanded fit's delay named extra_delay with p = 0
+    # where that delay sat on its search bound (0.6 s for a lab's 0.26 s static pilot).
+    delay_bound_expanded = None
+    if max_delay is not None:
+        delay_bound_expanded = _delay_bound(
+            expanded, base_e, free_e, lo_e, hi_e, [],
+            [[p_e[n_] for n_ in free_e], [p_o[n_] for n_ in core] + [0.0] * len(extra)],
+            max_delay, rss_e, dof_e, data, ld.w)
     checked = None
     if path_check is not None and p_value >= path_check:
         checked = _path_check(plants, fits[0], core, km0, rss_o, p_o, base, n_res, data, ld.w, path_check)
@@ -367,6 +377,7 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "parameters_original": {n_: float(v) for n_, v in p_o.items()},
             "parameters_expanded": {n_: float(v) for n_, v in p_e.items()},
             "standard_errors_original": _standard_errors(sol_o, free, rss_o, dof + 1),
+            "standard_errors_expanded": _standard_errors(sol_e, free_e, rss_e, dof_e),
             "rss_original": rss_o,
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
             "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": estimate["Km"],
@@ -375,7 +386,8 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "Km_se": estimate["Km_se"],
             "significant": bool(p_value < ALPHA),
             "alternatives": {"+".join(t[4]): t[0] for t in tests},
-            "delay_bound": delay_bound, "display": display, "target_lines": target, "path_check": checked,
+            "delay_bound": delay_bound, "delay_bound_expanded": delay_bound_expanded,
+            "display": display, "target_lines": target, "path_check": checked,
             "feedforward": None if yc_inv is None else {n_: float(p_e[n_]) for n_ in FEEDFORWARD},
             "degrees_of_freedom": dof}, profile
 
@@ -441,10 +453,11 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         `interval`: the profile intervals ``[lo, hi]``, ``hi`` inf when unbounded; else
         None), ``significant`` (p < :data:`ALPHA`),
         ``parameters_original`` / ``parameters_expanded`` (the test's two fits' pilot
-        parameters), ``parameters_estimate`` (the estimate's), ``standard_errors_original`` (of the original's free
-        parameters; diagnose reads the pilot's own delay from them) and
-        ``delay_bound`` (None without `max_delay`; else
-        :func:`_delay_bound`'s test of the original's delay against it), ``display``,
+        parameters), ``parameters_estimate`` (the estimate's), ``standard_errors_original`` and
+        ``standard_errors_expanded`` (of the two fits' free parameters; diagnose reads the
+        pilot's own delay from the model its verdict keeps),
+        ``delay_bound`` and ``delay_bound_expanded`` (None without `max_delay`; else
+        :func:`_delay_bound`'s test of that fit's delay against it), ``display``,
         ``target_lines`` (whether the record has a target's lines) and ``feedforward``
         (the fitted ``Kff`` and ``T_ff``; None unless a pursuit display with target
         lines); with display "either" also ``display_p`` (display → p-value; "pursuit"
