@@ -82,3 +82,37 @@ def test_the_report_says_which_fit_holds_the_named_motion_gain(twins):
     assert (f"fitted Km={km:.4g} on the describing function (the final model's control-spectrum refit: "
             f"Km={d.parameters_after['Km']:.4g})") in format_report(d)
     assert d.to_dict()["parameters_fitted_on"].startswith("control spectrum")
+
+
+def test_a_cohort_flown_with_a_negated_path_is_told_to_check_it(tmp_path):
+    # pilots' cohort verdict with the path's likely mistakes (verdict.path_verdict): a negated
+    # path made an independent lab's motion cohort a plain "no" (median-pilot p = 1) that only
+    # diagnose, run by run, flagged. The static cohort with the right path gets no line.
+    from hesspipe.core.errors import HesspipeError
+    from hesspipe.pilots.verdict import cohort_verdict, verdict_lines
+
+    def cohort(folder, effects, negate):
+        paths, seed = [], 0
+        while len(paths) < 3:   # the first three pilots the generator's draw budget finds
+            seed += 1
+            try:
+                spec = draw_trial("1/s", seed, task="both", pilot="hess", effects=effects, output="angle",
+                                  fs=50.0, T_m=70.0, style="plain", name=f"pilot{seed:02d}")
+            except HesspipeError:
+                continue
+            paths.append(write_trial(folder, simulate_trial(spec)))
+        plants = read_plants(folder / "plants.json")
+        if negate:
+            plants = dataclasses.replace(plants, motion_path=-plants.motion_path)
+        return cohort_verdict({p.stem: motion_test(read_run(p), plants, {}, k=1, path_check=ALPHA)
+                               for p in paths})
+
+    wrong = cohort(tmp_path / "m", ("motion_feedback",), True)
+    assert wrong["answer"] == "no" and wrong["path_check"]["named"][:1] == ["negated"], wrong["path_check"]
+    assert wrong["path_check"]["variants"]["negated"]["n_significant"] >= 2
+    lines = verdict_lines(wrong)
+    assert lines[1].startswith("  CHECK motion_path: motion feedback would improve the fit for at least half "
+                               "of the pilots with the path negated (")
+    static = cohort(tmp_path / "s", (), False)
+    assert static["answer"] == "no" and static["path_check"] is not None and static["path_check"]["named"] == []
+    assert not any("CHECK motion_path" in line for line in verdict_lines(static))

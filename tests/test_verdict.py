@@ -302,3 +302,26 @@ def test_compare_pilots_groups_repeated_runs_by_pilot(tmp_path, capsys):
     code = main(["compare-pilots", str(folder), "--plants", str(plants_path), "--pilot-id", "^x"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and len(err) == 1 and f"{folder / 's01_r1.csv'}: --pilot-id '^x' does not match" in err[0], err
+
+
+def test_the_path_check_needs_half_of_the_pilots():
+    from hesspipe.pilots.verdict import path_verdict
+
+    def checked(p, negated):
+        return {**_t(p), "path_check": {"p_values": {"negated": negated, "differentiated": 0.5,
+                                                     "integrated": 0.9}}}
+
+    # Two of six pilots with the path negated (each p x 3 < 0.01): a static cohort's shared
+    # misfit, not named; three of six: named. A run named with the path given keeps its p.
+    two = {f"s{i}": checked(0.6, 1e-4 if i < 2 else 0.4) for i in range(6)}
+    assert path_verdict(two, {}, 0.01)["named"] == []
+    three = {**two, "s2": {**_t(1e-5), "path_check": None}}
+    v = path_verdict(three, {}, 0.01)
+    assert v["named"] == ["negated"] and v["variants"]["negated"]["n_significant"] == 3
+    assert v["variants"]["differentiated"]["n_significant"] == 1      # s2's own p stands for it
+    assert path_verdict({"a": _t(0.5)}, {}, 0.01) is None              # no path checked
+    # A pilot's runs combine first: two runs at 4e-3 each (Fisher's p 3.8e-4) count once.
+    runs = {"a1": checked(0.5, 4e-3), "a2": checked(0.5, 4e-3), "b": checked(0.5, 0.5)}
+    g = path_verdict(runs, {"a1": "a", "a2": "a"}, 0.01)
+    assert g["variants"]["negated"]["n_pilots"] == 2 and g["named"] == ["negated"]
+    assert cohort_verdict(runs, groups={"a1": "a", "a2": "a"})["path_check"] == g

@@ -92,9 +92,14 @@ class RunDiagnoses:
         out += f"; motion not tested on {untested} of {n} runs (too few forcing lines)" if untested else ""
         # What a run's own report says beside its names (a reviewer read only the names).
         flags = [_flags(d) for d in self.diagnoses]
+        # The path check's caution, which a run's own report gives, once here: a reviewer's
+        # static run flagged "integrated" read as a wrong plants file for a cab that never moved.
+        caution = {"CHECK motion_path": " (on a run whose cab did not move, the model's misfit, not a wrong "
+                                        "path: believe it where the motion runs flag the same change and the "
+                                        "static runs do not)"}
         for what, verb in (("plant check", "failed"), ("CHECK motion_path", "flagged"), ("data check", "noted")):
             k = sum(any(f.startswith(what) for f in fl) for fl in flags)
-            out += f"; {what} {verb} on {k} of {n} runs" if k else ""
+            out += f"; {what} {verb} on {k} of {n} runs{caution.get(what, '')}" if k else ""
         return out + (f" ({len(self.failures)} run(s) failed)" if self.failures else "")
 
     def lines(self, failures: bool = True) -> list[str]:

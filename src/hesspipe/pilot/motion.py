@@ -76,8 +76,9 @@ def motion_path_note(plants) -> str | None:
         return None
     return ("no motion_path, so the vestibular path takes the output for the cab's angular rate "
             "(the paper's washout and platform); the controlled element integrates, as on an angle "
-            "display: if the cab turns with the displayed angle, add \"motion_path\": "
-            "{\"num\": [1, 0], \"den\": [0.01, 1]}")
+            "display: if the cab turns with the displayed angle one to one, add \"motion_path\": "
+            "{\"num\": [1, 0], \"den\": [0.01, 1]}, times the cab's washout and motion gain if it has "
+            "them (README \"Data formats\": left out, a washout can hide the motion)")
 
 
 @functools.lru_cache(maxsize=512)

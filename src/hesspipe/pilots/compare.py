@@ -72,7 +72,7 @@ from .settings import (  # noqa: F401
     CompareSettings,
     PilotsConfig,
 )
-from .verdict import pilot_groups, safe_motion_test
+from .verdict import ALPHA, pilot_groups, safe_motion_test
 
 # -- one pilot ------------------------------------------------------------------------------
 
@@ -291,9 +291,11 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
     return PilotComparison(
         id=run.id, source=run.source, synthetic=run.synthetic,
         original=original_d, expanded_fixed=fixed, expanded=expanded_d, improvement=float(improvement),
+        # path_check: where motion is not named, the path's likely mistakes are tried too, so
+        # the cohort verdict can say a wrong path (verdict.path_verdict).
         motion_test=safe_motion_test(run, plants, original.parameters, k=settings.k,
                                      band_hz=tuple(settings.band), interval=KM_INTERVAL,
-                                     display=settings.display),
+                                     display=settings.display, path_check=ALPHA),
         freq_hz=np.asarray(original.freq_hz)[mask], measured_psd=np.asarray(original.measured_psd)[mask],
         simulated_psd={"original": np.asarray(original.simulated_psd)[mask],
                        "expanded_fixed": np.asarray(fixed_psd)[mask],

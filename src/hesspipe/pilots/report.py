@@ -109,6 +109,12 @@ def format_table(comparison) -> str:
     out.append("Km/|Ke|: the vestibular gain relative to the visual one. Where 1/T1 lies below the "
                "forcing, Ke and Km scale together with 1 + K1 K2 (only their ratio, the crossover and "
                "the phase margin are determined): compare runs and pilots by these, not by Ke or Km")
+    # A reviewer compared the table's crossovers with conditions' and found them 0.74 times
+    # the truth on single-integrator motion runs, where conditions' were within a few per cent.
+    out.append("wc and PM in the table are each fitted model's loop; the measured ones, model-free from "
+               "the describing-function lines, are those of `hesspipe frf` and `hesspipe conditions`: "
+               "they differ where the model misses the pilot's shape (the paper's expanded model has no "
+               "vestibular delay)")
     # A reviewer read 0.048 in the table and 0.142 in the verdict for one run, both "Km/|Ke|".
     crit = getattr(getattr(comparison, "settings", None), "criterion", "")
     fit = {"paper": "the control-spectrum fit's (APID, Eq. 10)",

@@ -53,6 +53,7 @@ from ..core.errors import HesspipeError
 # The per-pilot test lives with identification so that diagnose uses the very same one.
 from ..identification.motion_test import (  # noqa: F401
     ALPHA,
+    PATH_VARIANTS,
     SEPARABLE,
     analysis_window,
     forcing_lines,
@@ -121,7 +122,7 @@ def _per_pilot(done: Mapping[str, Mapping], groups: Mapping[str, str]) -> dict[s
     out = {}
     for pid, ts in by.items():
         ps = [t["p_value"] for t in ts]
-        p = ps[0] if len(ps) == 1 else float(stats.combine_pvalues(ps, method="fisher").pvalue)
+        p = _combined(ps)
         forcing = sorted({t["forcing"] for t in ts})
         out[pid] = {"p_value": p, "gain": float(np.median([t["gain"] for t in ts])),
                     "lr": float(np.median([t["lr"] for t in ts])), "runs": len(ts),
@@ -171,7 +172,8 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
         pilot", reported), ``n_tested``, ``n_significant``, ``binomial_p`` (P[X ≥
         n_significant] for X ~ Binomial(n_tested, alpha)), ``median_gain``, ``per_pilot``
         (id → gain, p_value, significant, Km and Km/|Ke| with their profile intervals, or
-        with `groups` their means and standard errors over the pilot's runs), ``method``.
+        with `groups` their means and standard errors over the pilot's runs), ``method``,
+        ``path_check`` (:func:`path_verdict`, None when the answer is "yes").
     """
     done = {pid: t for pid, t in tests.items() if t.get("available")}
     method = ("per pilot: likelihood-ratio test of Km on the describing-function lines "
@@ -225,11 +227,86 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
                 f"binomial p = {binom_p:.2g}); Fisher's combined p = {fisher_p:.2g}{some}; "
                 f"median share of the misfit removed {100 * float(np.median(gains)):.0f} %{tail}")
     return {"answer": answer, "sentence": sentence, "n_tested": n, "n_separable": n_sep,
+            "path_check": None if yes else path_verdict(done, groups or {}, alpha),
             "n_significant": sig, "binomial_p": binom_p, "majority_p": majority_p, "majority_r": r,
             "fisher_p": fisher_p, "median_gain": float(np.median(gains)), "alpha": alpha,
             "method": method + (", a pilot's runs first combined by Fisher's rule (Km/|Ke| and Km: "
                                 "mean +/- standard error over the runs)" if groups else ""),
             "per_pilot": _per_pilot_out(tests, pilots, groups, alpha)}
+
+
+def _combined(ps: Sequence[float]) -> float:
+    return ps[0] if len(ps) == 1 else float(stats.combine_pvalues(ps, method="fisher").pvalue)
+
+
+def path_verdict(tests: Mapping[str, Mapping], groups: Mapping[str, str], alpha: float) -> dict | None:
+    """The cohort test again with each of the motion path's likely mistakes
+    (:data:`~hesspipe.identification.motion_test.PATH_VARIANTS`) in place of the path given.
+
+    A motion path with the wrong sign, or one differentiation off, makes a motion cohort a
+    plain "no" (an independent lab's hexapod roll runs, the path negated: median-pilot p = 1,
+    while `diagnose` flagged 17 of 18 runs one by one). Each run's test carries its
+    variants' p-values where motion was not named with the path given
+    (``motion_test(..., path_check=)``); a run named with it keeps its own p. The pilots'
+    runs are combined as for the verdict, and a variant is named where it makes at least half
+    of the pilots individually significant, each p times the number of variants below `alpha`
+    (Bonferroni). The median-pilot test alone (its p times the variants) flagged the path
+    negated on that lab's static cohort with the right path (p = 0.0017, 2 of 6 pilots
+    significant): a static pilot's misfit that a vestibular path of either sign takes up.
+
+    Parameters
+    ----------
+    tests : mapping
+        Run id → available :func:`motion_test` result.
+    groups : mapping
+        Run id → pilot id (a run its own pilot where absent).
+    alpha : float
+        Level of the cohort test.
+
+    Returns
+    -------
+    dict or None
+        ``variants`` (name → ``majority_p``: the median-pilot test's p, ``n_significant``:
+        pilots whose combined p times the number of variants is below `alpha`, ``n_pilots``),
+        ``named`` (the variants named, in PATH_VARIANTS' order), ``level``;
+        None where no run was checked (the plants give no motion path, or motion was named
+        on every run).
+    """
+    if not any(t.get("path_check") for t in tests.values()):
+        return None
+    out, m = {}, len(PATH_VARIANTS)
+    for name in PATH_VARIANTS:
+        by: dict[str, list[float]] = {}
+        for rid, t in tests.items():
+            check = t.get("path_check")
+            p = check["p_values"][name] if check else t["p_value"]
+            by.setdefault(groups.get(rid, rid), []).append(float(p))
+        ps = [_combined(v) for v in by.values()]
+        out[name] = {"majority_p": median_pilot_p(ps)[0], "n_significant": int(sum(p * m < alpha for p in ps)),
+                     "n_pilots": len(ps)}
+    named = [name for name in out if out[name]["n_significant"] >= math.ceil(out[name]["n_pilots"] / 2)]
+    return {"variants": out, "named": named, "level": float(alpha)}
+
+
+def path_verdict_line(check: Mapping | None) -> str:
+    """The cohort's ``CHECK motion_path`` line ("" where no variant is named).
+
+    Parameters
+    ----------
+    check : mapping or None
+        :func:`path_verdict`'s result.
+    """
+    if not check or not check.get("named"):
+        return ""
+    v, n = check["variants"], len(check["variants"])
+    found = " and ".join(f"{name} ({v[name]['n_significant']} of {v[name]['n_pilots']} pilots, median-pilot "
+                         f"p = {v[name]['majority_p']:.2g})" for name in check["named"])
+    return (f"CHECK motion_path: motion feedback would improve the fit for at least half of the pilots "
+            f"with the path {found} (a pilot counted where its p times the {n} variants tried is below "
+            f"{check['level']:g}): check "
+            f"motion_path's sign and whether it differentiates the output (SPEC: output -> cab angular "
+            f"velocity). A cohort whose cab did not move can show this as a misfit its pilots share: "
+            f"believe it where the motion cohort flags it and the static cohort does not")
 
 
 def median_pilot_p(p_values) -> tuple[float, int]:
@@ -298,6 +375,9 @@ def verdict_lines(verdict: Mapping) -> list[str]:
         A :func:`cohort_verdict` result (``sentence``, ``per_pilot``, ``method``).
     """
     out = [f"MOTION VERDICT: {verdict['sentence']}"]
+    check = path_verdict_line(verdict.get("path_check"))
+    if check:
+        out.append(f"  {check}")
     for pid, t in verdict.get("per_pilot", {}).items():
         if t.get("available", True) is False:
             out.append(f"  {pid}: not tested ({t.get('reason', 'no forcing lines')})")
