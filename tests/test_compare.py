@@ -507,7 +507,7 @@ def test_a_note_every_file_shares_is_said_once():
     only some files have keeps its files' names."""
     from hesspipe.cli._options import reading_lines
 
-    deg = "column 'Yaw [deg]' (output): deg converted to SPEC.md's units (x 0.0174533)"
+    deg = "column 'Yaw [deg]' (output): deg converted to rad (SPEC.md's units, x 0.0174533)"
     reading = {f"lab/s{i:02d}.csv": ["semicolon-separated with decimal commas", deg] for i in range(1, 19)}
     reading["lab/s07.csv"] = reading["lab/s07.csv"] + ["2 incomplete row(s) at the end dropped"]
     assert reading_lines(reading) == [

@@ -288,6 +288,21 @@ def test_a_folder_mapping_leaves_plain_files_readable(tmp_path):
         np.testing.assert_allclose(run.time, _signals()[0], atol=1e-9)
 
 
+def test_a_mapping_names_alternatives_for_a_header_changed_within_a_study(tmp_path):
+    # A reviewer's logger wrote 'Time [ms]' for three persons and 't [s]' for the others; one
+    # mapping could not read the folder, so the run was lost after 53 s of fits.
+    (tmp_path / "a.csv").write_text(_text(["Time [ms]", "dist", "roll", "Stick", "target"], scale=(1000, 1, 1, 1, 1)))
+    (tmp_path / "b.csv").write_text(_text(["t [s]", "dist", "roll", "stk", "target"], scale=(1, 1, 1, -1, 1)))
+    mapping = "time=Time|t,disturbance=dist,output=roll,control=Stick|-stk,reference=target"
+    a, b = (read_run(tmp_path / f, columns=mapping) for f in ("a.csv", "b.csv"))
+    for run in (a, b):
+        np.testing.assert_allclose(run.time, _signals()[0], atol=1e-9)
+        np.testing.assert_allclose(run.control, _signals()[3], atol=1e-9)   # each alternative its own sign
+    assert "column 'stk' (control): sign flipped, as mapped" in b.notes
+    with pytest.raises(HesspipeError, match=r"b.csv: column 'Clock\|Zeit' missing \(role time\)"):
+        read_run(tmp_path / "b.csv", columns="time=Clock|Zeit,disturbance=dist,output=roll,control=stk")
+
+
 def test_incomplete_rows_at_the_edges_are_dropped_and_said(tmp_path):
     lines = _text(PLAIN).splitlines()
     lines.insert(1, "0,,,,")                              # a recorder's empty first row

@@ -176,6 +176,12 @@ def test_a_record_whose_forcing_fades_out_before_the_logger_stops(seed):
     f = estimate_frf(rec)
     start, length = f.window
     assert length == N and keep <= start <= keep + 3   # (the previous code: no window a period)
+    # What was kept is said (diagnose's notes): a reviewer could not confirm the run-in was left out.
+    from hesspipe.identification.lines import window_note
+    assert window_note(rec) == (f"the describing function is taken over whole periods of the forcing, "
+                                f"{N / FS:.4g} s from {start / FS:.4g} s into the record ({start / FS:.4g} s "
+                                f"before it and {(keep + N + tail - start - N) / FS:.4g} s after it left out)")
+    assert window_note(one) is None
     w = f.feedback.freq_rad_s
     assert f.feedback.bins.size == D_BINS.size
     assert np.max(np.abs(f.feedback.H - H_fb(1j * w)) / np.abs(H_fb(1j * w))) < 0.1

@@ -19,7 +19,7 @@ def register(sub) -> None:
                                    "first), and identify the original Hess model, the expanded model with Km "
                                    "fixed, and the expanded model with Km identified; print a table and the "
                                    "mean improvement 1 - expanded/original fitness.")
-    p.add_argument("dir", metavar="DIR", help="folder of run CSVs (or one CSV)")
+    p.add_argument("dir", metavar="DIR", help="folder of run files (.csv, .tsv, .mat, .xlsx, .tdms, .h5, ...; or one file)")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants JSON (Yc, Yd)")
     p.add_argument("--workers", type=int, metavar="N", help="local worker processes (0 or absent: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS",

@@ -42,6 +42,30 @@ in radians on every signal (hesspipe's convention, as the plants' roll rate in r
 wind disturbance in ft/s. A unit not listed (a stick's N, a normalised command) is taken as
 written, in the plants' units, and noted."""
 
+
+
+def target_unit(role: str, unit: str) -> str:
+    """The unit that :data:`UNIT_FACTORS` converts `unit` of `role` to ("rad/s" for "deg/s").
+
+    Parameters
+    ----------
+    role : str
+        The column's role (time, output, ...).
+    unit : str
+        The unit written in its header, as listed in :data:`UNIT_FACTORS`.
+
+    Returns
+    -------
+    str
+    """
+    u = unit.lower().replace(" ", "")
+    if role == "time":
+        return "s"
+    if u in _ANGLES:
+        return "rad" + u.replace("°", "deg")[3:] if u != "°" else "rad"
+    return "ft/s"   # the wind's speeds, the only other unit converted
+
+
 _DIMENSIONLESS = ("", "-", "1", "none", "n/a", "norm", "normalised", "normalized")
 _UNIT = re.compile(r"^(?P<name>.*?)\s*(?:\[(?P<u1>[^\]]*)\]|\((?P<u2>[^)]*)\))\s*$")
 _TIME_OF_DAY = re.compile(r"^(\d{1,2}):(\d{2}):(\d{2}(?:[.,]\d+)?)$")

@@ -20,7 +20,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from ._csv import _DIMENSIONLESS, _TIME_OF_DAY, UNIT_FACTORS, _long_row, _prepare, _split_unit, decode
+from ._csv import _DIMENSIONLESS, _TIME_OF_DAY, UNIT_FACTORS, _long_row, _prepare, _split_unit, decode, target_unit
 from ._excel import EXCEL_SUFFIXES, excel_sheets
 from ._h5 import h5_frame
 from ._mat import mat_frame
@@ -333,6 +333,29 @@ def _missing(frame: Frame, missing: list[tuple[str, str]], hint: str | None, als
     return f"{frame.path}: {subject}; found {item}s: {headers}{tail}"
 
 
+def _find(path, headers: list[str], role: str, name: str, as_written, hint) -> tuple[str | None, bool]:
+    """(header, sign flipped) of `role` mapped to `name` (:func:`_match`), or (None, False).
+
+    ``-NAME`` is the column NAME with its sign flipped (a stick convention opposite to the
+    plants'); ``A|B`` the first of the alternatives A, B found, each with its own sign (a
+    logger whose header changed within a study: ``Time [ms]`` in some files, ``t [s]`` in
+    others, one mapping ``time=Time|t`` for the folder). A header written with ``-`` or
+    ``|`` is matched as written first.
+    """
+    col = _match(path, headers, role, name, as_written, hint)
+    if col is not None:
+        return col, False
+    for alt in (a.strip() for a in name.split("|")):
+        col = _match(path, headers, role, alt, as_written, hint) if alt != name else None
+        if col is not None:
+            return col, False
+        if alt.startswith("-") and alt[1:].strip():
+            col = _match(path, headers, role, alt[1:].strip(), as_written, hint)
+            if col is not None:
+                return col, True
+    return None, False
+
+
 def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refuse_gaps: str | None) -> Table:
     """:func:`read_table`'s columns found by role in `frame`, checked and converted."""
     path, df, decimal, written = frame.path, frame.df, frame.decimal, frame.written
@@ -342,13 +365,9 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
     data, used = {}, {}
     flipped, missing = set(), []
     for role, name in names.items():
-        col = _match(path, headers, role, name, frame.as_written, hint)
-        if col is None and name.startswith("-") and name[1:].strip():
-            # "-NAME": the column NAME with its sign flipped (a stick convention opposite
-            # to the plants').
-            col = _match(path, headers, role, name[1:].strip(), frame.as_written, hint)
-            if col is not None:
-                flipped.add(role)
+        col, flip = _find(path, headers, role, name, frame.as_written, hint)
+        if flip:
+            flipped.add(role)
         if col is None and name != role:
             # A mapping written for some files of a folder: the others keep the plain names.
             col = _match(path, headers, role, role, frame.as_written, hint)
@@ -422,7 +441,8 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
                 notes.append(f"column '{col}' ({role}): unit '{unit}' taken as written")
             elif factor is not None and factor != 1.0:
                 values = values * factor
-                notes.append(f"column '{col}' ({role}): {unit} converted to SPEC.md's units (x {factor:.6g})")
+                notes.append(f"column '{col}' ({role}): {unit} converted to {target_unit(role, unit)} "
+                             f"(SPEC.md's units, x {factor:.6g})")
                 if role in resolution:
                     resolution[role] = resolution[role] * factor
         data[role] = values

@@ -281,8 +281,9 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
     columns : str or mapping, optional
         Role → column-name mapping for files with other names, e.g.
         ``"control=stick,output=p"``; ``"control=-stick"`` flips the sign of a column
-        logged with the opposite convention to the plants'. A name with ``*`` (a run's
-        number, :func:`read_file_runs`) must find one run here.
+        logged with the opposite convention to the plants'; ``"time=Time|t"`` reads the first
+        of the names the file has. A name with ``*`` (a run's number,
+        :func:`read_file_runs`) must find one run here.
     resample : bool
         If the time column is not uniform, resample all signals linearly to
         the median interval instead of failing; a cell left empty or not a number between

@@ -56,8 +56,10 @@ def _run_window(run):
 
 
 def window_note(run) -> str | None:
-    """What the analysis window cannot do for `run`: the note on a record that holds no whole
-    period of its multisine (:func:`hesspipe.identification._window.period_note`), or None.
+    """What the analysis window did with `run`: the note on a record that holds no whole
+    period of its multisine (:func:`hesspipe.identification._window.period_note`); else, where
+    the window is not the whole record, which stretch it kept (a lab's logged run-in: a
+    reviewer could not confirm it was left out); else None.
 
     Parameters
     ----------
@@ -69,8 +71,14 @@ def window_note(run) -> str | None:
     str or None
         The note.
     """
-    d, r, _, _, purity = _run_window(run)
-    return period_note([d, r], purity, run.dt)
+    d, r, start, length, purity = _run_window(run)
+    leaky = period_note([d, r], purity, run.dt)
+    if leaky is not None or (start == 0 and length == d.size):
+        return leaky
+    left = [f"{n * run.dt:.4g} s {where}" for n, where in ((start, "before it"),
+                                                           (d.size - start - length, "after it")) if n]
+    return (f"the describing function is taken over whole periods of the forcing, {length * run.dt:.4g} s "
+            f"from {start * run.dt:.4g} s into the record ({' and '.join(left)} left out)")
 
 
 def windowed(run):

@@ -134,7 +134,7 @@ def validate(config: dict, source: str) -> None:
     # The data's own files are read by the pilots stage, after flight and plants have run:
     # a path that is not there (or plants that do not read) fails here, before any of them.
     if pilots.data and not Path(pilots.data).exists():
-        raise HesspipeError(f"{source}: field 'pilots.data': expected a folder or file of run CSVs, "
+        raise HesspipeError(f"{source}: field 'pilots.data': expected a folder or file of runs, "
                             f"{pilots.data} not found")
     if pilots.plants:
         _in_field(source, "pilots.plants", read_plants, pilots.plants)   # as the stages read it
