@@ -163,6 +163,7 @@ def test_the_table_says_which_fit_its_km_comes_from(tmp_path):
                              ("df", "the paper's expanded model fitted to the describing function")):
         table = compare_pilots(folder, paper_plants(), workers=1, job=fake_job, criterion=criterion).table()
         assert f"Km and Km/|Ke| in the table are {words}" in table and "motion test's estimate" in table
+        assert "wc and PM in the table are each fitted model's loop" in table
 
 
 def test_a_folders_runs_are_listed_in_natural_order(tmp_path):

@@ -131,6 +131,12 @@ def test_units_known_for_every_role_convert_to_spec():
     assert UNIT_FACTORS["output"]["deg/s"] == pytest.approx(math.pi / 180)
     assert UNIT_FACTORS["disturbance"]["m/s"] == pytest.approx(1 / 0.3048)
     assert UNIT_FACTORS["disturbance"]["kt"] == pytest.approx(1.6878099, rel=1e-6)
+    # The note names the unit converted to: one of the role's own units of factor 1.
+    from hesspipe.core._csv import target_unit
+    for role, units in UNIT_FACTORS.items():
+        for unit in units:
+            assert units[target_unit(role, unit)] == 1.0, (role, unit)
+    assert target_unit("output", "°/s") == "rad/s" and target_unit("time", "ms") == "s"
 
 
 def test_mapped_column_keeps_its_unit(tmp_path):
@@ -301,6 +307,11 @@ def test_a_mapping_names_alternatives_for_a_header_changed_within_a_study(tmp_pa
     assert "column 'stk' (control): sign flipped, as mapped" in b.notes
     with pytest.raises(HesspipeError, match=r"b.csv: column 'Clock\|Zeit' missing \(role time\)"):
         read_run(tmp_path / "b.csv", columns="time=Clock|Zeit,disturbance=dist,output=roll,control=stk")
+    with pytest.raises(HesspipeError, match=r"role 'time': 'Time\|': expected column names separated by '\|'"):
+        read_run(tmp_path / "a.csv", columns="time=Time|,disturbance=dist,output=roll,control=Stick")
+    both = read_run(tmp_path / "a.csv", columns="time=Time|t,disturbance=dist|roll,output=roll,control=Stick")
+    assert "column 'dist' (disturbance) read, the first of 'dist|roll' the file has; 'roll' left unread" \
+        in both.notes
 
 
 def test_incomplete_rows_at_the_edges_are_dropped_and_said(tmp_path):

@@ -214,6 +214,18 @@ def test_a_named_motion_path_tests_the_delay_of_its_own_fit(tmp_path_factory, mo
     d = diagnose(run, plants)
     assert "motion_feedback" in d.named_effects and "extra_delay" not in d.named_effects
     assert d.delay_verdict["criterion"].startswith("likelihood-ratio")
+    # The expanded fit's own bounded refit (it has Km; the original's has none): with the
+    # bound below the pilot's delay it holds the delay there and fits worse.
+    from hesspipe.identification.criteria import choose_k
+    from hesspipe.identification.motion_test import motion_test
+    from hesspipe.pilot.hess import PilotModel
+    k = choose_k(plants)[0]
+    t = motion_test(run, plants, PilotModel().complete({}, k), k=k, max_delay=0.05)
+    own = t["delay_bound_expanded"]
+    assert t["parameters_expanded"]["tau0"] > 0.05 and own["bounded_tau0"] <= 0.05 + 1e-9
+    assert own["parameters"]["Km"] > 0 and "Km" not in t["delay_bound"]["parameters"]
+    assert own["f"] > 0 and own["p_value"] < 0.01 and own["f"] != t["delay_bound"]["f"]
+    assert t["standard_errors_expanded"]["tau0"] < 0.05
     real = dm.safe_motion_test
 
     def on_its_bound(*args, **kw):

@@ -89,6 +89,8 @@ def test_a_cohort_flown_with_a_negated_path_is_told_to_check_it(tmp_path):
     # path made an independent lab's motion cohort a plain "no" (median-pilot p = 1) that only
     # diagnose, run by run, flagged. The static cohort with the right path gets no line.
     from hesspipe.core.errors import HesspipeError
+    from hesspipe.pilots.compare import pilot_motion_test
+    from hesspipe.pilots.settings import CompareSettings
     from hesspipe.pilots.verdict import cohort_verdict, verdict_lines
 
     def cohort(folder, effects, negate):
@@ -104,7 +106,8 @@ def test_a_cohort_flown_with_a_negated_path_is_told_to_check_it(tmp_path):
         plants = read_plants(folder / "plants.json")
         if negate:
             plants = dataclasses.replace(plants, motion_path=-plants.motion_path)
-        return cohort_verdict({p.stem: motion_test(read_run(p), plants, {}, k=1, path_check=ALPHA)
+        # The test as compare_pilots runs it for each pilot.
+        return cohort_verdict({p.stem: pilot_motion_test(read_run(p), plants, {}, CompareSettings(k=1))
                                for p in paths})
 
     wrong = cohort(tmp_path / "m", ("motion_feedback",), True)

@@ -55,7 +55,8 @@ def add_run_options(parser: argparse.ArgumentParser) -> None:
                              "time=t,control=u; a file of several runs, a column each: '*' for the "
                              "run's number, output=x:*,control=u:*; runs one after another in a long "
                              "table: the columns that tell them apart, person=Subject,run=Trial; "
-                             "-NAME flips a sign; A|B reads whichever of A and B a file has)")
+                             "-NAME flips a sign; a signal column A|B: whichever of A and B a file "
+                             "has)")
     parser.add_argument("--resample", action="store_true",
                         help="interpolate a non-uniform time column onto a uniform grid, and a "
                              "missed sample (an empty or NaN cell) (default: refuse them)")

@@ -333,8 +333,10 @@ def _missing(frame: Frame, missing: list[tuple[str, str]], hint: str | None, als
     return f"{frame.path}: {subject}; found {item}s: {headers}{tail}"
 
 
-def _find(path, headers: list[str], role: str, name: str, as_written, hint) -> tuple[str | None, bool]:
-    """(header, sign flipped) of `role` mapped to `name` (:func:`_match`), or (None, False).
+def _find(path, headers: list[str], role: str, name: str, as_written,
+          hint) -> tuple[str | None, bool, tuple[str, ...]]:
+    """(header, sign flipped, the other alternatives' headers found) of `role` mapped to
+    `name` (:func:`_match`), or (None, False, ()).
 
     ``-NAME`` is the column NAME with its sign flipped (a stick convention opposite to the
     plants'); ``A|B`` the first of the alternatives A, B found, each with its own sign (a
@@ -344,16 +346,19 @@ def _find(path, headers: list[str], role: str, name: str, as_written, hint) -> t
     """
     col = _match(path, headers, role, name, as_written, hint)
     if col is not None:
-        return col, False
+        return col, False, ()
+    found = []
     for alt in (a.strip() for a in name.split("|")):
         col = _match(path, headers, role, alt, as_written, hint) if alt != name else None
         if col is not None:
-            return col, False
-        if alt.startswith("-") and alt[1:].strip():
+            found.append((col, False))
+        elif alt.startswith("-") and alt[1:].strip():
             col = _match(path, headers, role, alt[1:].strip(), as_written, hint)
             if col is not None:
-                return col, True
-    return None, False
+                found.append((col, True))
+    if not found:
+        return None, False, ()
+    return (*found[0], tuple(c for c, _ in found[1:] if c != found[0][0]))
 
 
 def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refuse_gaps: str | None) -> Table:
@@ -365,9 +370,12 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
     data, used = {}, {}
     flipped, missing = set(), []
     for role, name in names.items():
-        col, flip = _find(path, headers, role, name, frame.as_written, hint)
+        col, flip, also_found = _find(path, headers, role, name, frame.as_written, hint)
         if flip:
             flipped.add(role)
+        if also_found:
+            notes.append(f"column '{col}' ({role}) read, the first of '{name}' the file has; "
+                         f"{', '.join(repr(c) for c in also_found)} left unread")
         if col is None and name != role:
             # A mapping written for some files of a folder: the others keep the plain names.
             col = _match(path, headers, role, role, frame.as_written, hint)

@@ -221,6 +221,9 @@ def _parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
         if role in KEY_COLUMNS and RUN_NUMBER in pairs[role]:
             raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r}: expected the name of the column "
                                 "whose values tell runs apart, without '*'")
+        if "|" in pairs[role] and not all(alt.strip().lstrip("-").strip() for alt in pairs[role].split("|")):
+            raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r}: expected column names separated by "
+                                "'|', got an empty one")
         if pairs[role].count(RUN_NUMBER) > 1:
             raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r} holds {pairs[role].count(RUN_NUMBER)} "
                                 f"'{RUN_NUMBER}'; expected at most one, standing for a run's number")

@@ -194,7 +194,8 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
 
     The model is refitted with tau0 held within [0, bound] (from the given starts and
     optima with their delay clipped to it) and ``F = (RSS_bounded - RSS) / (RSS / dof)``;
-    under a delay on the bound F is 0 half the time, so ``p = ½ P(F(1, dof) > F)``. Unlike
+    under a delay on the bound F is 0 half the time, so ``p = ½ P(F(1, dof) > F)``; the
+    bounded fit's ``parameters`` are returned where the optimum lies beyond the bound. Unlike
     a z test on the delay's standard error it asks whether any pilot within the bound fits
     as well: the delay trades with the visual lag or lead and the neuromuscular mode
     along a valley that the curvature at the optimum does not see (a precision pilot's
@@ -210,7 +211,7 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
     rss_b, p_b, _ = _fit(model, base, free, lo, hi_b, clip, *data, w)
     f, p = _nested_f(rss_b, rss, 1, dof)
     return {"bound_s": float(bound), "f": float(f), "p_value": p, "dof": int(dof),
-            "bounded_tau0": float(p_b["tau0"])}
+            "bounded_tau0": float(p_b["tau0"]), "parameters": {n_: float(v) for n_, v in p_b.items()}}
 
 
 def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, level: float) -> dict | None:

@@ -78,7 +78,7 @@ def motion_path_note(plants) -> str | None:
             "(the paper's washout and platform); the controlled element integrates, as on an angle "
             "display: if the cab turns with the displayed angle one to one, add \"motion_path\": "
             "{\"num\": [1, 0], \"den\": [0.01, 1]}, times the cab's washout and motion gain if it has "
-            "them (README \"Data formats\": left out, a washout can hide the motion)")
+            "them (README \"Your own recordings\": left out, a washout can hide the motion)")
 
 
 @functools.lru_cache(maxsize=512)

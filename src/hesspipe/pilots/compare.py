@@ -226,6 +226,33 @@ def _with_k(settings: CompareSettings, plants: Plants) -> CompareSettings:
     return replace(settings, k=choose_k(plants)[0])
 
 
+def pilot_motion_test(run: Run, plants: Plants, start: Mapping[str, float], settings: CompareSettings) -> dict:
+    """A pilot's motion test as the cohort verdict reads it
+    (:func:`hesspipe.identification.motion_test.safe_motion_test`, the 95 % intervals of Km
+    and Km/|Ke|); where motion is not named, the motion path's likely mistakes are tried
+    too (``path_check``), so the cohort verdict can say a wrong path
+    (:func:`hesspipe.pilots.verdict.path_verdict`).
+
+    Parameters
+    ----------
+    run : Run
+        The pilot's run.
+    plants : Plants
+        Yc, Yd and the optional motion path.
+    start : mapping
+        Starting pilot parameters (the original model's fit).
+    settings : CompareSettings
+        ``k`` (resolved, 1 or 2), ``band`` (Hz) and ``display``.
+
+    Returns
+    -------
+    dict
+        The test's result.
+    """
+    return safe_motion_test(run, plants, start, k=settings.k, band_hz=tuple(settings.band),
+                            interval=KM_INTERVAL, display=settings.display, path_check=ALPHA)
+
+
 def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSettings()) -> PilotComparison:
     """Identify the three configurations on one run.
 
@@ -291,11 +318,7 @@ def compare_run(run: Run, plants: Plants, settings: CompareSettings = CompareSet
     return PilotComparison(
         id=run.id, source=run.source, synthetic=run.synthetic,
         original=original_d, expanded_fixed=fixed, expanded=expanded_d, improvement=float(improvement),
-        # path_check: where motion is not named, the path's likely mistakes are tried too, so
-        # the cohort verdict can say a wrong path (verdict.path_verdict).
-        motion_test=safe_motion_test(run, plants, original.parameters, k=settings.k,
-                                     band_hz=tuple(settings.band), interval=KM_INTERVAL,
-                                     display=settings.display, path_check=ALPHA),
+        motion_test=pilot_motion_test(run, plants, original.parameters, settings),
         freq_hz=np.asarray(original.freq_hz)[mask], measured_psd=np.asarray(original.measured_psd)[mask],
         simulated_psd={"original": np.asarray(original.simulated_psd)[mask],
                        "expanded_fixed": np.asarray(fixed_psd)[mask],

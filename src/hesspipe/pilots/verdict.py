@@ -186,7 +186,7 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
         why = ("no pilot's record has multisine forcing lines, so no describing function could be "
                "tested for motion feedback") if tests else "no pilot was identified"
         return {"answer": "undetermined", "n_tested": 0, "n_significant": 0, "method": method,
-                "sentence": f"undetermined: {why}",
+                "sentence": f"undetermined: {why}", "path_check": None,
                 "per_pilot": _per_pilot_out(tests, {}, groups, alpha)}
     n_runs = len(done)
     pilots = _per_pilot(done, groups or {})
@@ -251,8 +251,9 @@ def path_verdict(tests: Mapping[str, Mapping], groups: Mapping[str, str], alpha:
     runs are combined as for the verdict, and a variant is named where it makes at least half
     of the pilots individually significant, each p times the number of variants below `alpha`
     (Bonferroni). The median-pilot test alone (its p times the variants) flagged the path
-    negated on that lab's static cohort with the right path (p = 0.0017, 2 of 6 pilots
-    significant): a static pilot's misfit that a vestibular path of either sign takes up.
+    negated on that lab's static cohort with the right path (p = 0.0017; 2 of 6 pilots below
+    `alpha`, 1 after the factor): a static pilot's misfit that a vestibular path of either
+    sign takes up.
 
     Parameters
     ----------
