@@ -191,3 +191,63 @@ def test_fields_optional_values_and_string_lists():
         f.strings("bad")
     with pytest.raises(HesspipeError, match=r"expected a list of names from 'a'"):
         f.strings("names", choices=("a",))
+
+
+def test_a_stop_whose_exception_was_swallowed_publishes_nothing(tmp_path):
+    # Raised inside an at-fork handler (logging's, as a worker pool forks), a signal's
+    # exception is only printed as "Exception ignored": a loaded CI machine saw SIGTERM during
+    # the pilots stage let `hesspipe run` finish and publish. The handler's record (core.stops)
+    # is acted on where the stage would be published.
+    import signal
+
+    from hesspipe.core import stops
+
+    class Stopped(BaseException):
+        pass
+
+    def handler(signum, frame):
+        stops.request(signum)
+        raise Stopped
+
+    out = tmp_path / "out"
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        with pytest.raises(Stopped):
+            with staged_output(out, "cohort") as stage:
+                (stage / "a.txt").write_text("x")
+                try:
+                    signal.raise_signal(signal.SIGTERM)
+                except Stopped:
+                    pass   # swallowed, as "Exception ignored" does
+                (stage / "b.txt").write_text("y")
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        stops.clear()
+    assert not out.exists()
+    with staged_output(out, "cohort") as stage:   # nothing recorded: published as ever
+        (stage / "a.txt").write_text("x")
+    assert (out / "a.txt").read_text() == "x"
+
+
+def test_the_command_line_ends_on_a_swallowed_sigterm_without_publishing(tmp_path, monkeypatch, capsys):
+    import signal
+
+    import hesspipe.plants.fit as fit
+    from hesspipe.cli import main
+
+    real = fit.write_plants
+
+    def swallowing(*args, **kw):
+        try:
+            signal.raise_signal(signal.SIGTERM)
+        except KeyboardInterrupt:
+            pass   # swallowed (the CLI's Terminated is a KeyboardInterrupt)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(fit, "write_plants", swallowing)
+    out = tmp_path / "plants"
+    assert main(["plants", "--analytic", "roskam", "--out", str(out), "--no-figures"]) == 128 + signal.SIGTERM
+    assert capsys.readouterr().err.strip().splitlines()[-1] == "hesspipe: terminated"
+    assert not out.exists()
+    monkeypatch.setattr(fit, "write_plants", real)
+    assert main(["plants", "--analytic", "roskam", "--out", str(out), "--no-figures"]) == 0   # nothing left over

@@ -18,6 +18,7 @@ import sys
 import threading
 
 from .. import __version__
+from ..core import stops
 from ..core.errors import HesspipeError
 from ._outputs import check_outputs_apart
 from .commands import COMMANDS
@@ -80,7 +81,13 @@ class Terminated(KeyboardInterrupt):
 
 
 def _on_sigterm(signum, frame):
+    stops.request(signum)   # acted on again if the exception is swallowed (core.stops)
     raise Terminated
+
+
+def _on_sigint(signum, frame):
+    stops.request(signum)
+    raise KeyboardInterrupt
 
 
 #: matplotlib's folder of a command's own (:func:`_matplotlib_folder_of_its_own`), with the
@@ -128,12 +135,16 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     in_main_thread = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
+    stops.clear()
+    previous = ({sig: signal.signal(sig, handler) for sig, handler in
+                 ((signal.SIGTERM, _on_sigterm), (signal.SIGINT, _on_sigint))} if in_main_thread else {})
     try:
         # Before anything loads python-control, which loads matplotlib.
         with _matplotlib_folder_of_its_own():
             check_outputs_apart(args)  # before any work, for every command
-            return int(args.func(args) or 0)
+            code = int(args.func(args) or 0)
+            stops.act()   # a stop whose exception was swallowed ends the command as it would have
+            return code
     except HesspipeError as exc:
         from ._options import cli_message  # library setting names -> this command's options
 
@@ -152,7 +163,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"hesspipe: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 1
     finally:
-        if in_main_thread and previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        stops.clear()
+        for sig, handler in previous.items():
+            # None: a handler installed outside Python (an embedding host); the default then.
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
 
 

@@ -18,6 +18,7 @@ import tempfile
 from pathlib import Path
 from typing import Any, Iterator
 
+from . import stops
 from .errors import HesspipeError
 
 #: Name prefixes of the temporary files and folders hesspipe makes beside its outputs; with
@@ -581,6 +582,7 @@ def staged_output(out_dir: str | os.PathLike, kind: str = "output") -> Iterator[
         raise _cannot_write(out_dir, exc) from None
     try:
         yield stage
+        stops.act()   # a stop whose exception was swallowed (core.stops) publishes nothing
         with _signals_held():
             _publish(stage, out_dir, kind)
     finally:
