@@ -111,5 +111,5 @@ def test_a_failed_plant_check_and_a_flagged_motion_path_show_on_the_run_line(run
     flagged = dataclasses.replace(each, diagnoses=[failing, d])
     line = flagged.lines()[1]
     assert line.endswith("[plant check fails: fit -159.0 %; CHECK motion_path: motion is named with it negated]")
-    assert "plant check failed on 1 of 2 runs; CHECK motion_path flagged on 1 of 2 runs (on a run whose cab " \
-           "did not move, the model's misfit, not a wrong path" in flagged.summary()
+    assert "plant check failed on 1 of 2 runs; CHECK motion_path flagged on 1 of 2 runs (a flag may be the " \
+           "model's misfit, not a wrong path, and on a run whose cab did not move it is" in flagged.summary()

@@ -94,9 +94,9 @@ class RunDiagnoses:
         flags = [_flags(d) for d in self.diagnoses]
         # The path check's caution, which a run's own report gives, once here: a reviewer's
         # static run flagged "integrated" read as a wrong plants file for a cab that never moved.
-        caution = {"CHECK motion_path": " (on a run whose cab did not move, the model's misfit, not a wrong "
-                                        "path: believe it where the motion runs flag the same change and the "
-                                        "static runs do not)"}
+        caution = {"CHECK motion_path": " (a flag may be the model's misfit, not a wrong path, and on a run "
+                                        "whose cab did not move it is: believe it where the motion runs flag "
+                                        "the same change and the static runs do not)"}
         for what, verb in (("plant check", "failed"), ("CHECK motion_path", "flagged"), ("data check", "noted")):
             k = sum(any(f.startswith(what) for f in fl) for fl in flags)
             out += f"; {what} {verb} on {k} of {n} runs{caution.get(what, '')}" if k else ""
