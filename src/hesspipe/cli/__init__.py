@@ -164,8 +164,6 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     finally:
         stops.clear()
-        for sig, handler in previous.items():
-            # None: a handler installed outside Python (an embedding host); the default then.
-            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+        stops.restore(previous)
 
 

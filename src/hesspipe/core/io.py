@@ -486,9 +486,7 @@ def _signals_held() -> Iterator[None]:
     try:
         yield
     finally:
-        for sig, handler in previous.items():
-            # None: a handler installed outside Python (an embedding host); the default then.
-            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+        stops.restore(previous)
         for sig in dict.fromkeys(held):
             signal.raise_signal(sig)
 

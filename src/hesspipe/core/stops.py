@@ -13,6 +13,7 @@ again, now where nothing swallows it. Library use installs no handler and record
 from __future__ import annotations
 
 import signal
+from typing import Mapping
 
 _REQUESTED: list[int] = []
 
@@ -40,3 +41,16 @@ def act() -> None:
         signum = _REQUESTED[0]
         _REQUESTED.clear()
         signal.raise_signal(signum)
+
+
+def restore(handlers: Mapping[int, object]) -> None:
+    """Put back the signal handlers a block replaced (``signal.signal``'s return values).
+
+    Parameters
+    ----------
+    handlers : mapping
+        Signal → the handler it had; None (a handler installed outside Python, an embedding
+        host) puts back the default.
+    """
+    for sig, handler in handlers.items():
+        signal.signal(sig, signal.SIG_DFL if handler is None else handler)

@@ -36,7 +36,7 @@ import scipy.stats
 
 from ..core.errors import HesspipeError
 from ..identification.lines import SEPARABLE, forcing_sets
-from ..identification.motion_test import forcing_lines, safe_motion_test, windowed
+from ..identification.motion_test import PATH_ADVICE, forcing_lines, safe_motion_test, windowed
 from ..identification.paired_delay import paired_delay
 from .results import Step
 
@@ -191,9 +191,8 @@ def path_words(check: dict | None) -> str:
     # the original did not explain it away), hence the caution.
     found = " and ".join(f"{name} (p={p[name]:.2g})" for name in check["named"])
     return (f"motion is not named with the path given, but it is with the path {found} (each p before "
-            f"multiplying by the {n} variants tried; each without the test's vestibular delay): check "
-            f"motion_path's sign and whether it differentiates the output (SPEC: output -> cab angular "
-            f"velocity). On a run whose cab did not move, this is the model's misfit, not a wrong path: "
+            f"multiplying by the {n} variants tried; each without the test's vestibular delay): "
+            f"{PATH_ADVICE}. On a run whose cab did not move, this is the model's misfit, not a wrong path: "
             f"believe it only where the motion runs flag the same change and the static runs do not")
 
 

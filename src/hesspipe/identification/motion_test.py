@@ -150,6 +150,10 @@ and one differentiation off (an angle output given the path of a rate, or the re
 lab stand-in's single-integrator yaw runs (s/(0.01 s + 1), motion named on 6 of 6) the path
 negated named motion on 2 of 6, without its differentiator on 1 of 6, without a word."""
 
+PATH_ADVICE = ("check motion_path's sign and whether it differentiates the output (SPEC: output -> cab "
+               "angular velocity)")
+"""What a user does where a variant names motion (diagnose's run line, pilots' cohort line)."""
+
 
 def _variant_cabs(plants) -> dict:
     # The motion path's PATH_VARIANTS as blocks (none where the plants give no path: the

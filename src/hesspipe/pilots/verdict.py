@@ -53,6 +53,7 @@ from ..core.errors import HesspipeError
 # The per-pilot test lives with identification so that diagnose uses the very same one.
 from ..identification.motion_test import (  # noqa: F401
     ALPHA,
+    PATH_ADVICE,
     PATH_VARIANTS,
     SEPARABLE,
     analysis_window,
@@ -304,9 +305,7 @@ def path_verdict_line(check: Mapping | None) -> str:
                          f"p = {v[name]['majority_p']:.2g})" for name in check["named"])
     return (f"CHECK motion_path: motion feedback would improve the fit for at least half of the pilots "
             f"with the path {found} (a pilot counted where its p times the {n} variants tried is below "
-            f"{check['level']:g}): check "
-            f"motion_path's sign and whether it differentiates the output (SPEC: output -> cab angular "
-            f"velocity). A cohort whose cab did not move can show this as a misfit its pilots share: "
+            f"{check['level']:g}): {PATH_ADVICE}. A cohort whose cab did not move can show this as a misfit its pilots share: "
             f"believe it where the motion cohort flags it and the static cohort does not")
 
 
