@@ -308,3 +308,21 @@ def test_a_record_shorter_than_a_period_is_said_in_the_diagnosis(clean):
     assert len(d.notes) == 1 and d.notes[0].startswith("no whole period of the forcing repeats")
     assert "Note: no whole period" in format_report(d) and d.to_dict()["notes"] == list(d.notes)
     assert diagnose(run, plants, config=cfg).notes == ()
+
+
+def test_report_says_how_small_a_residual_the_failed_residual_tests_are_about(clean):
+    # A reviewer's hexapod runs fitted 99.8 %; the plant check's line read "independent of
+    # disturbance: NO" before the next line said the plants match, and read as a failed check.
+    run, plants = clean
+    d = diagnose(run, plants, config=DiagnoseConfig(candidates=("remnant",), max_effects=1))
+    assert d.plant_finding["verdict"] == "match" and d.plant_check.fit_percent >= 90.0
+    dependent = replace(d.plant_check.tests_disturbance, independence_p=1e-6)
+    failed = replace(d, plant_check=replace(d.plant_check, tests_disturbance=dependent))
+    share = 100.0 - d.plant_check.fit_percent
+
+    def line(diag):
+        return next(ln for ln in format_report(diag).splitlines() if ln.startswith("Plant check: fit"))
+
+    assert f"the small residual ({share:.1f} % of the output): " in line(failed)
+    assert "of disturbance: NO" in line(failed)
+    assert "small residual" not in line(d)

@@ -30,8 +30,13 @@ def format_report(d: Diagnosis) -> str:
         out.append(SYNTHETIC_BANNER)
     out.append(f"Diagnosis of run '{d.run_id}' with the {d.baseline_model} model")
     pc = d.plant_check
+    # A reviewer read "NO" on a 99.8 % fit as a failed check before the next line explained it:
+    # where the plants match, the tests are said to be about a small residual first.
+    small = bool(d.plant_finding and d.plant_finding["verdict"] == "match" and not pc.passes
+                 and pc.fit_percent >= 90.0)
+    of = f"the small residual ({100 - pc.fit_percent:.1f} % of the output): " if small else "residual "
     out.append(f"Plant check: fit {pc.fit_percent:.1f} % of the output from the measured control and "
-               f"disturbance, the plants started from rest; residual {'white' if pc.tests_control.white else 'NOT white'} "
+               f"disturbance, the plants started from rest; {of}{'white' if pc.tests_control.white else 'NOT white'} "
                f"(p={pc.tests_control.whiteness_p:.2g}), independent of control: "
                f"{'yes' if pc.independence_p['control'] >= 0.01 else 'NO'} "
                f"(p={pc.independence_p['control']:.2g}), of disturbance: "
