@@ -139,12 +139,16 @@ class DFEvidence:
         tau0 (s), wn (rad/s), zn, 1/T1, 1/T2 (rad/s) as the describing function gives them.
     remnant : dict
         Share of control power between the lines, its threshold and whether it is named.
+    k : int
+        Hess's order whose original model fitted the lines better (the motion test's null;
+        0: not known).
     """
 
     motion: MotionVerdict
     delay: dict
     dynamics: dict
     remnant: dict
+    k: int = 0
 
 
 def motion_words(named: bool, forcing: str) -> str:
@@ -422,7 +426,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
     remnant = {"named": bool(share >= cfg.remnant_share), "share": share,
                "threshold": cfg.remnant_share, "band_hz": list(cfg.band_hz),
                "criterion": "share of the control power between the multisine lines"}
-    return DFEvidence(mv, delay, dyn, remnant), ""
+    return DFEvidence(mv, delay, dyn, remnant, int(t.get("k", 0))), ""
 
 
 def motion_step(ev: DFEvidence, problem, current, cfg):
