@@ -84,6 +84,24 @@ def test_a_struct_array_and_numbered_text_columns(tmp_path):
     np.testing.assert_allclose(runs[1].control, 2 * s["control"], atol=1e-8)
 
 
+def test_plain_names_on_a_file_of_runs_say_the_starred_mapping(tmp_path):
+    # A reviewer's struct array of runs mapped as time=t,... failed with the variables found
+    # and no word of the star that reads them.
+    s = signals()
+    trial = np.zeros((2,), dtype=[("t", object), ("u", object), ("y", object), ("d", object)])
+    for i in range(2):
+        trial[i] = (s["time"], s["control"], s["output"], s["disturbance"])
+    savemat(tmp_path / "all.mat", {"trial": trial})
+    with pytest.raises(HesspipeError, match=r"all.mat: variables 't' \(role time\).*; the file holds a run "
+                                            r"per number: map each role with '\*' for the run's number, e.g. "
+                                            r"time=trial\(\*\).t,disturbance=trial\(\*\).d,output=trial\(\*\).y,"
+                                            r"control=trial\(\*\).u$"):
+        read_file_runs(tmp_path / "all.mat", columns="time=t,control=u,output=y,disturbance=d")
+    _session(tmp_path / "s01.mat")
+    with pytest.raises(HesspipeError, match=r"e.g. output=x:\*,control=u:\*$"):
+        read_file_runs(tmp_path / "s01.mat", columns="time=t,reference=ft:*,disturbance=fd,output=x,control=u")
+
+
 def test_starred_names_that_do_not_find_the_same_runs_are_refused(tmp_path):
     path = tmp_path / "s01.mat"
     s = _session(path)

@@ -324,6 +324,7 @@ def _missing(frame: Frame, missing: list[tuple[str, str]], hint: str | None, als
     else:
         subject = f"{item}s {', '.join(names[:-1])} and {names[-1]} missing"
     headers = ", ".join(frame.headers)
+    tail += _starred_hint(frame.headers, missing)
     if others is not None:
         left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
         return f"{frame.path}: {subject}; found {item}s: {headers}{left}{tail}"
@@ -331,6 +332,27 @@ def _missing(frame: Frame, missing: list[tuple[str, str]], hint: str | None, als
         return (f"{frame.path}: {subject}; the file has no header row, its columns are "
                 f"named by position 1-{len(frame.headers)}{tail}")
     return f"{frame.path}: {subject}; found {item}s: {headers}{tail}"
+
+
+def _starred_hint(headers, missing: list[tuple[str, str]]) -> str:
+    """Where a missing name is there once per run (``trial(1).t``, ``t:2``), the starred
+    mapping that reads them (``time=trial(*).t``): a reviewer's struct array of runs failed
+    on ``time=t`` with no word of the star."""
+    forms = []
+    for role, name in missing:
+        bare = re.escape(name.lstrip("-").strip().lower())
+        for h in (h.strip() for h in headers):
+            if bare and re.match(rf"^.*?\d+\)?[:_. /-]?{bare}$", h.lower()) and not h[0].isdigit():
+                forms.append(f"{role}={re.sub(r'[0-9]+', RUN_NUMBER, h, count=1)}")
+            elif bare and re.match(rf"^{bare}[:_ ]\d+$", h.lower()):
+                forms.append(f"{role}={re.sub(r'[0-9]+$', RUN_NUMBER, h)}")
+            else:
+                continue
+            break
+    if not forms:
+        return ""
+    return (f"; the file holds a run per number: map each role with '{RUN_NUMBER}' for the run's "
+            f"number, e.g. {','.join(forms)}")
 
 
 def _find(path, headers: list[str], role: str, name: str, as_written,
