@@ -1,5 +1,5 @@
 """Several runs in one file (:func:`hesspipe.core.formats.read_file_runs`,
-:func:`hesspipe.core._table.run_columns`): a MATLAB session's matrices of one column per run, a
+:func:`hesspipe.core._star.run_columns`): a MATLAB session's matrices of one column per run, a
 struct array, numbered text columns; a star in the mapped name stands for the run's number.
 The runs are built here from known signals (SYNTHETIC)."""
 

@@ -39,7 +39,8 @@ from ._roles import (  # noqa: F401
     without_disturbance,
 )
 from ._signals import SIGNALS, checked_signals
-from ._table import BINARY_SUFFIXES, RUN_NUMBER, read_frame, read_table, run_columns
+from ._star import run_columns
+from ._table import BINARY_SUFFIXES, RUN_NUMBER, read_frame, read_table
 from ._tf import siso_coefficients as siso_coefficients  # re-exported: the plants and blocks use it
 from ._tf import tf_coefficients as tf_coefficients  # re-exported: the plants report and the flight use it
 from ._time import (
@@ -355,7 +356,7 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
     ------
     HesspipeError
         Naming the file, the column and the problem (:func:`read_run`); starred names that
-        match no column or find different runs (:func:`hesspipe.core._table.run_columns`).
+        match no column or find different runs (:func:`hesspipe.core._star.run_columns`).
     """
     path = Path(path)
     mapping = _parse_columns(columns)
