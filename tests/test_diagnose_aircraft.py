@@ -323,6 +323,6 @@ def test_report_says_how_small_a_residual_the_failed_residual_tests_are_about(cl
     def line(diag):
         return next(ln for ln in format_report(diag).splitlines() if ln.startswith("Plant check: fit"))
 
-    assert f"the small residual ({share:.1f} % of the output): " in line(failed)
+    assert f"the small residual ({share:.2g} % of the output): " in line(failed)
     assert "of disturbance: NO" in line(failed)
     assert "small residual" not in line(d)

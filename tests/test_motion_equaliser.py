@@ -101,3 +101,25 @@ def test_a_lead_that_hess_s_rule_does_not_expect_is_not_read_as_motion_feedback(
                     display="compensatory")
     assert t["k"] == 2 and t["p_value"] > 0.01, (t["k"], t["p_value"])
     assert abs(t["parameters_original"]["tau0"] - spec.pilot["tau"]) < 0.05
+
+
+def test_the_paired_delay_test_takes_the_order_the_motion_test_kept(tmp_path):
+    # A review of the order choice: diagnose's delay test against a baseline run still fitted
+    # the rule's order, where the persons' lead is missing and the delays fell to their bound
+    # (0 and 0.04 s for 0.21 s). It now fits the order the run's motion test kept.
+    from hesspipe.diagnose.settings import DiagnoseConfig
+    from hesspipe.diagnose.workflow import diagnose
+    from hesspipe.humanlike import retest
+
+    plant = {"num": [4.0, 3.2], "den": [1.0, 3.0, 6.25, 0.0]}
+    spec = draw_trial(plant, 0, task="both", pilot="precision", fs=50.0, T_m=81.92,
+                      wc=(3.0, 4.0), name="cond")
+    run = read_run(write_trial(tmp_path / "c", simulate_trial(spec)))
+    base = read_run(write_trial(tmp_path / "b", simulate_trial(retest(spec, 11, effects=(), name="base"))))
+    plants = read_plants(tmp_path / "c" / "plants.json")
+    d = diagnose(run, plants, baseline_run=[base], seed=0,
+                 config=DiagnoseConfig(candidates=("extra_delay",), max_effects=1))
+    dv = d.delay_verdict
+    assert abs(dv["delay_s"] - spec.pilot["tau"]) < 0.06, dv
+    assert abs(dv["baseline_delay_s"] - spec.pilot["tau"]) < 0.06, dv
+    assert not dv["named"]

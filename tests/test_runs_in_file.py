@@ -92,14 +92,22 @@ def test_plain_names_on_a_file_of_runs_say_the_starred_mapping(tmp_path):
     for i in range(2):
         trial[i] = (s["time"], s["control"], s["output"], s["disturbance"])
     savemat(tmp_path / "all.mat", {"trial": trial})
-    with pytest.raises(HesspipeError, match=r"all.mat: variables 't' \(role time\).*; the file holds a run "
-                                            r"per number: map each role with '\*' for the run's number, e.g. "
+    with pytest.raises(HesspipeError, match=r"all.mat: variables 't' \(role time\).*; if the file holds a run "
+                                            r"per number, map each role with '\*' for the run's number, e.g. "
                                             r"time=trial\(\*\).t,disturbance=trial\(\*\).d,output=trial\(\*\).y,"
                                             r"control=trial\(\*\).u$"):
         read_file_runs(tmp_path / "all.mat", columns="time=t,control=u,output=y,disturbance=d")
     _session(tmp_path / "s01.mat")
-    with pytest.raises(HesspipeError, match=r"e.g. output=x:\*,control=u:\*$"):
-        read_file_runs(tmp_path / "s01.mat", columns="time=t,reference=ft:*,disturbance=fd,output=x,control=u")
+    with pytest.raises(HesspipeError, match=r"e.g. output=x:\*,control=-u:\*$"):
+        read_file_runs(tmp_path / "s01.mat", columns="time=t,reference=ft:*,disturbance=fd,output=x,control=-u")
+    # The number beside the name, two runs at least: a person's number is not starred, and one
+    # numbered column (an aircraft's name) is no run.
+    from hesspipe.core._table import _starred_hint
+
+    assert _starred_hint(["s01_run1.t", "s01_run2.t"], [("time", "t")]).endswith("e.g. time=s01_run*.t")
+    assert _starred_hint(["Time", "F16_t"], [("time", "t")]) == ""
+    assert _starred_hint(["trial(1).t [s]", "trial(2).t [s]", "u1", "u2"],
+                         [("time", "t"), ("control", "u")]).endswith("e.g. time=trial(*).t,control=u*")
 
 
 def test_starred_names_that_do_not_find_the_same_runs_are_refused(tmp_path):

@@ -339,24 +339,30 @@ def _missing(frame: Frame, missing: list[tuple[str, str]], hint: str | None, als
 
 
 def _starred_hint(headers, missing: list[tuple[str, str]]) -> str:
-    """Where a missing name is there once per run (``trial(1).t``, ``t:2``), the starred
-    mapping that reads them (``time=trial(*).t``): a reviewer's struct array of runs failed
-    on ``time=t`` with no word of the star."""
+    """Where a missing name is there once per run (``trial(1).t`` and ``trial(2).t``, ``u1``
+    and ``u2``: two numbers at least, the one beside the name), the starred mapping that
+    reads them (``time=trial(*).t``): a reviewer's struct array of runs failed on ``time=t``
+    with no word of the star."""
     forms = []
     for role, name in missing:
-        bare = re.escape(name.lstrip("-").strip().lower())
-        for h in (h.strip() for h in headers):
-            if bare and re.match(rf"^.*?\d+\)?[:_. /-]?{bare}$", h.lower()) and not h[0].isdigit():
-                forms.append(f"{role}={re.sub(r'[0-9]+', RUN_NUMBER, h, count=1)}")
-            elif bare and re.match(rf"^{bare}[:_ ]\d+$", h.lower()):
-                forms.append(f"{role}={re.sub(r'[0-9]+$', RUN_NUMBER, h)}")
-            else:
-                continue
-            break
+        sign, bare = ("-", name[1:].strip()) if name.startswith("-") else ("", name.strip())
+        if not bare:
+            continue
+        numbers: dict[str, set] = {}
+        for h in headers:
+            plain = _split_unit(h)[0].strip()
+            m = (re.match(rf"^(?:.*\D)?(\d+)\)?[:_. /-]?{re.escape(bare)}$", plain, re.IGNORECASE)
+                 or re.match(rf"^{re.escape(bare)}[:_ ]?(\d+)$", plain, re.IGNORECASE))
+            if m:
+                form = plain[:m.start(1)] + RUN_NUMBER + plain[m.end(1):]
+                numbers.setdefault(form, set()).add(int(m.group(1)))
+        runs = [form for form, ks in numbers.items() if len(ks) >= 2]
+        if runs:
+            forms.append(f"{role}={sign}{runs[0]}")
     if not forms:
         return ""
-    return (f"; the file holds a run per number: map each role with '{RUN_NUMBER}' for the run's "
-            f"number, e.g. {','.join(forms)}")
+    return (f"; if the file holds a run per number, map each role with '{RUN_NUMBER}' for the "
+            f"run's number, e.g. {','.join(forms)}")
 
 
 def _find(path, headers: list[str], role: str, name: str, as_written,

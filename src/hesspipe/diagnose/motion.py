@@ -140,8 +140,7 @@ class DFEvidence:
     remnant : dict
         Share of control power between the lines, its threshold and whether it is named.
     k : int
-        Hess's order whose original model fitted the lines better (the motion test's null;
-        0: not known).
+        Hess's order the motion test kept (its expanded model scored better; 0: not known).
     """
 
     motion: MotionVerdict
@@ -415,8 +414,11 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
             raise HesspipeError(f"{bases[0].source or bases[0].id}: the baseline run has no "
                                 f"describing function to read the pilot's delay from "
                                 f"({tb.get('reason', 'motion test unavailable')})")
-        joint = paired_delay([run, *repeat_runs], bases, plants,
-                             (t["parameters_original"], tb["parameters_original"]), k=k)
+        # In the order the run's test kept; the baseline's fit starts it only if it kept the same.
+        order = int(t.get("k", k))
+        base_start = tb["parameters_original"] if int(tb.get("k", k)) == order else t["parameters_original"]
+        joint = paired_delay([run, *repeat_runs], bases, plants, (t["parameters_original"], base_start),
+                             k=order)
         delay = paired_delay_test(joint, cfg.retest_delay_sd, cfg.alpha)
         delay["baseline_run"] = ", ".join(b.source or b.id for b in bases)
         own = min(delay["pilot_delay_s"], cfg.max_pilot_delay) if delay["named"] else cfg.max_pilot_delay

@@ -34,7 +34,7 @@ def format_report(d: Diagnosis) -> str:
     # where the plants match, the tests are said to be about a small residual first.
     small = bool(d.plant_finding and d.plant_finding["verdict"] == "match" and not pc.passes
                  and pc.fit_percent >= 90.0)
-    of = f"the small residual ({100 - pc.fit_percent:.1f} % of the output): " if small else "residual "
+    of = f"the small residual ({100 - pc.fit_percent:.2g} % of the output): " if small else "residual "
     out.append(f"Plant check: fit {pc.fit_percent:.1f} % of the output from the measured control and "
                f"disturbance, the plants started from rest; {of}{'white' if pc.tests_control.white else 'NOT white'} "
                f"(p={pc.tests_control.whiteness_p:.2g}), independent of control: "

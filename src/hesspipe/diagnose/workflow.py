@@ -233,7 +233,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
                             cfg=cfg, baseline_run=bases or None, repeat_runs=repeats) \
         if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else (None, "")
     dynamics = {n: v for n, v in (ev.dynamics if ev else {}).items() if n not in cfg.free}
-    k_df = ev.k if ev is not None and ev.k else k_df   # the order whose pilot fitted the lines
+    k_df = ev.k if ev is not None and ev.k else k_df   # the order the motion test kept
     # Starts, in order: the describing function's dynamics (the pilot's own), then the
     # defaults, first with the configured order and then with Hess's rule's. The
     # describing function's dynamics need not close the loop (an original model fitted

@@ -355,8 +355,8 @@ def _either_order(ld: LineData, plants, start: Mapping[str, float], *, k: int, m
         return result, profile
     n_res = _residuals(ld)
 
-    def expanded_score(r: dict) -> float:
-        return r["rss_expanded"] + (n_res - r["degrees_of_freedom"]) * math.log(n_res)
+    def expanded_score(r: dict) -> float:   # the alternative the test kept, its parameters
+        return r["rss_expanded"] + (n_res - r["dof_expanded"]) * math.log(n_res)
 
     # The rule's original scores with its parameters: the test's dof less Km and tau_m.
     rule = result["rss_original"] + (n_res - result["degrees_of_freedom"] - 2) * math.log(n_res)
@@ -480,7 +480,7 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "delay_bound": delay_bound, "delay_bound_expanded": delay_bound_expanded,
             "display": display, "target_lines": target, "path_check": checked,
             "feedforward": None if yc_inv is None else {n_: float(p_e[n_]) for n_ in FEEDFORWARD},
-            "degrees_of_freedom": dof, "k": k}, profile
+            "degrees_of_freedom": dof, "dof_expanded": dof_e, "k": k}, profile
 
 
 def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
@@ -559,7 +559,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         asked and run; else ``p_values``, variant → p of motion with that path,
         ``named``, the variants whose p times their number is below ``level`` (in
         :data:`PATH_VARIANTS`' order), ``better``, the one of them with the smallest p or None,
-        and ``level``).
+        and ``level``); ``k`` (Hess's order the test was made in: `k`, or with both line sets
+        the other where its expanded model scores better, RSS + ln(residuals) per parameter)
+        and ``dof_expanded`` (the residual degrees of freedom of the alternative kept).
     """
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
