@@ -261,9 +261,13 @@ class _Null:
     sol_n: object
 
     def score(self, n_res: int) -> float:
-        # RSS is in remnant-variance units (a chi-square under the model), so the
-        # information criterion is RSS plus the parameters' price, not n ln RSS.
-        return self.rss + len(self.free) * math.log(n_res)
+        return _score(self.rss, len(self.free), n_res)
+
+
+def _score(rss: float, n_parameters: int, n_res: int) -> float:
+    # RSS is in remnant-variance units (a chi-square under the model), so the information
+    # criterion is RSS plus the parameters' price, not n ln RSS.
+    return rss + n_parameters * math.log(n_res)
 
 
 def _null_fit(ld: LineData, plants, start: Mapping[str, float], k: int, display: str,
@@ -350,21 +354,24 @@ def _either_order(ld: LineData, plants, start: Mapping[str, float], *, k: int, m
     # vestibular path (p 1e-4 -> 0.42, tests/test_verdict.py). With one forcing function the
     # test rests on the model's shapes, the rule's order among them.
     kw = dict(max_delay=max_delay, display=display, path_check=path_check)
-    result, profile = _one_display(ld, plants, start, k=k, **kw)
-    if not (result.get("available") and ld.both):
+    if ld.reason or not ld.both:
+        return _one_display(ld, plants, start, k=k, **kw)
+    target, n_res = _has_target(ld), _residuals(ld)
+    null = _null_fit(ld, plants, start, k, display, target)
+    result, profile = _one_display(ld, plants, start, k=k, null=null, **kw)
+    if not result.get("available"):
         return result, profile
-    n_res = _residuals(ld)
 
     def expanded_score(r: dict) -> float:   # the alternative the test kept, its parameters
-        return r["rss_expanded"] + (n_res - r["dof_expanded"]) * math.log(n_res)
+        return _score(r["rss_expanded"], n_res - r["dof_expanded"], n_res)
 
-    # The rule's original scores with its parameters: the test's dof less Km and tau_m.
-    rule = result["rss_original"] + (n_res - result["degrees_of_freedom"] - 2) * math.log(n_res)
-    quick = _null_fit(ld, plants, start, 3 - k, display, result["target_lines"], quick=True)
+    # The rule's original as the test left it (an exchange of optima may have lowered its RSS).
+    rule = _score(result["rss_original"], len(null.free), n_res)
+    quick = _null_fit(ld, plants, start, 3 - k, display, target, quick=True)
     if quick.score(n_res) >= min(rule, expanded_score(result)):
         return result, profile
-    null = _null_fit(ld, plants, start, 3 - k, display, result["target_lines"])
-    other = _one_display(ld, plants, start, k=3 - k, null=null, **kw)
+    other = _one_display(ld, plants, start, k=3 - k, null=_null_fit(ld, plants, start, 3 - k, display, target),
+                         **kw)
     if other[0].get("available") and expanded_score(other[0]) < expanded_score(result):
         return other
     return result, profile
