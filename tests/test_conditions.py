@@ -265,3 +265,27 @@ def test_a_stick_in_another_unit_is_refused_as_pilots_refuses_it(cohort, capsys,
                  str(cohort / "static" / "plants.json")])
     err = capsys.readouterr().err.strip().splitlines()
     assert code != 0 and len(err) == 1 and "control's units differ from the plants'" in err[0]
+
+
+def test_a_person_whose_crossover_is_ill_defined_is_left_out_of_the_crossover_tests():
+    rng = np.random.default_rng(5)
+    persons = {}
+    for i in range(6):
+        a = {"crossover_rad_s": 2.0 + rng.normal(0, 0.2), "phase_margin_deg": 40 + rng.normal(0, 5),
+             "error_variance": 0.01, "crossover_ill_defined": False}
+        persons[f"s{i}"] = {"static": a, "motion": dict(a, crossover_rad_s=a["crossover_rad_s"] + 0.4,
+                                                        error_variance=0.012)}
+    persons["s1"]["motion"].update(crossover_rad_s=0.7, phase_margin_deg=115.0, crossover_ill_defined=True)
+    tests = paired_tests(persons, ("static", "motion"))
+    assert tests["crossover_rad_s"]["n"] == 5 and tests["phase_margin_deg"]["n"] == 5
+    assert tests["error_variance"]["n"] == 6
+    assert tests["crossover_rad_s"]["effect"] == pytest.approx(0.4)
+    for c in persons.values():
+        for v in c.values():
+            v.update(control_variance=1.0, remnant_share=0.2)
+    from hesspipe.pilots.conditions import ConditionComparison, format_conditions
+
+    table = format_conditions(ConditionComparison(("static", "motion"), persons, tests, "v", True))
+    row = next(line for line in table.splitlines() if line.startswith("s1 "))
+    assert row.split()[1:5] == [f"{persons['s1']['static']['crossover_rad_s']:.3g}", "~0.7",
+                                f"{persons['s1']['static']['phase_margin_deg']:.1f}", "~115.0"]

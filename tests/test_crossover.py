@@ -100,3 +100,24 @@ def test_band_floor_is_checked():
         record_band_floor(0.0)
     with pytest.raises(HesspipeError, match="w_min"):
         loop_crossover(PilotModel().loop(table1(1)), None, w_min=float("nan"))
+
+
+def test_flat_band_of_a_crossover_model_loop_and_of_a_flat_one():
+    from hesspipe.pilot.crossover import FLAT_FACTOR, flat_band
+
+    w = np.geomspace(0.1, 30, 3000)
+    cm = flat_band(w, 3.0 / (1j * w) * np.exp(-0.2j * w), 3.0)
+    assert cm.low_rad_s == pytest.approx(3.0 / FLAT_FACTOR, rel=0.01)
+    assert cm.high_rad_s == pytest.approx(3.0 * FLAT_FACTOR, rel=0.01) and not cm.wide
+    assert cm.phase_margin_range_deg[0] == pytest.approx(90 - np.degrees(0.2 * 3.75), abs=0.5)
+    # |L| of -6 dB/decade: within 1.25 of 1 over a factor 1.25**(20/6) each side
+    flat = flat_band(w, (3.0 / w) ** 0.3 + 0j, 3.0)
+    assert flat.wide and flat.high_rad_s / flat.low_rad_s == pytest.approx(FLAT_FACTOR ** (2 / 0.3), rel=0.02)
+    assert "within a factor 1.25 of 1" in flat.describe()
+    assert flat_band(w, 3.0 / (1j * w), float("nan")) is None
+
+
+def test_the_model_crossover_reports_its_flat_band():
+    c = crossover("original", table1(1), ct.tf([1], [1, 0]))
+    band = c.to_dict()["flat_band"]
+    assert band["low_rad_s"] < c.frequency_rad_s < band["high_rad_s"] and band["wide"] is False

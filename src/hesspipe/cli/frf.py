@@ -72,6 +72,8 @@ def format_table(frf) -> str:
         lines.append(f"crossover (nonparametric)      {c.frequency_rad_s:.3f} +- {c.frequency_std:.3f} "
                      f"rad/s, phase margin {c.phase_margin_deg:.1f} +- {c.phase_margin_std_deg:.1f} deg "
                      f"({c.estimate} estimate; the other in the JSON)")
+        if c.note:
+            lines.append(f"  {c.note}")
     else:
         lines.append(f"crossover (nonparametric)      not found: {c.note}")
     for n in frf.notes:

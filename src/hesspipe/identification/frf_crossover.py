@@ -27,6 +27,7 @@ import numpy as np
 
 from ..core.seeds import derive_seed
 from ..pilot.blocks import from_tf
+from ..pilot.crossover import FlatBand, flat_band
 from .frf_smooth import consistent, fit_smooth, smooth_crossover
 
 DRAWS = 400
@@ -40,6 +41,10 @@ MAX_MISFIT = 4.0
 many line variances (an RMS residual above two standard deviations)."""
 SPAN = 2.0
 """The smooth loop's crossing is sought within this factor of the previous estimate."""
+ILL_SPREAD = 0.25
+"""A crossover in a wide flat band (:class:`~hesspipe.pilot.crossover.FlatBand`) is ill-defined
+when its standard deviation exceeds this share of it: its 95 % interval then spans a factor of
+about three, the flat band's own width, so noise, not the pilot, places the crossing."""
 
 
 @dataclass(frozen=True)
@@ -68,7 +73,11 @@ class FrfCrossover:
         The local regression's (frequency rad/s, phase margin deg, their stds).
     smooth : dict
         The smooth fit: ``parameters``, ``chi2``, ``dof``, ``p_value``, ``consistent`` and its
-        crossover (``frequency_rad_s``, ``phase_margin_deg`` and stds); empty without one.
+        crossover (``frequency_rad_s``, ``phase_margin_deg``, stds and ``flat_band``); empty
+        without one.
+    flat_band : hesspipe.pilot.crossover.FlatBand or None
+        Where |L| stays near 1 around the headline crossover: of the smooth fit's loop, or of
+        the reliable lines for the local regression.
     """
 
     frequency_rad_s: float
@@ -81,6 +90,14 @@ class FrfCrossover:
     estimate: str = "local"
     local: tuple = (float("nan"),) * 4
     smooth: dict = field(default_factory=dict)
+    flat_band: FlatBand | None = None
+
+    @property
+    def ill_defined(self) -> bool:
+        """The flat band is wide and the crossover's standard deviation above :data:`ILL_SPREAD`
+        of it: the crossover and phase margin are then no stable measure of the loop."""
+        return (self.flat_band is not None and self.flat_band.wide
+                and not self.frequency_std <= ILL_SPREAD * self.frequency_rad_s)
 
     def to_dict(self) -> dict:
         """JSON-ready fields, with the method of each estimate in words.
@@ -106,7 +123,8 @@ class FrfCrossover:
         return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
                 "frequency_std_rad_s": self.frequency_std,
                 "phase_margin_std_deg": self.phase_margin_std_deg, "note": self.note,
-                "estimate": self.estimate, "method": method,
+                "estimate": self.estimate, "method": method, "ill_defined": self.ill_defined,
+                "flat_band": None if self.flat_band is None else self.flat_band.to_dict(),
                 "local_regression": {"frequency_rad_s": lw, "phase_margin_deg": lp,
                                      "frequency_std_rad_s": lws, "phase_margin_std_deg": lps,
                                      "method": LOCAL_METHOD},
@@ -147,15 +165,17 @@ def nonparametric_crossover(resp, yc, *, seed: int = 0) -> FrfCrossover:
     fit = fit_smooth(resp.freq_rad_s, resp.H, resp.sigma)
     if fit is None:
         return local
-    wc, pm, wc_std, pm_std = smooth_crossover(fit, block, resp.freq_rad_s)
+    wc, pm, wc_std, pm_std, band = smooth_crossover(fit, block, resp.freq_rad_s, draws=DRAWS, seed=seed)
     ok = consistent(fit)
     smooth = {"parameters": fit.params, "chi2": fit.chi2, "dof": fit.dof,
               "p_value": fit.p_value, "consistent": ok, "frequency_rad_s": wc,
-              "phase_margin_deg": pm, "frequency_std_rad_s": wc_std, "phase_margin_std_deg": pm_std}
+              "phase_margin_deg": pm, "frequency_std_rad_s": wc_std, "phase_margin_std_deg": pm_std,
+              "flat_band": None if band is None else band.to_dict()}
     if ok and np.isfinite(wc):
-        note = "smoothed crossover very uncertain" if not np.isfinite(wc_std) else ""
-        return replace(local, frequency_rad_s=wc, phase_margin_deg=pm, frequency_std=wc_std,
-                       phase_margin_std_deg=pm_std, note=note, estimate="smoothed", smooth=smooth)
+        out = replace(local, frequency_rad_s=wc, phase_margin_deg=pm, frequency_std=wc_std,
+                      phase_margin_std_deg=pm_std, estimate="smoothed", smooth=smooth, flat_band=band,
+                      note="smoothed crossover very uncertain" if not np.isfinite(wc_std) else "")
+        return _with_band_note(out)
     return replace(local, smooth=smooth)
 
 
@@ -204,7 +224,16 @@ def _local_crossover(resp, block, seed: int) -> FrfCrossover:
                             local=(wc, pm, float("inf"), float("inf")))
     dpm = (arr[ok, 1] - pm + 180.0) % 360.0 - 180.0
     sd = (float(np.std(arr[ok, 0])), float(np.std(dpm)))
-    return FrfCrossover(wc, pm, *sd, "", *raw, local=(wc, pm, *sd))
+    band = flat_band(w[ok_lines], (H0 * plant[3])[ok_lines], wc)
+    return _with_band_note(FrfCrossover(wc, pm, *sd, "", *raw, local=(wc, pm, *sd), flat_band=band))
+
+
+def _with_band_note(c: FrfCrossover) -> FrfCrossover:
+    if not c.ill_defined:
+        return c
+    note = (f"crossover ill-defined: {c.flat_band.describe()}; its spread over draws is "
+            f"{c.frequency_std:.2g} rad/s")
+    return replace(c, note="; ".join(n for n in (c.note, note) if n))
 
 
 def _wls(X, y, wt):

@@ -18,9 +18,9 @@ line instead of the two or three within its octave.
 
 The crossover of ``L = H Yc`` (exact plant) is the first fall of |L| through
 1 on a fine grid spanning the lines (the definition the generator's truth and
-SPEC's tracking crossover use); its standard deviation comes from the fit's
-linearised covariance (Gauss-Newton, inflated by the reduced chi-square when
-above 1) through finite-difference derivatives of (wc, PM), not from refits.
+SPEC's tracking crossover use); its standard deviation is the spread of that
+crossing over loops drawn from the fit's linearised covariance (Gauss-Newton,
+inflated by the reduced chi-square when above 1), not from refits.
 Unlike :func:`hesspipe.pilot.mcruer.fit_precision`, which scores simulated
 loops for the benchmark, this fits the points directly and has no loop.
 
@@ -38,6 +38,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import chi2 as chi2_dist
+
+from ..core.seeds import derive_seed
+from ..pilot.crossover import flat_band
 
 NAMES = ("K", "tau", "TL", "TI", "wn", "zn")
 LOWER = np.array([-np.inf, 0.05, np.log(0.01), np.log(0.01), np.log(4.0), 0.05])
@@ -188,23 +191,27 @@ def consistent(fit: SmoothFit | None) -> bool:
     return fit is not None and fit.dof > 0 and fit.p_value >= P_CONSISTENT
 
 
-def _first_fall(x, sign, grid, yc_grid, yc_at):
-    L = np.exp(x[0]) * _shape(x, 1j * grid, sign) * yc_grid
-    m = np.log(np.abs(L))
-    down = np.nonzero((m[:-1] >= 0) & (m[1:] < 0))[0]
-    if not down.size:
-        return float("nan"), float("nan")
-    i = down[0]
-    t = m[i] / (m[i] - m[i + 1])
-    wc = float(np.exp(np.log(grid[i]) + t * (np.log(grid[i + 1]) - np.log(grid[i]))))
-    wcv = np.array([wc])
-    pm = 180.0 + np.degrees(np.angle(np.exp(x[0]) * _shape(x, 1j * wcv, sign)[0] * yc_at(wcv)[0]))
-    pm = (pm + 180.0) % 360.0 - 180.0
-    return wc, (180.0 if pm == -180.0 else float(pm))
+def _first_falls(m, grid):
+    """The first fall through 0 of each row of `m` (D, G), ln|L| on `grid`: wc (D,) rad/s, NaN
+    without one; the grid index just below it and the fraction of the step."""
+    down = (m[:, :-1] >= 0) & (m[:, 1:] < 0)
+    i = np.argmax(down, axis=1)
+    rows = np.arange(m.shape[0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = m[rows, i] / (m[rows, i] - m[rows, i + 1])
+    lg = np.log(grid)
+    wc = np.where(down.any(axis=1), np.exp(lg[i] + t * (lg[i + 1] - lg[i])), np.nan)
+    return wc, i, t
 
 
-def smooth_crossover(fit: SmoothFit, block, w_lines) -> tuple[float, float, float, float]:
-    """Crossover of ``L = H_fit Yc`` and its linearised standard deviations.
+def smooth_crossover(fit: SmoothFit, block, w_lines, *, draws: int = 400, seed: int = 0):
+    """Crossover of ``L = H_fit Yc``, its standard deviations and the band where |L| stays near 1.
+
+    The standard deviations are the spread of the same crossing over `draws` loops drawn
+    from the fit's covariance, linearised: ``ln L(j w) + G(w) dx`` with ``G`` the gradient of
+    ``ln L`` at each frequency and ``dx`` drawn from the covariance. Near a well-defined
+    crossing this is the usual propagation; where |L| stays near 1 over a wide band a draw's
+    crossing can jump along it, which a derivative at the crossing does not see.
 
     Parameters
     ----------
@@ -213,36 +220,59 @@ def smooth_crossover(fit: SmoothFit, block, w_lines) -> tuple[float, float, floa
         The control plant.
     w_lines : array
         The fitted lines' frequencies (rad/s): the search spans them (times SPAN each side).
+    draws : int
+        Loops drawn for the standard deviations.
+    seed : int
+        Seed of the draws.
 
     Returns
     -------
     wc, pm, wc_std, pm_std : float
-        rad/s and deg; NaN when |L| does not fall through 1 in the span (std inf when a
-        perturbed fit loses the crossing).
+        rad/s and deg; NaN when |L| does not fall through 1 in the span (std inf when most
+        draws find no crossing).
+    band : hesspipe.pilot.crossover.FlatBand or None
+        :func:`hesspipe.pilot.crossover.flat_band` of the fitted loop.
     """
     grid = np.logspace(np.log10(np.min(w_lines) / SPAN), np.log10(np.max(w_lines) * SPAN),
                        GRID_POINTS)
     yc_grid = block.response(1j * grid)
 
-    def yc_at(v):
-        return block.response(1j * v)
+    def loop(x):
+        return np.exp(x[0]) * _shape(x, 1j * grid, fit.sign) * yc_grid
 
-    wc, pm = _first_fall(fit.x, fit.sign, grid, yc_grid, yc_at)
+    L = loop(fit.x)
+    ln = np.log(np.abs(L)) + 1j * np.unwrap(np.angle(L))
+    wc, i, t = _first_falls(ln.real[None, :], grid)
     nan = float("nan")
-    if not np.isfinite(wc):
-        return nan, nan, nan, nan
-    grad = np.zeros((2, fit.x.size))
+    if not np.isfinite(wc[0]):
+        return nan, nan, nan, nan, None
+
+    def margin(phase, i, t):
+        pm = (180.0 + np.degrees(phase[..., 0] + t * (phase[..., 1] - phase[..., 0])) + 180.0) % 360.0 - 180.0
+        return np.where(pm == -180.0, 180.0, pm)
+
+    rows = np.arange(1)
+    pm = margin(ln.imag[None, :][rows[:, None], i[:, None] + [0, 1]], i, t)
+    band = flat_band(grid, L, float(wc[0]))
+    G = np.empty((grid.size, fit.x.size), complex)
     for j in range(fit.x.size):
-        h = 1e-4 * max(1.0, abs(fit.x[j]))
+        h = 1e-5 * max(1.0, abs(fit.x[j]))
         xp, xm = fit.x.copy(), fit.x.copy()
         xp[j] += h
         xm[j] -= h
-        (a, pa), (b, pb) = (_first_fall(x, fit.sign, grid, yc_grid, yc_at) for x in (xp, xm))
-        if not (np.isfinite(a) and np.isfinite(b)):
-            return wc, pm, float("inf"), float("inf")
-        grad[:, j] = ((a - b) / (2 * h), ((pa - pb + 180.0) % 360.0 - 180.0) / (2 * h))
-    var = np.einsum("ij,jk,ik->i", grad, fit.cov, grad)
-    return wc, pm, float(np.sqrt(max(var[0], 0.0))), float(np.sqrt(max(var[1], 0.0)))
+        G[:, j] = np.log(loop(xp) / loop(xm)) / (2 * h)   # d ln L / dx_j, phase unwrapped by the ratio
+    vals, vecs = np.linalg.eigh(fit.cov)
+    root = vecs * np.sqrt(np.clip(vals, 0.0, None))
+    rng = np.random.default_rng(derive_seed(seed, "frf-smooth-crossover"))
+    lnd = ln[None, :] + (rng.standard_normal((draws, fit.x.size)) @ root.T) @ G.T
+    wcs, ii, tt = _first_falls(lnd.real, grid)
+    ok = np.isfinite(wcs)
+    if ok.sum() < draws // 2:
+        return float(wc[0]), float(pm[0]), float("inf"), float("inf"), band
+    rows = np.arange(draws)[ok]
+    pms = margin(lnd.imag[rows[:, None], ii[ok, None] + [0, 1]], ii[ok], tt[ok])
+    dpm = (pms - pm[0] + 180.0) % 360.0 - 180.0
+    return float(wc[0]), float(pm[0]), float(np.std(wcs[ok])), float(np.std(dpm)), band
 
 
 def describing_function(params: dict):

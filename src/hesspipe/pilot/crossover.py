@@ -43,6 +43,13 @@ from .motion import motion_block, with_motion_path
 
 LIMITS_NOTE = ("crossover-model limits are an assumption of hesspipe (configurable), "
                "not values from the paper")
+FLAT_FACTOR = 1.25
+"""|L| within this factor of 1 (either way) counts as "at crossover" for :func:`flat_band`."""
+FLAT_SPAN = 2.5
+"""A :func:`flat_band` spanning more than this factor in frequency is wide: across it |L| falls
+by less than about 10 dB per decade, half the crossover model's -20 dB/decade (whose band spans
+FLAT_FACTOR**2 = 1.56), so where |L| passes 1 there is set by a few per cent of gain, and the
+phase margin changes along the band."""
 
 
 @dataclass(frozen=True)
@@ -74,19 +81,97 @@ class Crossover:
     within_limits : bool
         Both inside :class:`CrossoverLimits`.
     limits : CrossoverLimits
+    flat_band : FlatBand or None
+        Where |L| stays near 1 around the crossover (:func:`flat_band`; a wide one makes the
+        crossover sensitive to the parameters); None without a crossover.
     """
 
     frequency_rad_s: float
     phase_margin_deg: float
     within_limits: bool
     limits: CrossoverLimits = CrossoverLimits()
+    flat_band: "FlatBand | None" = None
 
     def to_dict(self) -> dict:
         """JSON-ready: frequency (rad/s), margin (deg), the verdict and the limits it used."""
         return {"frequency_rad_s": self.frequency_rad_s, "phase_margin_deg": self.phase_margin_deg,
                 "within_limits": self.within_limits,
                 "limits": {k: list(v) for k, v in asdict(self.limits).items()},
-                "limits_note": LIMITS_NOTE}
+                "limits_note": LIMITS_NOTE,
+                "flat_band": None if self.flat_band is None else self.flat_band.to_dict()}
+
+
+@dataclass(frozen=True)
+class FlatBand:
+    """The band around a crossover where |L| stays within :data:`FLAT_FACTOR` of 1.
+
+    Attributes
+    ----------
+    low_rad_s, high_rad_s : float
+        Its edges, rad/s (the searched span's edge where |L| is still near 1 there).
+    phase_margin_range_deg : (float, float)
+        The lowest and highest ``180 + angle L`` along it, deg.
+    """
+
+    low_rad_s: float
+    high_rad_s: float
+    phase_margin_range_deg: tuple[float, float]
+
+    @property
+    def wide(self) -> bool:
+        """The band spans more than :data:`FLAT_SPAN` in frequency."""
+        return self.high_rad_s > FLAT_SPAN * self.low_rad_s
+
+    def describe(self) -> str:
+        """The band in words."""
+        lo, hi = self.phase_margin_range_deg
+        return (f"|L| stays within a factor {FLAT_FACTOR:g} of 1 from {self.low_rad_s:.2g} to "
+                f"{self.high_rad_s:.2g} rad/s (less than half the crossover model's -20 dB/decade), so "
+                f"where it passes 1 is set by a few per cent of gain; 180 + angle L is {lo:.0f} to "
+                f"{hi:.0f} deg along the band")
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields (rad/s, deg) with the rule in words."""
+        return {"low_rad_s": self.low_rad_s, "high_rad_s": self.high_rad_s,
+                "phase_margin_range_deg": list(self.phase_margin_range_deg), "wide": self.wide,
+                "rule": (f"the band around the crossover where |L| stays within a factor {FLAT_FACTOR:g} "
+                         f"of 1; wide when it spans more than a factor {FLAT_SPAN:g}")}
+
+
+def flat_band(w, L, wc: float) -> FlatBand | None:
+    """The band around `wc` where |L| stays within :data:`FLAT_FACTOR` of 1.
+
+    Parameters
+    ----------
+    w : array
+        Ascending frequencies, rad/s (a fine grid, or measured lines).
+    L : array of complex
+        The loop at `w`.
+    wc : float
+        The crossover, rad/s.
+
+    Returns
+    -------
+    FlatBand or None
+        None when `wc` is not finite or no point of `w` is near 1 around it.
+    """
+    w, L = np.asarray(w, dtype=float), np.asarray(L)
+    if not np.isfinite(wc) or w.size == 0:
+        return None
+    with np.errstate(divide="ignore"):   # a zero gain is far from 1, not a warning
+        near = np.abs(np.log(np.abs(L))) <= np.log(FLAT_FACTOR)
+    # the points near 1 connected to the crossover (which lies between two of them, or beside one)
+    i = int(np.clip(np.searchsorted(w, wc), 0, w.size - 1))
+    start = next((j for j in (i, i - 1) if 0 <= j < w.size and near[j]), None)
+    if start is None:
+        return None
+    lo = hi = start
+    while lo > 0 and near[lo - 1]:
+        lo -= 1
+    while hi < w.size - 1 and near[hi + 1]:
+        hi += 1
+    pm = (180.0 + np.degrees(np.angle(L[lo:hi + 1])) + 180.0) % 360.0 - 180.0
+    return FlatBand(float(min(w[lo], wc)), float(max(w[hi], wc)), (float(np.min(pm)), float(np.max(pm))))
 
 
 TRACKING_DEFINITION = ("tracking crossover: the first fall of |L| through 1 above the lowest frequency the "
@@ -154,28 +239,32 @@ def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits(),
     Crossover
         NaN frequency and margin when |L| never falls through 1.
     """
-    def gain_db(w):
+    def open_loop(w):
         s = 1j * np.atleast_1d(np.asarray(w, dtype=float))
+        return loop.pilot_open_loop(s, yc.response(s))
+
+    def gain_db(w):
         with np.errstate(divide="ignore"):  # a zero gain (Ke = 0) is log 0 = -inf: no crossover
-            return np.log(np.abs(loop.pilot_open_loop(s, yc.response(s))))
+            return np.log(np.abs(open_loop(w)))
 
     if not (math.isfinite(w_min) and 1e-3 <= w_min < 1e3):
         raise HesspipeError(f"w_min: expected a frequency in [0.001, 1000) rad/s, got {w_min!r}")
     w = np.logspace(-3, 3, 3001)
     w = np.concatenate(([w_min], w[w > w_min]))
-    g = gain_db(w)
+    L = open_loop(w)
+    with np.errstate(divide="ignore"):
+        g = np.log(np.abs(L))
     down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
     if down.size == 0:
         return Crossover(float("nan"), float("nan"), False, limits)
     i = down[0] if first else down[-1]
     wc = brentq(lambda x: float(gain_db(x)[0]), w[i], w[i + 1], xtol=1e-10, rtol=1e-12)
-    s = np.array([1j * wc])
-    phase = np.degrees(np.angle(loop.pilot_open_loop(s, yc.response(s))[0]))
+    phase = np.degrees(np.angle(open_loop(wc)[0]))
     pm = (180.0 + phase + 180.0) % 360.0 - 180.0
     pm = 180.0 if pm == -180.0 else pm
     within = (limits.frequency_rad_s[0] <= wc <= limits.frequency_rad_s[1]
               and limits.phase_margin_deg[0] <= pm <= limits.phase_margin_deg[1])
-    return Crossover(float(wc), float(pm), bool(within), limits)
+    return Crossover(float(wc), float(pm), bool(within), limits, flat_band(w, L, wc))
 
 
 def record_band_floor(duration_s: float) -> float:

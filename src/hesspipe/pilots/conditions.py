@@ -74,6 +74,9 @@ class Metric:
     primary : bool
         In the verdict (Holm-adjusted with the other primary metrics); a secondary metric's
         test is reported beside them, unadjusted.
+    unless : str
+        Key of a flag that, true for a person in either condition, leaves the person out of
+        this metric's test ("" for none).
     """
 
     key: str
@@ -81,18 +84,22 @@ class Metric:
     unit: str
     log: bool = False
     primary: bool = True
+    unless: str = ""
 
 
 METRICS = (
-    Metric("crossover_rad_s", "disturbance-loop crossover", "rad/s"),
-    Metric("phase_margin_deg", "phase margin", "deg"),
+    Metric("crossover_rad_s", "disturbance-loop crossover", "rad/s", unless="crossover_ill_defined"),
+    Metric("phase_margin_deg", "phase margin", "deg", unless="crossover_ill_defined"),
     Metric("error_variance", "error variance", "output unit^2 as read (an angle logged in deg: rad^2)", log=True),
     Metric("control_variance", "control variance", "control unit^2 as read (deg: rad^2)", log=True, primary=False),
     Metric("remnant_share", "remnant share of control power", "", primary=False),
     Metric("output_channel", "output channel |Hpy|/|Hpe|", "", log=True, primary=False),
 )
 """The loop the disturbance sees and the tracking performance are the primary measures of motion
-experiments; control effort, remnant and the output channel are reported beside them."""
+experiments; control effort, remnant and the output channel are reported beside them. A person
+whose crossover is ill-defined in either condition (|L| near 1 over a wide band, where noise
+places the crossing: :attr:`~hesspipe.identification.frf_crossover.FrfCrossover.ill_defined`)
+is left out of the crossover's and the phase margin's tests."""
 
 
 @dataclass(frozen=True)
@@ -106,7 +113,7 @@ class ConditionComparison:
     persons : dict
         Person id → ``{label: metrics}`` for every person with runs in a condition; the
         metrics are those of :data:`METRICS` plus ``runs`` (ids), ``crossover_std`` (rad/s),
-        ``phase_margin_std_deg`` and the forcing's variances.
+        ``phase_margin_std_deg``, ``crossover_ill_defined`` and the forcing's variances.
     tests : dict
         Metric key → ``{"n", "higher", "effect", "t", "p_value", "p_holm"}`` (``effect``: the
         mean difference, or for a log metric the geometric-mean ratio; ``p_holm`` None for a
@@ -156,7 +163,8 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         ``runs`` (ids), ``averaged`` (how the runs were combined: "line by line", or "run by
         run: " and why), ``crossover_rad_s`` and ``crossover_std`` (rad/s; NaN when |L| does not
         fall through 1 between the lines), ``phase_margin_deg`` and ``phase_margin_std_deg``
-        (deg), ``error_variance`` (output unit², e = reference - output), ``control_variance``
+        (deg), ``crossover_ill_defined`` (|L| near 1 over a wide band: :attr:`~hesspipe.
+        identification.frf_crossover.FrfCrossover.ill_defined`), ``error_variance`` (output unit², e = reference - output), ``control_variance``
         (control unit²), ``remnant_share`` (0-1), ``output_channel`` (the median |Hpy|/|Hpe| at
         1-5 rad/s, :attr:`~hesspipe.identification.frf_channels.Channels.ratio_median`; NaN
         without both line sets), ``reference_variance`` and ``disturbance_variance`` (the
@@ -189,10 +197,12 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         c = frf.crossover
         wc, wc_sd, pm, pm_sd, rem, ch = (c.frequency_rad_s, c.frequency_std, c.phase_margin_deg,
                                          c.phase_margin_std_deg, frf.remnant_share, _channel(frf))
+        flat = c.ill_defined
     else:
+        each = [estimate_frf(r, plants, seed=seed) for r in runs]
         per = np.array([(f.crossover.frequency_rad_s, f.crossover.frequency_std, f.crossover.phase_margin_deg,
-                         f.crossover.phase_margin_std_deg, f.remnant_share, _channel(f))
-                        for f in (estimate_frf(r, plants, seed=seed) for r in runs)])
+                         f.crossover.phase_margin_std_deg, f.remnant_share, _channel(f)) for f in each])
+        flat = any(f.crossover.ill_defined for f in each)
         wc, wc_sd, pm, pm_sd, rem, ch = per.mean(axis=0)
         # Independent runs: the mean's variance is the sum of theirs over N squared.
         wc_sd, pm_sd = (float(np.sqrt(np.sum(per[:, i] ** 2))) / len(runs) for i in (1, 3))
@@ -203,6 +213,7 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
     return {"runs": [r.id for r in runs], "averaged": averaged,
             "crossover_rad_s": float(wc), "crossover_std": float(wc_sd),
             "phase_margin_deg": float(pm), "phase_margin_std_deg": float(pm_sd),
+            "crossover_ill_defined": bool(flat),
             "error_variance": variance("error"), "control_variance": variance("control"),
             "remnant_share": float(rem), "output_channel": float(ch),
             "reference_variance": variance("reference"), "disturbance_variance": variance("disturbance")}
@@ -222,7 +233,8 @@ def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple, *,
     ----------
     persons : mapping
         Person → condition label → :func:`person_metrics` (a metric missing or not finite
-        there leaves the person out of that metric's test).
+        there, or the metric's ``unless`` flag true in either condition, leaves the person out
+        of that metric's test).
     labels : (str, str)
         The conditions; a difference is the second's minus the first's.
     confounded : frozenset of str
@@ -239,7 +251,8 @@ def paired_tests(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple, *,
     tests: dict = {}
     for m in METRICS:
         pairs = [(float(c[a].get(m.key, math.nan)), float(c[b].get(m.key, math.nan)))
-                 for c in persons.values() if a in c and b in c]
+                 for c in persons.values() if a in c and b in c
+                 and not (m.unless and (c[a].get(m.unless) or c[b].get(m.unless)))]
         pairs = [(x, y) for x, y in pairs if math.isfinite(x) and math.isfinite(y) and (not m.log or min(x, y) > 0)]
         if len(pairs) < MIN_PERSONS:
             tests[m.key] = None
@@ -425,6 +438,12 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
                   for label, v in c.items() if not math.isfinite(v["crossover_rad_s"])]
         notes += [f"{p} ({label}): {len(v['runs'])} runs averaged {v['averaged']}"
                   for label, v in c.items() if v["averaged"] != "line by line" and len(v["runs"]) > 1]
+    flat = [f"{p} ({', '.join(label for label in labels if c[label]['crossover_ill_defined'])})"
+            for p, c in sorted(persons.items()) if len(c) == 2 and any(v["crossover_ill_defined"] for v in c.values())]
+    if flat:
+        notes.append("crossover ill-defined (~ in the table: |L| stays near 1 over a wide band and the crossing's "
+                     f"spread is more than a quarter of it, so noise places it) for {', '.join(flat)}: left out of "
+                     "the crossover's and the phase margin's tests")
     # The crossover is the disturbance loop's, measured at its lines; runs without them (a
     # target alone) give the loop the target sees, which a vestibular path changes otherwise.
     if not any(forcing_sets(r) in (SEPARABLE, "disturbance only") for r in [*runs_a, *runs_b]):
@@ -502,7 +521,10 @@ def _size(m: Metric, effect: float) -> str:
 
 
 def _num(c, key, spec=".3g") -> str:
-    return "-" if c is None or not math.isfinite(c[key]) else format(c[key], spec)
+    if c is None or not math.isfinite(c[key]):
+        return "-"
+    flat = key in ("crossover_rad_s", "phase_margin_deg") and c.get("crossover_ill_defined")
+    return ("~" if flat else "") + format(c[key], spec)
 
 
 def _pct(c) -> str:

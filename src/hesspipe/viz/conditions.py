@@ -37,8 +37,11 @@ def conditions_figure(path: str | Path, result) -> Path:
                 continue
             x, y, err = zip(*pts)
             scale = 100.0 if m.key == "remnant_share" else 1.0
+            # a person left out of this metric's test (an ill-defined crossover) drawn dashed
+            out = m.unless and any(c[label].get(m.unless) for label in (a, b) if label in c)
             ax.errorbar(x, [scale * v for v in y], yerr=[e if math.isfinite(e) else 0.0 for e in err],
-                        fmt="o-" if len(pts) == 2 else "o", ms=4, capsize=2, lw=1, alpha=0.8, label=person)
+                        fmt=("o--" if out else "o-") if len(pts) == 2 else "o", ms=4, capsize=2, lw=1,
+                        alpha=0.4 if out else 0.8, label=person)
         ax.set_xticks([0, 1], [a, b])
         ax.set_xlim(-0.4, 1.4)
         if m.log:

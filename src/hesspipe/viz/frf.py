@@ -66,7 +66,8 @@ def frf_figure(path: str | Path, frf, models: Mapping[str, object] | None = None
             a.axvline(c.frequency_rad_s, color="k", ls=":", lw=1)
         a1.set_title(title or f"{frf.run_id}: pilot describing function\nnonparametric crossover "
                      f"{c.frequency_rad_s:.2f} ± {c.frequency_std:.2f} rad/s, PM "
-                     f"{c.phase_margin_deg:.0f} ± {c.phase_margin_std_deg:.0f} deg", fontsize=9)
+                     f"{c.phase_margin_deg:.0f} ± {c.phase_margin_std_deg:.0f} deg"
+                     + (" (ill-defined: |L| flat near 1)" if c.ill_defined else ""), fontsize=9)
     else:
         a1.set_title(title or f"{frf.run_id}: pilot describing function", fontsize=9)
     a1.set_xscale("log")
