@@ -320,6 +320,18 @@ def test_the_table_says_when_the_motion_test_and_the_expanded_fit_disagree():
     assert "motion test and table" not in Comparison(pilots=(named, other)).table()
 
 
+def test_the_table_marks_a_crossover_in_a_wide_flat_band():
+    p = fake_job(Run(0.02 * np.arange(3.0), *(np.zeros(3),) * 4, id="a"))
+    assert "~" not in Comparison(pilots=(p,)).table()
+    wide = {"frequency_rad_s": 0.9, "phase_margin_deg": 104.0,
+            "flat_band": {"low_rad_s": 0.6, "high_rad_s": 4.1, "wide": True}}
+    flat = PilotComparison(**{**p.__dict__, "id": "b", "original": {**p.original, "crossover": wide}})
+    table = Comparison(pilots=(flat,)).table()
+    row = next(line for line in table.splitlines() if line.startswith("b "))
+    assert row.split()[-2:] == ["~0.9", "~104"]
+    assert "~ wc, PM: the model's |L| stays within a factor 1.25 of 1" in table
+
+
 def test_improvement_stats_ignore_nan():
     p = fake_job(Run(0.02 * np.arange(3.0), *(np.zeros(3),) * 4, id="a"))
     nan = PilotComparison(**{**p.__dict__, "id": "b", "improvement": math.nan})
