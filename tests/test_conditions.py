@@ -289,3 +289,22 @@ def test_a_person_whose_crossover_is_ill_defined_is_left_out_of_the_crossover_te
     row = next(line for line in table.splitlines() if line.startswith("s1 "))
     assert row.split()[1:5] == [f"{persons['s1']['static']['crossover_rad_s']:.3g}", "~0.7",
                                 f"{persons['s1']['static']['phase_margin_deg']:.1f}", "~115.0"]
+
+
+def test_a_person_with_one_run_reads_as_frf_reads_the_file(cohort, capsys):
+    # A reviewer's one-run person crossed at 5.4 rad/s in conditions and at 0.81 in frf: the
+    # one run was "averaged", its lines' errors swapped for the remnant levels between them.
+    from hesspipe.identification.frf import estimate_frf
+
+    plants = read_plants(cohort / "static" / "plants.json")
+    result = compare_conditions([read_run(cohort / "static" / f"p{i}.csv") for i in (1, 2, 3)],
+                                [read_run(cohort / "motion" / f"p{i}.csv") for i in (1, 2, 3)], plants,
+                                labels=("static", "motion"))
+    run = read_run(cohort / "motion" / "p2.csv")
+    seed = derive_seed(0, "conditions", "motion", "p2")
+    c = estimate_frf(run, plants, seed=seed).crossover
+    got = result.persons["p2"]["motion"]
+    assert (got["crossover_rad_s"], got["crossover_std"]) == (c.frequency_rad_s, c.frequency_std)
+    assert main(["frf", str(cohort / "motion" / "p2.csv"), "--plants", str(cohort / "static" / "plants.json"),
+                 "--seed", str(seed)]) == 0
+    assert f"{c.frequency_rad_s:.3f} +- {c.frequency_std:.3f}" in capsys.readouterr().out

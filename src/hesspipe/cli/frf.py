@@ -109,7 +109,6 @@ def _model_curves(path) -> dict:
 
 def run(args) -> int:
     from ..core.formats import read_plants
-    from ..identification.frf import estimate_frf
     from ..identification.frf_average import average_frf
     from ._options import read_cli_runs
     from ._outputs import check_file_outputs, write_result_json
@@ -122,8 +121,7 @@ def run(args) -> int:
 
     for rec in recs:   # a sign or units mistake, as pilots and identify refuse it
         check_consistent(rec, plants)
-    result = (average_frf(recs, plants, seed=args.seed) if len(recs) > 1 else
-              estimate_frf(recs[0], plants, seed=args.seed))
+    result = average_frf(recs, plants, seed=args.seed)
     print(format_table(result))
     if args.json:
         write_result_json(args.json, result, run=args.run, plants=args.plants, seed=args.seed)
