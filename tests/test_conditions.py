@@ -280,6 +280,13 @@ def test_a_person_whose_crossover_is_ill_defined_is_left_out_of_the_crossover_te
     assert tests["crossover_rad_s"]["n"] == 5 and tests["phase_margin_deg"]["n"] == 5
     assert tests["error_variance"]["n"] == 6
     assert tests["crossover_rad_s"]["effect"] == pytest.approx(0.4)
+    for p in ("s2", "s3", "s4"):
+        persons[p]["static"]["crossover_ill_defined"] = True
+    few = paired_tests(persons, ("static", "motion"))
+    assert few["crossover_rad_s"] is None
+    assert conditions_verdict(few, ("static", "motion"), 6, ill_defined=4).endswith(
+        "; the crossover and phase margin are not compared: ill-defined for 4 of 6 persons (the notes name them)")
+    assert "not compared" not in conditions_verdict(tests, ("static", "motion"), 6, ill_defined=1)
     for c in persons.values():
         for v in c.values():
             v.update(control_variance=1.0, remnant_share=0.2)

@@ -310,7 +310,8 @@ def forcing_ratios(persons: Mapping[str, Mapping[str, Mapping]], labels: tuple) 
     return out
 
 
-def conditions_verdict(tests: Mapping[str, Mapping | None], labels: tuple, n_both: int) -> str:
+def conditions_verdict(tests: Mapping[str, Mapping | None], labels: tuple, n_both: int, *,
+                       ill_defined: int = 0) -> str:
     """The comparison in words.
 
     Parameters
@@ -321,12 +322,23 @@ def conditions_verdict(tests: Mapping[str, Mapping | None], labels: tuple, n_bot
         The conditions.
     n_both : int
         Persons with runs in both conditions.
+    ill_defined : int
+        Of them, those whose crossover is ill-defined in a condition: where that leaves the
+        crossover untested, the verdict says so (a "no difference" read alone would cover it).
 
     Returns
     -------
     str
         "undetermined: ...", "the conditions differ: ..." or "no difference found: ...".
     """
+    verdict = _verdict(tests, labels, n_both)
+    if ill_defined and tests.get("crossover_rad_s") is None and n_both >= MIN_PERSONS:
+        verdict += (f"; the crossover and phase margin are not compared: ill-defined for {ill_defined} of "
+                    f"{n_both} persons (the notes name them)")
+    return verdict
+
+
+def _verdict(tests: Mapping[str, Mapping | None], labels: tuple, n_both: int) -> str:
     a, b = labels
     done = {m.key: tests[m.key] for m in METRICS if m.primary and tests.get(m.key) is not None
             and tests[m.key]["p_holm"] is not None}
@@ -461,7 +473,7 @@ def compare_conditions(runs_a: Sequence, runs_b: Sequence, plants, *, labels: tu
                      "median over the persons): the error and control variances scale with it, so they are "
                      "left out of the verdict")
     tests = paired_tests(persons, labels, confounded=confounded)
-    verdict = conditions_verdict(tests, labels, len(both))
+    verdict = conditions_verdict(tests, labels, len(both), ill_defined=len(flat))
     if differs:
         # Said in the headline: where the forcing's level is the factor studied, the verdict
         # alone would read as "no difference" in the variances.
