@@ -219,7 +219,7 @@ def test_runs_of_different_forcings_are_averaged_run_by_run_and_a_record_twice_i
     assert p1["averaged"].startswith("run by run: ") and len(p1["runs"]) == 2
     assert math.isfinite(p1["phase_margin_deg"]) and math.isfinite(p1["error_variance"])
     assert any(n.startswith("p1 (A): 2 runs averaged run by run") for n in result.notes)
-    assert result.persons["p2"]["A"]["averaged"] == "line by line"
+    assert result.persons["p2"]["A"]["averaged"] == "one run"   # p2 flew one run
     with pytest.raises(HesspipeError, match="the same record as"):
         compare_conditions([*runs["static"], runs["static"][0]], runs["motion"], plants, pilot_id=r"^(p\d)")
 
@@ -312,6 +312,7 @@ def test_a_person_with_one_run_reads_as_frf_reads_the_file(cohort, capsys):
     c = estimate_frf(run, plants, seed=seed).crossover
     got = result.persons["p2"]["motion"]
     assert (got["crossover_rad_s"], got["crossover_std"]) == (c.frequency_rad_s, c.frequency_std)
+    assert got["averaged"] == "one run"
     assert main(["frf", str(cohort / "motion" / "p2.csv"), "--plants", str(cohort / "static" / "plants.json"),
                  "--seed", str(seed)]) == 0
     assert f"{c.frequency_rad_s:.3f} +- {c.frequency_std:.3f}" in capsys.readouterr().out

@@ -168,3 +168,46 @@ def test_a_crossover_model_loop_is_never_ill_defined():
         c = nonparametric_crossover(Response(w, H, sig, np.arange(w.size)), ct.tf([1.0], [1.0, 0.0]), seed=seed)
         assert not c.ill_defined and not c.flat_band.wide
         assert c.flat_band.high_rad_s / c.flat_band.low_rad_s < 1.8
+
+
+def test_a_parameter_on_its_bound_is_held_and_a_rare_far_tail_does_not_set_the_spread():
+    # A pilot without a lag: the smoother's lag TI ends on its 0.01 s bound, where the
+    # Jacobian says nothing of its spread (a reviewer's double integrator read 19.5 in ln TI,
+    # and draws carried the crossover to 10 rad/s).
+    import control as ct
+
+    from hesspipe.identification.frf_smooth import _spread, smooth_crossover
+    from hesspipe.pilot.blocks import from_tf
+
+    w = 2 * np.pi / 81.92 * np.array([5, 11, 23, 37, 51, 71, 101, 137, 171, 226])
+
+    def lead(s):
+        return 0.4 * (1 + 1.5 * s) * np.exp(-0.18 * s) * 113 / (s * s + 6.2 * s + 113)
+
+    H, sig = _points(lead, w, 0.15, 2)   # a draw whose lag ends on the bound (seeds 0, 2, 6, 9-11)
+    fit = fit_smooth(w, H, sig)
+    assert fit.params["TI"] == pytest.approx(0.01, rel=1e-3)
+    assert np.all(fit.cov[3] == 0) and np.all(fit.cov[:, 3] == 0) and fit.cov[0, 0] > 0
+    wc, pm, wc_std, pm_std, _ = smooth_crossover(fit, from_tf(ct.tf([5.0], [1, 0, 0])), w)
+    assert 0 < wc_std < 0.3 * wc and 0 < pm_std < 30
+    assert smooth_crossover(fit, from_tf(ct.tf([5.0], [1, 0, 0])), w)[2] == wc_std   # the same draws
+    x = np.random.default_rng(1).standard_normal(4000)
+    assert _spread(x) == pytest.approx(1.0, rel=0.05)
+    tail = np.concatenate((x, np.full(40, 30.0)))   # 1 % of the draws far out
+    assert _spread(tail) == pytest.approx(1.0, rel=0.1) and np.std(tail) > 3.0
+
+
+def test_lines_that_never_cross_raise_no_warning():
+    import warnings
+
+    import control as ct
+
+    from hesspipe.identification.frf import Response
+    from hesspipe.identification.frf_crossover import nonparametric_crossover
+
+    w = np.geomspace(0.3, 12.0, 10)
+    H, sig = _points(lambda s: 3.0 * np.exp(-0.1 * s) + 0 * s, w, 0.05, 2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        c = nonparametric_crossover(Response(w, H, sig, np.arange(w.size)), ct.tf([10.0], [1.0, 5.0]))
+    assert np.isnan(c.frequency_rad_s) and "above the highest line" in c.note

@@ -154,7 +154,8 @@ def nonparametric_crossover(resp, yc, *, seed: int = 0) -> FrfCrossover:
     yc : control.TransferFunction or Block
         The control plant (input of Yc: the pilot's control).
     seed : int
-        Seed of the local regression's draws (neither estimate depends on it).
+        Seed of the local regression's draws behind its standard deviation (neither estimate,
+        nor the smoothed one's spread, depends on it).
 
     Returns
     -------
@@ -165,7 +166,7 @@ def nonparametric_crossover(resp, yc, *, seed: int = 0) -> FrfCrossover:
     fit = fit_smooth(resp.freq_rad_s, resp.H, resp.sigma)
     if fit is None:
         return local
-    wc, pm, wc_std, pm_std, band = smooth_crossover(fit, block, resp.freq_rad_s, draws=DRAWS, seed=seed)
+    wc, pm, wc_std, pm_std, band = smooth_crossover(fit, block, resp.freq_rad_s)
     ok = consistent(fit)
     smooth = {"parameters": fit.params, "chi2": fit.chi2, "dof": fit.dof,
               "p_value": fit.p_value, "consistent": ok, "frequency_rad_s": wc,

@@ -160,8 +160,8 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
     Returns
     -------
     dict
-        ``runs`` (ids), ``averaged`` (how the runs were combined: "line by line", or "run by
-        run: " and why), ``crossover_rad_s`` and ``crossover_std`` (rad/s; NaN when |L| does not
+        ``runs`` (ids), ``averaged`` (how the runs were combined: "line by line", "one run", or
+        "run by run: " and why), ``crossover_rad_s`` and ``crossover_std`` (rad/s; NaN when |L| does not
         fall through 1 between the lines), ``phase_margin_deg`` and ``phase_margin_std_deg``
         (deg), ``crossover_ill_defined`` (|L| near 1 over a wide band: :attr:`~hesspipe.
         identification.frf_crossover.FrfCrossover.ill_defined`), ``error_variance`` (output unit², e = reference - output), ``control_variance``
@@ -185,7 +185,7 @@ def person_metrics(runs: Sequence, plants, *, seed: int = 0) -> dict:
         # The crossover and phase margin are of L = H Yc: a column in another unit than the
         # plants' scales L and moves both, where pilots refused the same files.
         check_consistent(run, plants)
-    frf, averaged = None, "line by line"
+    frf, averaged = None, "line by line" if len(runs) > 1 else "one run"
     try:
         frf = average_frf(runs, plants, seed=seed)
     except HesspipeError as exc:
