@@ -142,7 +142,7 @@ def main(argv=None) -> int:
           "writes them; A and B are two conditions of the same persons")
     for design in args.designs.split(","):
         for tag in args.plants.split(","):
-            found, which, walls, err_wc, err_pm, channel = 0, {}, [], [], [], 0
+            found, which, walls, err_wc, err_pm, channel, ill = 0, {}, [], [], [], 0, []
             seeds = range(args.seed_start, args.seed_start + args.seeds)
             for seed in seeds:
                 with tempfile.TemporaryDirectory() as tmp:
@@ -155,6 +155,8 @@ def main(argv=None) -> int:
                         if got["crossover_rad_s"] is not None:   # JSON null: no crossover found
                             err_wc.append(abs(got["crossover_rad_s"] / wc - 1))
                             err_pm.append(abs(got["phase_margin_deg"] - pm))
+                            if got.get("crossover_ill_defined"):
+                                ill.append((err_wc[-1], err_pm[-1]))
                 hits = [k for k, t in result["tests"].items()
                         if t and t["p_holm"] is not None and t["p_holm"] < result["alpha"]]
                 found += bool(hits)
@@ -171,7 +173,9 @@ def main(argv=None) -> int:
                   f"{sorted(walls)[len(walls) // 2]:.1f} s per comparison ({args.persons} persons x "
                   f"{args.runs} runs x 2 conditions); against the generator's truth, median error of "
                   f"the crossover {100 * np.median(err_wc):.0f} %, of the phase margin {np.median(err_pm):.1f} deg "
-                  f"({len(err_wc)} person-conditions with a crossover found)", flush=True)
+                  f"({len(err_wc)} person-conditions with a crossover found); ill-defined (left out of the "
+                  f"crossover's tests): {len(ill)}" + (f", their errors {', '.join(f'{100 * a:.0f} %/{b:.0f} deg' for a, b in ill)}"
+                                                        if ill else ""), flush=True)
     return 0
 
 
