@@ -255,18 +255,6 @@ def smooth_crossover(fit: SmoothFit, block, w_lines, *, draws: int = DRAWS):
 
     L = loop(fit.x)
     ln = np.log(np.abs(L)) + 1j * np.unwrap(np.angle(L))
-    wc, i, t = _first_falls(ln.real[None, :], grid)
-    nan = float("nan")
-    if not np.isfinite(wc[0]):
-        return nan, nan, nan, nan, None
-
-    def margin(phase, i, t):
-        pm = (180.0 + np.degrees(phase[..., 0] + t * (phase[..., 1] - phase[..., 0])) + 180.0) % 360.0 - 180.0
-        return np.where(pm == -180.0, 180.0, pm)
-
-    rows = np.arange(1)
-    pm = margin(ln.imag[None, :][rows[:, None], i[:, None] + [0, 1]], i, t)
-    band = flat_band(grid, L, float(wc[0]))
     G = np.empty((grid.size, fit.x.size), complex)
     for j in range(fit.x.size):
         h = 1e-5 * max(1.0, abs(fit.x[j]))
@@ -276,16 +264,23 @@ def smooth_crossover(fit: SmoothFit, block, w_lines, *, draws: int = DRAWS):
         G[:, j] = np.log(loop(xp) / loop(xm)) / (2 * h)   # d ln L / dx_j, phase unwrapped by the ratio
     vals, vecs = np.linalg.eigh(fit.cov)
     root = vecs * np.sqrt(np.clip(vals, 0.0, None))
-    rng = np.random.default_rng(derive_seed(0, "frf-smooth-crossover"))
-    lnd = ln[None, :] + (rng.standard_normal((draws, fit.x.size)) @ root.T) @ G.T
-    wcs, ii, tt = _first_falls(lnd.real, grid)
-    ok = np.isfinite(wcs)
-    if ok.sum() < draws // 2:
-        return float(wc[0]), float(pm[0]), float("inf"), float("inf"), band
-    rows = np.arange(draws)[ok]
-    pms = margin(lnd.imag[rows[:, None], ii[ok, None] + [0, 1]], ii[ok], tt[ok])
-    dpm = (pms - pm[0] + 180.0) % 360.0 - 180.0
-    return float(wc[0]), float(pm[0]), _spread(wcs[ok]), _spread(dpm), band
+    dx = np.random.default_rng(derive_seed(0, "frf-smooth-crossover")).standard_normal((draws, fit.x.size)) @ root.T
+    # row 0 the fitted loop itself, then the draws
+    lns = ln[None, :] + np.vstack((np.zeros(fit.x.size), dx)) @ G.T
+    wcs, i, t = _first_falls(lns.real, grid)
+    nan = float("nan")
+    if not np.isfinite(wcs[0]):
+        return nan, nan, nan, nan, None
+    rows = np.nonzero(np.isfinite(wcs))[0]
+    ph = lns.imag[rows[:, None], i[rows, None] + [0, 1]]
+    pms = (180.0 + np.degrees(ph[:, 0] + t[rows] * (ph[:, 1] - ph[:, 0])) + 180.0) % 360.0 - 180.0
+    pms = np.where(pms == -180.0, 180.0, pms)
+    wc, pm = float(wcs[0]), float(pms[0])
+    band = flat_band(grid, L, wc)
+    if rows.size - 1 < draws // 2:
+        return wc, pm, float("inf"), float("inf"), band
+    dpm = (pms[1:] - pm + 180.0) % 360.0 - 180.0
+    return wc, pm, _spread(wcs[rows[1:]]), _spread(dpm), band
 
 
 def _spread(x) -> float:
