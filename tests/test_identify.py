@@ -71,6 +71,21 @@ def test_scipy_recovers_parameters_and_floor_and_reports_product(data):
     assert ident["identifiable"] == ["Ke"] and ident["weak"]  # Ke vs K1*K2: weakly separated
 
 
+def test_the_summary_says_when_the_models_crossover_lies_in_a_wide_flat_band(data):
+    from dataclasses import replace
+
+    from hesspipe.cli.identify import format_table
+    from hesspipe.pilot.crossover import FlatBand
+
+    pl, _, run = data
+    res = identify(run, pl, "original", optimizer="scipy", with_benchmark=False, with_identifiability=False)
+    assert "the model's |L| stays" not in format_table(res)
+    c = res.primary_crossover if res.primary_crossover is not None else res.crossover
+    flat = replace(c, flat_band=FlatBand(0.6, 4.0, (20.0, 110.0)))
+    text = format_table(replace(res, primary_crossover=flat, crossover=flat))
+    assert "the model's |L| stays within a factor 1.25 of 1 from 0.6 to 4 rad/s" in text
+
+
 def test_apid_reaches_floor_to_grid_resolution(data):
     pl, _, run = data
     true_c = crossover("original", TRUE, pl)

@@ -145,6 +145,8 @@ def format_table(result) -> str:
         lines.append(f"crossover          {c.frequency_rad_s:.3f} rad/s, phase margin "
                      f"{c.phase_margin_deg:.1f} deg, within limits: {'yes' if c.within_limits else 'no'} "
                      + limits)
+        if c.flat_band is not None and c.flat_band.wide:
+            lines.append(f"                   the model's {c.flat_band.describe()}")
     else:
         lines.append("crossover          none found (the open loop's gain never crosses 1), within "
                      "limits: no " + limits)
