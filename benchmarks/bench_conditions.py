@@ -47,11 +47,11 @@ import bench_lab_experiment as lab  # noqa: E402  (the same persons, files and c
 from hesspipe.cli import main as hesspipe  # noqa: E402
 from hesspipe.core.errors import HesspipeError  # noqa: E402
 from hesspipe.core.seeds import derive_seed  # noqa: E402
-from hesspipe.pilots.conditions import ALPHA  # noqa: E402
 from hesspipe.humanlike import draw_trial, simulate_trial  # noqa: E402
 from hesspipe.humanlike.pilots import loop_metrics, parts  # noqa: E402
 from hesspipe.humanlike.plants import make_plant  # noqa: E402
 from hesspipe.humanlike.writer import plants_dict  # noqa: E402
+from hesspipe.pilots.conditions import ALPHA  # noqa: E402
 
 KW = lab.TRIAL
 MIN_PM, MAX_PM, MIN_GM = 15.0, 90.0, 1.5
