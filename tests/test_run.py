@@ -5,6 +5,7 @@ synthetic pilots) so the whole pipeline runs in seconds; what is tested is
 which stages run, not the science (each stage's own tests do that).
 """
 
+import json
 import os
 import shutil
 import signal
@@ -344,3 +345,18 @@ def test_the_report_cautions_beside_the_verdict_when_the_plants_are_not_the_runs
     (pilots / "cohort").mkdir()
     (pilots / "cohort" / "cohort.json").write_text("{}")
     assert "pilot model itself" in _synthetic_note(pilots)
+
+
+def test_the_reports_crossover_table_marks_a_wide_flat_band(tmp_path):
+    from hesspipe.pipeline.report import _pilots
+
+    def conf(flat):
+        c = {"frequency_rad_s": 0.8, "phase_margin_deg": 110.0, "within_limits": False,
+             "flat_band": {"low_rad_s": 0.5, "high_rad_s": 4.0, "wide": flat}}
+        return {"parameters": {"Ke": 1.0, "K1": 0.1, "K2": 2.0, "Km": 0.2}, "fitness": 1.0, "primary_crossover": c}
+
+    comp = {"pilots": [{"id": "s1", "original": conf(True), "expanded_fixed": conf(False), "expanded": conf(False),
+                        "improvement": 0.1}]}
+    (tmp_path / "comparison.json").write_text(json.dumps(comp))
+    rows = [line for line in _pilots(tmp_path, tmp_path) if line.startswith(("| s1 | original", "| s1 | expanded"))]
+    assert rows == ["| s1 | original | ~0.8 | ~110 | no |", "| s1 | expanded | 0.8 | 110 | no |"]

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Mapping
 
 from ..core.provenance import versions
+from ..pilot.crossover import FLAT_FACTOR, FLAT_SPAN
 from ..pilot.hess import km_per_ke
 from ..plants.fit import format_tf
 
@@ -186,14 +187,17 @@ def _pilots(folder: Path, root: Path) -> list[str]:
         for name in ("original", "expanded"):
             c = p[name].get("primary_crossover") or p[name].get("crossover") or {}
             limits = limits or c.get("limits")
-            rows.append([p["id"], name, c.get("frequency_rad_s"), c.get("phase_margin_deg"),
-                         c.get("within_limits")])
+            # "~": the loop's |L| stays near 1 over a wide band (hesspipe.pilot.crossover.FlatBand)
+            flat = "~" if (c.get("flat_band") or {}).get("wide") else ""
+            rows.append([p["id"], name, flat + _num(c.get("frequency_rad_s")),
+                         flat + _num(c.get("phase_margin_deg")), c.get("within_limits")])
     n_in = sum(bool(r[4]) for r in rows[1::2])
     out += ["Crossover of the identified pilots (open loop broken at the displayed error; the tracking "
             "loop's crossover: the first fall of |L| through 1 above the lowest frequency the record "
             "resolves, 2π/duration, which leaves out crossings the fitted plants' slow roots make far "
             "below the data's band and neuromuscular peaks touching 1 far above it; "
-            "— : |L| does not cross 1)" + (f"; limits {limits['frequency_rad_s']} rad/s and "
+            f"— : |L| does not cross 1; ~ : |L| stays within a factor {FLAT_FACTOR:g} of 1 over more than a "
+            f"factor {FLAT_SPAN:g} around it, so a few per cent of gain move it)" + (f"; limits {limits['frequency_rad_s']} rad/s and "
                                            f"{limits['phase_margin_deg']} deg are an assumption of "
                                            "hesspipe, not the paper's" if limits else "") + ":", ""]
     show_truth = any(v != "—" for v in truths.values())
