@@ -211,3 +211,22 @@ def test_lines_that_never_cross_raise_no_warning():
         warnings.simplefilter("error")
         c = nonparametric_crossover(Response(w, H, sig, np.arange(w.size)), ct.tf([10.0], [1.0, 5.0]))
     assert np.isnan(c.frequency_rad_s) and "above the highest line" in c.note
+
+
+def test_a_spread_that_leaves_the_span_in_more_than_a_few_draws_is_unbounded():
+    # K/s crossing at 15 rad/s, the lines up to 10 (the search to 20): with ln K's standard
+    # deviation 0.3 about a fifth of the draws cross beyond the span, so the spread is not
+    # bounded; with 0.01 every draw crosses within it.
+    import control as ct
+
+    from hesspipe.identification.frf_smooth import SmoothFit, smooth_crossover
+    from hesspipe.pilot.blocks import from_tf
+
+    x = np.array([np.log(15.0), 0.05, np.log(0.01), np.log(0.01), np.log(25.0), 0.7])
+    w = np.geomspace(0.5, 10.0, 8)
+    yc = from_tf(ct.tf([1.0], [1.0, 0.0]))
+    for sd, bounded in ((0.3, False), (0.01, True)):
+        cov = np.zeros((6, 6))
+        cov[0, 0] = sd ** 2
+        wc, pm, wc_std, pm_std, _ = smooth_crossover(SmoothFit(x, 1.0, 10.0, 10, cov), yc, w)
+        assert 12.0 < wc < 15.0 and np.isfinite(wc_std) == bounded and np.isfinite(pm_std) == bounded
