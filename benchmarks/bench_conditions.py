@@ -176,6 +176,9 @@ def main(argv=None) -> int:
                 effects = ", ".join(f"{k} {t['effect']:.3g} ({t['higher']}/{t['n']} higher, p {t['p_value']:.2g})"
                                     for k, t in result["tests"].items() if t)
                 print(f"{design} {tag} seed {seed}: {result['verdict'][:60]}... | {effects}", flush=True)
+            if not done:
+                print(f"== {design} {tag}: no cohort generated", flush=True)
+                continue
             print(f"== {design} {tag}: a difference found in {found}/{done} cohorts "
                   + (f"({len(seeds) - done} not generated) " if done < len(seeds) else "") +
                   f"({', '.join(f'{k} {v}' for k, v in which.items()) or 'no metric'}); the output "
