@@ -360,3 +360,6 @@ def test_the_reports_crossover_table_marks_a_wide_flat_band(tmp_path):
     (tmp_path / "comparison.json").write_text(json.dumps(comp))
     rows = [line for line in _pilots(tmp_path, tmp_path) if line.startswith(("| s1 | original", "| s1 | expanded"))]
     assert rows == ["| s1 | original | ~0.8 | ~110 | no |", "| s1 | expanded | 0.8 | 110 | no |"]
+    comp["pilots"][0]["original"]["primary_crossover"].update(frequency_rad_s=None, phase_margin_deg=None)
+    (tmp_path / "comparison.json").write_text(json.dumps(comp))
+    assert "| s1 | original | — | — | no |" in _pilots(tmp_path, tmp_path)   # no crossover: nothing to mark

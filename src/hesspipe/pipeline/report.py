@@ -189,8 +189,9 @@ def _pilots(folder: Path, root: Path) -> list[str]:
             limits = limits or c.get("limits")
             # "~": the loop's |L| stays near 1 over a wide band (hesspipe.pilot.crossover.FlatBand)
             flat = "~" if (c.get("flat_band") or {}).get("wide") else ""
-            rows.append([p["id"], name, flat + _num(c.get("frequency_rad_s")),
-                         flat + _num(c.get("phase_margin_deg")), c.get("within_limits")])
+            rows.append([p["id"], name, *((flat if _num(c.get(k)) != "—" else "") + _num(c.get(k))
+                                          for k in ("frequency_rad_s", "phase_margin_deg")),
+                         c.get("within_limits")])
     n_in = sum(bool(r[4]) for r in rows[1::2])
     out += ["Crossover of the identified pilots (open loop broken at the displayed error; the tracking "
             "loop's crossover: the first fall of |L| through 1 above the lowest frequency the record "
