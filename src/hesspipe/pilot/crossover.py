@@ -138,6 +138,24 @@ class FlatBand:
                          f"of 1; wide when it spans more than a factor {FLAT_SPAN:g}")}
 
 
+def flat_mark(cross: Mapping) -> str:
+    """The tables' mark of a crossover in a wide flat band.
+
+    Parameters
+    ----------
+    cross : mapping
+        A crossover as :meth:`Crossover.to_dict` writes it (a comparison's JSON).
+
+    Returns
+    -------
+    str
+        "~" where it crosses and its ``flat_band`` is wide, else "".
+    """
+    f = cross.get("frequency_rad_s")
+    crossed = isinstance(f, (int, float)) and math.isfinite(f)
+    return "~" if crossed and (cross.get("flat_band") or {}).get("wide") else ""
+
+
 def flat_band(w, L, wc: float) -> FlatBand | None:
     """The band around `wc` where |L| stays within :data:`FLAT_FACTOR` of 1.
 

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..core.io import write_json, write_text
-from ..pilot.crossover import FLAT_FACTOR, FLAT_SPAN
+from ..pilot.crossover import FLAT_FACTOR, FLAT_SPAN, flat_mark
 from ..pilot.hess import km_per_ke
 from .settings import CONFIGURATIONS
 from .verdict import ALPHA, verdict_lines
@@ -23,12 +23,6 @@ def _fmt(x, spec=".3g") -> str:
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "-"
     return format(x, spec)
-
-
-def _flat(cross) -> str:
-    # "~" before a crossover whose flat band is wide (hesspipe.pilot.crossover.FlatBand)
-    # (a crossover without a crossing has no band)
-    return "~" if (cross.get("flat_band") or {}).get("wide") else ""
 
 
 def _km_per_ke(params) -> str:
@@ -77,7 +71,7 @@ def format_table(comparison) -> str:
                          _fmt(conf.get("fitness"), ".4g"),
                          f"{100 * p.improvement:.1f} %" if name == "expanded" and math.isfinite(p.improvement)
                          else "",
-                         *(_flat(cross) + _fmt(cross.get(k)) for k in ("frequency_rad_s", "phase_margin_deg"))))
+                         *(flat_mark(cross) + _fmt(cross.get(k)) for k in ("frequency_rad_s", "phase_margin_deg"))))
     widths = [max(len(str(r[i])) for r in [head, *rows]) for i in range(len(head))]
     line = lambda r: "  ".join(str(c).ljust(w) if i < 2 else str(c).rjust(w)  # noqa: E731
                                for i, (c, w) in enumerate(zip(r, widths)))
@@ -123,7 +117,7 @@ def format_table(comparison) -> str:
                "the describing-function lines, are those of `hesspipe frf` and `hesspipe conditions`: "
                "they differ where the model misses the pilot's shape (the paper's expanded model has no "
                "vestibular delay)")
-    if any(_flat(p.configuration(n).get("primary_crossover") or p.configuration(n).get("crossover") or {})
+    if any(flat_mark(p.configuration(n).get("primary_crossover") or p.configuration(n).get("crossover") or {})
            for p in comparison.pilots for n in CONFIGURATIONS):
         out.append(f"~ wc, PM: the model's |L| stays within a factor {FLAT_FACTOR:g} of 1 over more than a factor "
                    f"{FLAT_SPAN:g} around the crossover (comparison.json: flat_band), so a few per cent of gain "

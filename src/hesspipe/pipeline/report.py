@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Mapping
 
 from ..core.provenance import versions
-from ..pilot.crossover import FLAT_FACTOR, FLAT_SPAN
+from ..pilot.crossover import FLAT_FACTOR, FLAT_SPAN, flat_mark
 from ..pilot.hess import km_per_ke
 from ..plants.fit import format_tf
 
@@ -187,10 +187,7 @@ def _pilots(folder: Path, root: Path) -> list[str]:
         for name in ("original", "expanded"):
             c = p[name].get("primary_crossover") or p[name].get("crossover") or {}
             limits = limits or c.get("limits")
-            # "~": the loop's |L| stays near 1 over a wide band (hesspipe.pilot.crossover.FlatBand)
-            flat = "~" if (c.get("flat_band") or {}).get("wide") else ""
-            rows.append([p["id"], name, *((flat if _num(c.get(k)) != "—" else "") + _num(c.get(k))
-                                          for k in ("frequency_rad_s", "phase_margin_deg")),
+            rows.append([p["id"], name, *(flat_mark(c) + _num(c.get(k)) for k in ("frequency_rad_s", "phase_margin_deg")),
                          c.get("within_limits")])
     n_in = sum(bool(r[4]) for r in rows[1::2])
     out += ["Crossover of the identified pilots (open loop broken at the displayed error; the tracking "
