@@ -16,26 +16,38 @@ from ..pilot.motion import with_motion_path
 from ._lsq import best_least_squares, held_covariance
 from .lines import LineData, remnant_variance
 
+MULTIMODAL = "multimodal"
+"""The held parameter (0 or 1) that selects the vestibular path's form in :func:`_predict`: 0
+Hess's (the vestibular sensation joins the visual drive inside the proprioceptive loop, so
+the loop's equalisation shapes both), 1 the multimodal pilot models' (Zaal et al. 2009:
+the visual and vestibular channels each with their own equalisation, summed at the
+neuromuscular system). Only :mod:`.motion_test`'s alternatives set it."""
+
 
 def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None, *, response: bool = False):
     # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
     # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model),
     # the visual path with the test's equaliser (VISUAL_EQUALISER; 0 when absent); on a
     # pursuit display (yc_inv, the controlled element's inverse at s) also + NM FF R with
-    # R = E + Y (FEEDFORWARD). `cache`: Block.response's shape cache for this `s` (a fit's
-    # thousands of calls then evaluate the vestibular path's fixed shape once). With
+    # R = E + Y (FEEDFORWARD). With MULTIMODAL set (the test's other vestibular form) the
+    # vestibular path reaches the muscle outside the proprioceptive loop: U = NM (visual E /
+    # (1 + NM PF) - vestibular Y). `cache`: Block.response's shape cache for this `s` (a
+    # fit's thousands of calls then evaluate the vestibular path's fixed shape once). With
     # `response`, also the pilot's response to -y (e = -y, r = 0: the remnant's bins).
     loop = with_motion_path(model.loop(params), cab)
     nm = loop.neuromuscular.response(s, cache)
     ves = loop.vestibular.response(s, cache) * np.exp(-s * params.get("tau_m", 0.0))
     vis = loop.visual.response(s, cache) * (1.0 + s * params.get("TL_v", 0.0)) \
         / (1.0 + s * params.get("TI_v", 0.0))
-    drive = vis * E - ves * Y
+    drive = vis * E
     if yc_inv is not None:
         drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("tau0", 0.0)) \
             / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
     rd = loop.return_difference(s, None, cache)
-    return (nm * drive / rd, nm * (vis + ves) / rd) if response else nm * drive / rd
+    # The vestibular term's share of the return difference: 1 / rd in Hess's form, 1 outside it.
+    ves_rd = 1.0 if params.get(MULTIMODAL, 0.0) else 1.0 / rd
+    u = nm * (drive / rd - ves * ves_rd * Y)
+    return (u, nm * (vis / rd + ves * ves_rd)) if response else u
 
 
 def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w,
