@@ -31,13 +31,16 @@ parameters (the expanded model is the original at Km = 0) is the F test
 ``p = ½ P(F(1, 2L − p) > F)``. With target and disturbance lines a second
 alternative adds a vestibular delay tau_m (0-:data:`TAU_M_MAX` s, q = 2,
 ``p = P(F(2, 2L − p) > F)``, conservative: tau_m is not identified under the null,
-Davies 1987), and the test's p is the smaller of the two, doubled (Bonferroni). The
+Davies 1987). The
 delay is the test's, not the paper's model's: human vestibular responses lag by
 0.1-0.2 s (SPEC.md "Describing functions"); Km alone lost half its motion runs on angle
 tasks of the generator drawn with tau_m = 0.15 s (development seeds 100-111), and the
 delayed alternative alone named 9 of 16 JSBSim-flown motion pilots (whose path has no
 delay) against 10 of 16 with Km alone or with both (benchmarks/bench_fly_pilot.py).
-With one line set only Km is tested. Both models are fitted by bounded least
+With both line sets each of these two is also fitted in the multimodal pilot models'
+form, the vestibular path outside Hess's proprioceptive loop (:data:`VESTIBULAR_FORMS`),
+and the test's p is the smallest of the four, times four (Bonferroni).
+With one line set only Km in Hess's form is tested. Both models are fitted by bounded least
 squares (Ke, K1, 1/T1, tau0, wn, zn, and 1/T2 for k = 2; K2 is held because
 only K1 K2 is identifiable; and a visual lag or lead a human adds that Hess's
 structure lacks, :data:`VISUAL_EQUALISER`, which the expanded fits hold at the
@@ -237,7 +240,7 @@ def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, lev
     if not cabs:
         return None
     expanded = PilotModel(("motion_feedback",))
-    _, _, _, (base_e, free_e, lo_e, hi_e), _ = km_fit
+    (base_e, free_e, lo_e, hi_e) = km_fit[3]
     starts = [[c[n_] for n_ in core] + [km] for c in (p_o, base)
               for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"]))]
     dof = n_res - len(free_e) - 1   # as the test's: the equaliser held at the original's value counts
