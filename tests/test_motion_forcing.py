@@ -35,6 +35,9 @@ def test_words_say_when_the_data_cannot_tell():
     assert motion_words(False, "disturbance and target").startswith("no evidence")
     assert "shapes of the two paths alone" in motion_words(True, "disturbance only")
     assert motion_words(True, "disturbance and target").startswith("motion feedback named")
+    # The form of the path that fitted best, where it is not the paper's.
+    assert "proprioceptive loop" not in motion_words(True, "disturbance and target")
+    assert "outside the proprioceptive loop" in motion_words(True, "disturbance and target", "multimodal")
 
 
 def test_disturbance_only_baseline_is_undetermined_not_denied(tmp_path):

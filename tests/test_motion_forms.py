@@ -16,7 +16,6 @@ from hesspipe.core.formats import read_plants
 from hesspipe.identification._line_fit import MULTIMODAL, _predict
 from hesspipe.identification.lines import LineData
 from hesspipe.identification.motion_test import ALPHA, VESTIBULAR_FORMS, _either_order
-from hesspipe.pilot.blocks import from_tf
 from hesspipe.pilot.hess import PilotModel
 from hesspipe.pilot.motion import motion_block
 

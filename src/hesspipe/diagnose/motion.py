@@ -85,6 +85,9 @@ class MotionVerdict:
         differentiated or integrated once more (``p_values``), and ``better``, the one
         that names motion (or None): the path given may be wrong
         (:func:`hesspipe.identification.motion_test.motion_test`'s ``path_check``).
+    vestibular_form : str
+        The form of the test's alternative that fitted best ("hess" or "multimodal",
+        :data:`hesspipe.identification.motion_test.VESTIBULAR_FORMS`; "" without a test).
     """
 
     named: bool
@@ -102,6 +105,7 @@ class MotionVerdict:
     verdict: str = ""
     Km_per_Ke: float = float("nan")
     path_check: dict | None = None
+    vestibular_form: str = ""
 
     def to_dict(self) -> dict:
         """JSON-ready fields and the criterion that produced them."""
@@ -111,9 +115,11 @@ class MotionVerdict:
                 "runs": self.runs,
                 "alpha": self.alpha, "note": self.note, "forcing": self.forcing,
                 "separable": self.separable, "verdict": self.verdict, "path_check": self.path_check,
+                "vestibular_form": self.vestibular_form,
                 "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
                              "lines (equation error, per-line remnant variance from the unforced "
-                             "neighbours), p halved for Km >= 0"}
+                             "neighbours), Km alone (p halved for Km >= 0) and with a vestibular delay, in "
+                             "Hess's order 2 each also in the multimodal form; the smallest p times their number"}
 
 
 #: Pilot parameters the describing function identifies (with the phase the control spectrum
@@ -150,7 +156,7 @@ class DFEvidence:
     k: int = 0
 
 
-def motion_words(named: bool, forcing: str) -> str:
+def motion_words(named: bool, forcing: str, form: str = "hess") -> str:
     """The motion verdict in words, saying what the record's forcing lets it rest on.
 
     Parameters
@@ -159,10 +165,14 @@ def motion_words(named: bool, forcing: str) -> str:
         Whether the motion test is significant.
     forcing : str
         :func:`forcing_sets` of the record.
+    form : str
+        The vestibular form of the test's best alternative ("hess" or "multimodal").
     """
+    where = (" (one outside the proprioceptive loop, as multimodal pilot models have it)"
+             if form == "multimodal" else "")
     if forcing == SEPARABLE:
-        return ("motion feedback named: the target and disturbance lines disagree as a vestibular "
-                "path predicts" if named else
+        return (f"motion feedback named: the target and disturbance lines disagree as a vestibular "
+                f"path{where} predicts" if named else
                 "no evidence of motion feedback: the target and disturbance lines agree without it")
     why = ("one forcing function (%s): one describing function, in which the visual and "
            "vestibular paths act on the same signal" % forcing)
@@ -395,8 +405,10 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
     mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
                        separable=forcing == SEPARABLE,
-                       verdict=motion_words(named, forcing), runs=1 + len(repeat_runs) if pool else 1,
-                       Km_per_Ke=float(t.get("Km_per_Ke", math.nan)), path_check=t.get("path_check"))
+                       verdict=motion_words(named, forcing, t.get("vestibular_form", "hess")),
+                       runs=1 + len(repeat_runs) if pool else 1,
+                       Km_per_Ke=float(t.get("Km_per_Ke", math.nan)), path_check=t.get("path_check"),
+                       vestibular_form=t.get("vestibular_form", ""))
     pars, se, bound = _df_delay(t, mv.named)
     if baseline_run is None:
         delay = delay_bound_test(pars["tau0"], se, bound, cfg.alpha)

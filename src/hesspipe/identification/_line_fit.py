@@ -11,6 +11,7 @@ import math
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
+from scipy import stats
 
 from ..pilot.motion import with_motion_path
 from ._lsq import best_least_squares, held_covariance
@@ -48,6 +49,16 @@ def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None
     ves_rd = 1.0 if params.get(MULTIMODAL, 0.0) else 1.0 / rd
     u = nm * (drive / rd - ves * ves_rd * Y)
     return (u, nm * (vis / rd + ves * ves_rd)) if response else u
+
+
+def _nested_f(rss_restricted: float, rss_full: float, q: int, dof: int) -> tuple[float, float]:
+    """(F, p) of a nested least-squares test: `q` parameters, `dof` residual degrees of freedom
+    of the full model. With one parameter the restriction is a bound (Km >= 0, a delay at
+    most a human's), where F is 0 half the time under H0 (Self & Liang 1987): p is halved."""
+    gain = max(rss_restricted - rss_full, 0.0)
+    f = gain / q / (rss_full / dof) if rss_full > 0 and dof > 0 else math.inf
+    p = float(stats.f.sf(f, q, dof)) * (0.5 if q == 1 else 1.0) if f > 0 else 1.0
+    return f, p
 
 
 def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U, groups, yc_inv, w,

@@ -78,18 +78,17 @@ from dataclasses import dataclass
 from typing import Callable, Mapping
 
 import numpy as np
-from scipy import stats
 
-from ..core._tf import siso_coefficients
 from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 from ..core.errors import HesspipeError
 from ..core.formats import as_runs
-from ..pilot.blocks import from_tf, tf
+from ..pilot.blocks import from_tf
 from ..pilot.crossover import gain_scale
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
 from ._km_estimate import km_estimate
-from ._line_fit import MULTIMODAL, _fit, _standard_errors, pilot_start
+from ._line_fit import MULTIMODAL, _fit, _nested_f, _standard_errors, pilot_start
+from ._path_check import PATH_ADVICE, PATH_VARIANTS, _path_check  # noqa: F401
 
 # The line data live in .lines; re-exported here, where the test's callers have read them.
 from .lines import (  # noqa: F401
@@ -148,33 +147,6 @@ compensatory p, a lower bound of it that is at least 0.5: every decision at a le
 0.5 is exact - diagnose's, and the cohort's median-pilot test, whose p is at least 0.5 when
 its median pilot's is (:func:`hesspipe.pilots.verdict.median_pilot_p`)."""
 
-PATH_VARIANTS = {"negated": (-1.0, 0), "differentiated": (1.0, 1), "integrated": (1.0, -1)}
-"""The motion path's likely mistakes that :func:`motion_test`'s ``path_check`` tries, name:
-(sign, powers of s multiplied in): its sign (the cab's rotation against the logged output's)
-and one differentiation off (an angle output given the path of a rate, or the reverse). On the
-lab stand-in's single-integrator yaw runs (s/(0.01 s + 1), motion named on 6 of 6) the path
-negated named motion on 2 of 6, without its differentiator on 1 of 6, without a word."""
-
-PATH_ADVICE = ("check motion_path's sign and whether it differentiates the output (SPEC: output -> cab "
-               "angular velocity)")
-"""What a user does where a variant names motion (diagnose's run line, pilots' cohort line)."""
-
-
-def _variant_cabs(plants) -> dict:
-    # The motion path's PATH_VARIANTS as blocks (none where the plants give no path: the
-    # paper's platform x washout, whose angle-output mistake motion_path_note names).
-    mp = getattr(plants, "motion_path", None)
-    if mp is None:
-        return {}
-    num, den = siso_coefficients(mp)
-    out = {}
-    for name, (sign, power) in PATH_VARIANTS.items():
-        n_ = sign * (np.append(num, np.zeros(power)) if power > 0 else num)
-        d_ = np.append(den, np.zeros(-power)) if power < 0 else den
-        out[name] = tf(n_, d_)
-    return out
-
-
 VESTIBULAR_FORMS = ("hess", "multimodal")
 """Where the test's vestibular path joins the pilot in Hess's order k = 2 with both line sets
 (otherwise Hess's form alone). "hess": the paper's expanded model, the sensation beside the
@@ -202,16 +174,6 @@ no-motion runs of the generator's precision pilots (single and double integrator
 display, development seeds 100-109), and a lag's phase was read as 0.1 s of extra delay."""
 
 
-def _nested_f(rss_restricted: float, rss_full: float, q: int, dof: int) -> tuple[float, float]:
-    """(F, p) of a nested least-squares test: `q` parameters, `dof` residual degrees of freedom
-    of the full model. With one parameter the restriction is a bound (Km >= 0, a delay at
-    most a human's), where F is 0 half the time under H0 (Self & Liang 1987): p is halved."""
-    gain = max(rss_restricted - rss_full, 0.0)
-    f = gain / q / (rss_full / dof) if rss_full > 0 and dof > 0 else math.inf
-    p = float(stats.f.sf(f, q, dof)) * (0.5 if q == 1 else 1.0) if f > 0 else 1.0
-    return f, p
-
-
 def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, data, w) -> dict:
     """Likelihood-ratio test of "the visual delay is at most `bound` (s)" in `model` (the
     original, or the expanded where the vestibular path is named).
@@ -236,29 +198,6 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
     f, p = _nested_f(rss_b, rss, 1, dof)
     return {"bound_s": float(bound), "f": float(f), "p_value": p, "dof": int(dof),
             "bounded_tau0": float(p_b["tau0"]), "parameters": {n_: float(v) for n_, v in p_b.items()}}
-
-
-def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, level: float) -> dict | None:
-    # motion_test's path_check: the Km alternative refitted with each of the path's likely
-    # mistakes (PATH_VARIANTS) in place of the path given; None without a path to vary.
-    cabs = _variant_cabs(plants)
-    if not cabs:
-        return None
-    expanded = PilotModel(("motion_feedback",))
-    (base_e, free_e, lo_e, hi_e) = km_fit[3]
-    starts = [[c[n_] for n_ in core] + [km] for c in (p_o, base)
-              for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"]))]
-    dof = n_res - len(free_e) - 1   # as the test's: the equaliser held at the original's value counts
-    p, gain = {}, {}
-    for name, cab in cabs.items():
-        rss_v, _, _ = _fit(expanded, base_e, free_e, lo_e, hi_e, starts, cab, *data[1:], w, keep=EXPANDED_KEEP)
-        p[name] = _nested_f(rss_o, min(rss_v, rss_o), 1, dof)[1]
-        gain[name] = float(1.0 - min(rss_v, rss_o) / rss_o) if rss_o > 0 else 0.0
-    # Bonferroni over the variants: on records without motion feedback a variant is then
-    # found with probability at most `level`, as motion itself is.
-    named = [name for name in p if p[name] * len(p) < level]
-    return {"p_values": p, "gains": gain, "named": named, "better": min(named, key=p.get) if named else None,
-            "level": float(level)}
 
 
 @dataclass(frozen=True)
@@ -489,7 +428,8 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             max_delay, rss_e, dof_e, data, ld.w)
     checked = None
     if path_check is not None and p_value >= path_check:
-        checked = _path_check(plants, fits[0], core, km0, rss_o, p_o, base, n_res, data, ld.w, path_check)
+        checked = _path_check(plants, fits[0], core, km0, rss_o, p_o, base, n_res, data, ld.w, path_check,
+                              EXPANDED_KEEP)
     # How much (Km, Km/|Ke|, their intervals): the estimate's own fit (_km_estimate).
     estimate, profile = km_estimate(expanded, *hess[5], hess[3], p_o, (eq, lo[-1], hi[-1]),
                                     n_res - len(hess[5][1]), 1e-3 * km0, data, ld)
