@@ -39,7 +39,6 @@ def _variant_cabs(plants) -> dict:
     return out
 
 
-
 def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, level: float, keep: int) -> dict | None:
     # motion_test's path_check: the Km alternative refitted with each of the path's likely
     # mistakes (PATH_VARIANTS) in place of the path given; None without a path to vary.

@@ -75,7 +75,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable, Mapping
+from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 
@@ -198,6 +198,26 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
     f, p = _nested_f(rss_b, rss, 1, dof)
     return {"bound_s": float(bound), "f": float(f), "p_value": p, "dof": int(dof),
             "bounded_tau0": float(p_b["tau0"]), "parameters": {n_: float(v) for n_, v in p_b.items()}}
+
+
+class _Alternative(NamedTuple):
+    # One of the test's pre-planned alternatives fitted: its p and F, the expanded fit's RSS,
+    # parameters, search problem (base, free, lo, hi) and solution, residual dof, and which
+    # parameters (Km, tau_m) in which of VESTIBULAR_FORMS it adds.
+    p: float
+    lr: float
+    rss: float
+    params: dict
+    extra: list
+    problem: tuple
+    sol: object
+    dof: int
+    form: str
+
+    @property
+    def name(self) -> str:
+        """As in the result's ``alternatives``: "Km", "Km+tau_m", "multimodal Km", ..."""
+        return ("" if self.form == "hess" else self.form + " ") + "+".join(self.extra)
 
 
 @dataclass(frozen=True)
@@ -407,16 +427,16 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
         rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
         q, dof_e = len(extra), n_res - len(free) - len(extra)
         lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
-        tests.append((p, lr, rss_e, p_e, extra, problem, sol_e, dof_e, form))
+        tests.append(_Alternative(p, lr, rss_e, p_e, extra, problem, sol_e, dof_e, form))
     # With both line sets, pre-planned alternatives - Km alone (the paper's path) and Km with
     # a vestibular delay, in each of VESTIBULAR_FORMS - and the smallest p,
     # Bonferroni-corrected: the delay alone cost JSBSim-flown motion runs (tau_m = 0) their
     # power, Km alone lost half the generator's runs drawn with tau_m = 0.15 s, Hess's form
-    # alone half a laboratory's double-integrator motion runs (VESTIBULAR_FORMS).
-    p_value, lr, rss_e, p_e, extra, (base_e, free_e, lo_e, hi_e), sol_e, dof_e, form = min(tests, key=lambda t: t[0])
+    # alone 7 of 24 of a laboratory's double-integrator motion runs (VESTIBULAR_FORMS).
+    p_value, lr, rss_e, p_e, extra, (base_e, free_e, lo_e, hi_e), sol_e, dof_e, form = min(tests, key=lambda t: t.p)
     p_value = min(1.0, p_value * len(tests))
     # How much motion: Hess's form, whose Km/|Ke| is the paper's model's (the estimate below).
-    hess = min((t for t in tests if t[8] == "hess"), key=lambda t: t[0])
+    hess = min((t for t in tests if t.form == "hess"), key=lambda t: t.p)
     # The vestibular path's model keeps its own delay, tested as the original's is: the
     # original's standard error beside the expanded fit's delay named extra_delay with p = 0
     # where that delay sat on its search bound (0.6 s for a lab's 0.26 s static pilot).
@@ -431,8 +451,8 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
         checked = _path_check(plants, fits[0], core, km0, rss_o, p_o, base, n_res, data, ld.w, path_check,
                               EXPANDED_KEEP)
     # How much (Km, Km/|Ke|, their intervals): the estimate's own fit (_km_estimate).
-    estimate, profile = km_estimate(expanded, *hess[5], hess[3], p_o, (eq, lo[-1], hi[-1]),
-                                    n_res - len(hess[5][1]), 1e-3 * km0, data, ld)
+    estimate, profile = km_estimate(expanded, *hess.problem, hess.params, p_o, (eq, lo[-1], hi[-1]),
+                                    n_res - len(hess.problem[1]), 1e-3 * km0, data, ld)
 
     return {"available": True, "n_lines": int(lines.size), "window_samples": ld.window_samples,
             "parameters_original": {n_: float(v) for n_, v in p_o.items()},
@@ -446,7 +466,7 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "tau_m": float(p_e.get("tau_m", 0.0)),
             "Km_se": estimate["Km_se"],
             "significant": bool(p_value < ALPHA),
-            "alternatives": {("" if t[8] == "hess" else t[8] + " ") + "+".join(t[4]): t[0] for t in tests},
+            "alternatives": {t.name: t.p for t in tests},
             "vestibular_form": form,
             "delay_bound": delay_bound, "delay_bound_expanded": delay_bound_expanded,
             "display": display, "target_lines": target, "path_check": checked,
