@@ -15,7 +15,7 @@ import pytest
 from hesspipe.core.formats import read_plants
 from hesspipe.identification._line_fit import MULTIMODAL, _predict
 from hesspipe.identification.lines import LineData
-from hesspipe.identification.motion_test import ALPHA, VESTIBULAR_FORMS, _either_order
+from hesspipe.identification.motion_test import ALPHA, FORM_SHARES, VESTIBULAR_FORMS, _either_order
 from hesspipe.pilot.hess import PilotModel
 from hesspipe.pilot.motion import motion_block
 
@@ -86,7 +86,9 @@ def test_a_multimodal_persons_motion_is_found_in_the_multimodal_form(tmp_path, s
     r, _ = _either_order(_lines(0.35, seed), plants, start, k=2, max_delay=None, display="compensatory")
     alts = r["alternatives"]
     assert set(alts) == {"Km", "Km+tau_m", "multimodal Km", "multimodal Km+tau_m"}
-    assert r["p_value"] == pytest.approx(min(1.0, 4 * min(alts.values())))
+    # Weighted Bonferroni: each form's share of the level split between its two alternatives.
+    shares = {a: FORM_SHARES["multimodal" if a.startswith("multimodal") else "hess"] / 2 for a in alts}
+    assert r["p_value"] == pytest.approx(min(1.0, min(alts[a] / shares[a] for a in alts)))
     assert r["p_value"] < ALPHA and r["vestibular_form"] == "multimodal"
     # Hess's form, the path led by the loop's lead, fits it far worse (p 100 times larger or more).
     assert min(alts["multimodal Km"], alts["multimodal Km+tau_m"]) < 1e-2 * min(alts["Km"], alts["Km+tau_m"])
@@ -100,6 +102,9 @@ def test_without_motion_neither_form_names_it(tmp_path, seed):
     assert r["p_value"] >= ALPHA
 
 
-def test_the_forms_are_hess_first():
-    # Hess's form is the paper's model, where the Km estimate is read.
+def test_the_forms_are_hess_first_and_share_the_level():
+    # Hess's form is the paper's model, where the Km estimate is read, and the primary alternative.
     assert VESTIBULAR_FORMS[0] == "hess"
+    assert set(FORM_SHARES) == set(VESTIBULAR_FORMS)
+    assert sum(FORM_SHARES.values()) == pytest.approx(1.0)
+    assert FORM_SHARES["hess"] > FORM_SHARES["multimodal"]

@@ -46,11 +46,10 @@ def test_profile_interval_of_a_named_motion_path_excludes_zero_and_covers_the_tr
     r = motion_test(run, plants, table1(k), k=k, interval=0.95)
     lo, hi = r["Km_interval"]
     assert r["p_value"] < 0.01
-    # Both line sets: the pre-planned alternatives (Km alone and with a delay; in order 2 each
-    # in Hess's form and the multimodal one), the smallest p times their number.
-    both = {"Km", "Km+tau_m"}
-    assert set(r["alternatives"]) == (both | {"multimodal " + a for a in both} if r["k"] == 2 else both)
-    assert r["p_value"] == pytest.approx(min(1.0, len(r["alternatives"]) * min(r["alternatives"].values())))
+    # Both line sets: the pre-planned alternatives, Km alone and with a delay (in order 2 also in
+    # the multimodal form, tests/test_motion_forms.py); on this rate task the smaller p doubled.
+    assert r["k"] == 1 and set(r["alternatives"]) == {"Km", "Km+tau_m"}
+    assert r["p_value"] == pytest.approx(min(1.0, 2 * min(r["alternatives"].values())))
     assert 0 < lo < r["Km"] < hi < math.inf
     assert lo <= km_true <= hi
     # The ratio: the estimate's own, covered, and narrower than Km's (upper over lower end).

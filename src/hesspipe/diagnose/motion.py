@@ -119,7 +119,7 @@ class MotionVerdict:
                 "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
                              "lines (equation error, per-line remnant variance from the unforced "
                              "neighbours), Km alone (p halved for Km >= 0) and with a vestibular delay, in "
-                             "Hess's order 2 each also in the multimodal form; the smallest p times their number"}
+                             "Hess's order 2 each also in the multimodal form; weighted Bonferroni over them (FORM_SHARES)"}
 
 
 #: Pilot parameters the describing function identifies (with the phase the control spectrum
