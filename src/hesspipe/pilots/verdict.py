@@ -179,8 +179,10 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     done = {pid: t for pid, t in tests.items() if t.get("available")}
     method = ("per pilot: likelihood-ratio test of Km on the describing-function lines "
               "(equation error U(1+NM PF) = NM(visual E - vestibular Y), residuals scaled by the "
-              "remnant level of neighbouring unforced bins; nested F test, p = 0.5 P(F > f), "
-              "Km >= 0); "
+              "remnant level of neighbouring unforced bins; nested F tests of Km alone, p = 0.5 P(F > f) "
+              "for Km >= 0, and with target and disturbance lines also with a vestibular delay and, in "
+              "Hess's order 2, with the vestibular path outside the proprioceptive loop (the multimodal "
+              "form), weighted Bonferroni over them); "
               f"cohort: yes if at least half of the pilots show it, median-pilot order-statistic test "
               f"p < {alpha:g} (Fisher's combination, reported beside it, tests 'at least one')")
     if not done:
