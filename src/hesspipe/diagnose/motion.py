@@ -405,10 +405,10 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
     mv = MotionVerdict(named, float(t["lr"]), float(t["p_value"]), float(t["gain"]), float(t["Km"]),
                        float(t["Km_se"]), int(t["n_lines"]), cfg.motion_alpha, forcing=forcing,
                        separable=forcing == SEPARABLE,
-                       verdict=motion_words(named, forcing, t.get("vestibular_form", "hess")),
+                       verdict=motion_words(named, forcing, t["vestibular_form"]),
                        runs=1 + len(repeat_runs) if pool else 1,
                        Km_per_Ke=float(t.get("Km_per_Ke", math.nan)), path_check=t.get("path_check"),
-                       vestibular_form=t.get("vestibular_form", ""))
+                       vestibular_form=t["vestibular_form"])
     pars, se, bound = _df_delay(t, mv.named)
     if baseline_run is None:
         delay = delay_bound_test(pars["tau0"], se, bound, cfg.alpha)

@@ -39,14 +39,16 @@ def _variant_cabs(plants) -> dict:
     return out
 
 
-def _path_check(plants, km_fit, core, km0, rss_o, p_o, base, n_res, data, w, level: float, keep: int) -> dict | None:
-    # motion_test's path_check: the Km alternative refitted with each of the path's likely
-    # mistakes (PATH_VARIANTS) in place of the path given; None without a path to vary.
+def _path_check(plants, km_problem, core, km0, rss_o, p_o, base, n_res, data, w, level: float,
+                keep: int) -> dict | None:
+    # motion_test's path_check: the Km alternative (its search problem: base, free, lo, hi)
+    # refitted with each of the path's likely mistakes (PATH_VARIANTS) in place of the path
+    # given; None without a path to vary.
     cabs = _variant_cabs(plants)
     if not cabs:
         return None
     expanded = PilotModel(("motion_feedback",))
-    (base_e, free_e, lo_e, hi_e) = km_fit[3]
+    base_e, free_e, lo_e, hi_e = km_problem
     starts = [[c[n_] for n_ in core] + [km] for c in (p_o, base)
               for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"]))]
     dof = n_res - len(free_e) - 1   # as the test's: the equaliser held at the original's value counts

@@ -440,8 +440,8 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
         lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
         tests.append(_Alternative(p, lr, rss_e, p_e, extra, problem, sol_e, dof_e, form))
     # With both line sets, pre-planned alternatives - Km alone (the paper's path) and Km with
-    # a vestibular delay, in each of VESTIBULAR_FORMS - and the smallest p,
-    # Bonferroni-corrected (weighted, FORM_SHARES): the delay alone cost JSBSim-flown motion runs (tau_m = 0) their
+    # a vestibular delay, in each of VESTIBULAR_FORMS - and the smallest p, Bonferroni-corrected
+    # (weighted, FORM_SHARES): the delay alone cost JSBSim-flown motion runs (tau_m = 0) their
     # power, Km alone lost half the generator's runs drawn with tau_m = 0.15 s, Hess's form
     # alone 7 of 24 of a laboratory's double-integrator motion runs (VESTIBULAR_FORMS).
     share = {f: FORM_SHARES[f] / sum(FORM_SHARES[g] for g in forms) / len(alternatives) for f in forms}
@@ -461,8 +461,8 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             max_delay, rss_e, dof_e, data, ld.w)
     checked = None
     if path_check is not None and p_value >= path_check:
-        checked = _path_check(plants, fits[0], core, km0, rss_o, p_o, base, n_res, data, ld.w, path_check,
-                              EXPANDED_KEEP)
+        checked = _path_check(plants, tests[0].problem, core, km0, rss_o, p_o, base, n_res, data, ld.w,
+                              path_check, EXPANDED_KEEP)
     # How much (Km, Km/|Ke|, their intervals): the estimate's own fit (_km_estimate).
     estimate, profile = km_estimate(expanded, *hess.problem, hess.params, p_o, (eq, lo[-1], hi[-1]),
                                     n_res - len(hess.problem[1]), 1e-3 * km0, data, ld)
