@@ -138,6 +138,12 @@ class FlatBand:
                          f"of 1; wide when it spans more than a factor {FLAT_SPAN:g}")}
 
 
+FLAT_MARK_MEANING = (f"the model's |L| stays within a factor {FLAT_FACTOR:g} of 1 over more than a factor "
+                     f"{FLAT_SPAN:g} around the crossover, so a few per cent of gain move the crossover "
+                     "along that band and the phase margin with it")
+"""What the tables' :func:`flat_mark` means, in the captions' words."""
+
+
 def flat_mark(cross: Mapping) -> str:
     """The tables' mark of a crossover in a wide flat band.
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Mapping
 
 from ..core.provenance import versions
-from ..pilot.crossover import FLAT_FACTOR, FLAT_SPAN, flat_mark
+from ..pilot.crossover import FLAT_MARK_MEANING, flat_mark
 from ..pilot.hess import km_per_ke
 from ..plants.fit import format_tf
 
@@ -194,8 +194,7 @@ def _pilots(folder: Path, root: Path) -> list[str]:
             "loop's crossover: the first fall of |L| through 1 above the lowest frequency the record "
             "resolves, 2π/duration, which leaves out crossings the fitted plants' slow roots make far "
             "below the data's band and neuromuscular peaks touching 1 far above it; "
-            f"— : |L| does not cross 1; ~ : |L| stays within a factor {FLAT_FACTOR:g} of 1 over more than a "
-            f"factor {FLAT_SPAN:g} around it, so a few per cent of gain move it)" + (f"; limits {limits['frequency_rad_s']} rad/s and "
+            f"— : |L| does not cross 1; ~ : {FLAT_MARK_MEANING})" + (f"; limits {limits['frequency_rad_s']} rad/s and "
                                            f"{limits['phase_margin_deg']} deg are an assumption of "
                                            "hesspipe, not the paper's" if limits else "") + ":", ""]
     show_truth = any(v != "—" for v in truths.values())
