@@ -41,6 +41,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     try:
+        configs = [DiagnoseConfig(display=d) for d in args.display.split(",") if d]
         plants = read_plants(args.plants)
         runs = []
         for folder in args.folders:
@@ -51,9 +52,8 @@ def main(argv=None) -> int:
     except HesspipeError as exc:
         print(f"bench_diagnose_folder: error: {exc}", file=sys.stderr)
         return 1
-    for display in [d for d in args.display.split(",") if d]:
-        config = DiagnoseConfig(display=display)
-        times = []
+    for config in configs:
+        display, times = config.display, []
         for run in runs:
             t = time.process_time()
             d = diagnose(run, plants, seed=args.seed, config=config)
