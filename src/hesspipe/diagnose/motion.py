@@ -36,7 +36,7 @@ import scipy.stats
 
 from ..core.errors import HesspipeError
 from ..identification.lines import SEPARABLE, forcing_sets
-from ..identification.motion_test import PATH_ADVICE, forcing_lines, safe_motion_test, windowed
+from ..identification.motion_test import ALTERNATIVES_IN_WORDS, PATH_ADVICE, forcing_lines, safe_motion_test, windowed
 from ..identification.paired_delay import paired_delay
 from .results import Step
 
@@ -118,8 +118,7 @@ class MotionVerdict:
                 "vestibular_form": self.vestibular_form,
                 "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
                              "lines (equation error, per-line remnant variance from the unforced "
-                             "neighbours), Km alone (p halved for Km >= 0) and with a vestibular delay, in "
-                             "Hess's order 2 each also in the multimodal form; weighted Bonferroni over them (FORM_SHARES)"}
+                             f"neighbours): {ALTERNATIVES_IN_WORDS}"}
 
 
 #: Pilot parameters the describing function identifies (with the phase the control spectrum

@@ -173,6 +173,12 @@ integrator (bench_motion_calibration.py, seed 3) was lost at p = 0.014 that Hess
 alone named at 0.007; the laboratory's multimodal persons were named as often either way
 (21 of 24)."""
 
+ALTERNATIVES_IN_WORDS = ("nested F tests of Km alone, p = 0.5 P(F > f) for Km >= 0, and with target and "
+                         "disturbance lines also with a vestibular delay and, in Hess's order 2, with the "
+                         "vestibular path outside the proprioceptive loop (the multimodal form), weighted "
+                         "Bonferroni over them (FORM_SHARES)")
+"""The test's alternatives in words, as diagnose's criterion and pilots' method state them."""
+
 VISUAL_EQUALISER = {1: ("TI_v", 0.2, 1.0), 2: ("TL_v", 1.0, 5.0)}
 """The test's visual equaliser by Hess order k: (name, start, upper bound in s) of a lag
 ``1/(1 + TI_v s)`` (k = 1) or a lead ``1 + TL_v s`` (k = 2) on the visual path, a

@@ -53,6 +53,7 @@ from ..core.errors import HesspipeError
 # The per-pilot test lives with identification so that diagnose uses the very same one.
 from ..identification.motion_test import (  # noqa: F401
     ALPHA,
+    ALTERNATIVES_IN_WORDS,
     PATH_ADVICE,
     PATH_VARIANTS,
     SEPARABLE,
@@ -179,10 +180,7 @@ def cohort_verdict(tests: Mapping[str, Mapping], *, alpha: float = ALPHA,
     done = {pid: t for pid, t in tests.items() if t.get("available")}
     method = ("per pilot: likelihood-ratio test of Km on the describing-function lines "
               "(equation error U(1+NM PF) = NM(visual E - vestibular Y), residuals scaled by the "
-              "remnant level of neighbouring unforced bins; nested F tests of Km alone, p = 0.5 P(F > f) "
-              "for Km >= 0, and with target and disturbance lines also with a vestibular delay and, in "
-              "Hess's order 2, with the vestibular path outside the proprioceptive loop (the multimodal "
-              "form), weighted Bonferroni over them); "
+              f"remnant level of neighbouring unforced bins; {ALTERNATIVES_IN_WORDS}); "
               f"cohort: yes if at least half of the pilots show it, median-pilot order-statistic test "
               f"p < {alpha:g} (Fisher's combination, reported beside it, tests 'at least one')")
     if not done:
