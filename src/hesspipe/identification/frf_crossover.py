@@ -31,6 +31,9 @@ from ..pilot.crossover import FlatBand, flat_band
 from .frf_smooth import consistent, fit_smooth, smooth_crossover
 
 DRAWS = 400
+"""Draws of the lines' H from their error model for the local crossover's spread (seeded by
+the caller's seed). Not :data:`.frf_smooth.DRAWS`: those are loops drawn from a smooth fit's
+covariance, the same on every call."""
 RELIABLE = 0.5
 """Lines with a relative error sigma/|H| above this are left out of the crossover."""
 KERNEL = 0.7

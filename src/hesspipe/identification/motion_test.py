@@ -452,8 +452,10 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
     # alone 7 of 24 of a laboratory's double-integrator motion runs (VESTIBULAR_FORMS).
     share = {f: FORM_SHARES[f] / sum(FORM_SHARES[g] for g in forms) / len(alternatives) for f in forms}
     best = min(tests, key=lambda t: t.p / share[t.form])
-    p_value, lr, rss_e, p_e, extra, (base_e, free_e, lo_e, hi_e), sol_e, dof_e, form = best
-    p_value = min(1.0, p_value / share[form])
+    lr, rss_e, p_e, extra, form = best.lr, best.rss, best.params, best.extra, best.form
+    sol_e, dof_e = best.sol, best.dof
+    base_e, free_e, lo_e, hi_e = best.problem
+    p_value = min(1.0, best.p / share[form])
     # How much motion: Hess's form, whose Km/|Ke| is the paper's model's (the estimate below).
     hess = min((t for t in tests if t.form == "hess"), key=lambda t: t.p)
     # The vestibular path's model keeps its own delay, tested as the original's is: the
