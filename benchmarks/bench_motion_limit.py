@@ -45,6 +45,7 @@ from hesspipe.identification._line_fit import _fit, _predict
 from hesspipe.identification.criteria import choose_k
 from hesspipe.identification.frf import NEIGHBOURS
 from hesspipe.identification.motion_test import (
+    ALPHA,  # diagnose's motion_alpha
     analysis_window,
     forcing_lines,
     line_variances,
@@ -52,8 +53,6 @@ from hesspipe.identification.motion_test import (
 )
 from hesspipe.pilot.hess import PilotModel
 from hesspipe.pilot.motion import motion_block
-
-ALPHA = 0.01   # diagnose's motion_alpha
 
 
 def _lines_spectra(run, start, length):

@@ -210,7 +210,7 @@ def path_words(check: dict | None) -> str:
 
 def delay_bound_test(delay_s: float, se_s: float, bound: dict, alpha: float) -> dict:
     """Extra-delay verdict from the likelihood-ratio test of "the visual delay is at most a
-    human's" (:func:`hesspipe.identification.motion_test._delay_bound`'s result `bound`).
+    human's" (:func:`hesspipe.identification._motion_fits._delay_bound`'s result `bound`).
 
     Only the sum of pilot and simulator delay is identifiable, so an extra delay is named
     only when no pilot with a human's delay (``bound["bound_s"]``, s) fits the describing
