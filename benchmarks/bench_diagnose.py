@@ -35,7 +35,8 @@ Usage::
                                         [--effects none,dutch_roll,...] [--km-ratio 1.0,1.0]
                                         [--tau-m 0.15] [--fs 100 --T-m 81.92] [--paired] [--repeats 3]
                                         [--pilot precision] [--remnant-at error] [--gain-drift 0.15]
-                                        [--layout sparse] [--motion-path NUM;DEN] [--known-delay 0.03]
+                                        [--layout sparse] [--motion-path NUM;DEN] [--told-motion-path NUM;DEN|none]
+                                        [--known-delay 0.03]
 
 ``--layout sparse``: the forcing on :data:`hesspipe.humanlike.forcing.SPARSE_LAYOUT` (81.92 s
 at 100 Hz, ten lines per set, target lines 1-23 bins from the disturbance's) instead of the
@@ -44,6 +45,11 @@ generator's adjacent sets at 70 s and 50 Hz.
 ``--motion-path NUM;DEN``: the simulator's motion path from the output to the cab's angular
 velocity (e.g. a yaw washout), which the generator's pilot feels and plants.json carries,
 instead of the plant's own (s/(0.01 s + 1) on an angle display).
+
+``--told-motion-path NUM;DEN`` (or ``none``): the motion path diagnose is told (its
+plants.json), where it differs from the simulator's: a user's approximation of the platform
+(a lag or a washout left out, a washout's gain or corner misjudged); ``none`` leaves the key
+out (the paper's platform and washout on a rate output).
 
 ``--gain-drift CV``: the pilot's visual gain wanders within each run (coefficient of
 variation CV, correlation time 10 s), as a human's does; the describing function averages
@@ -95,7 +101,7 @@ PILOT_SIDE = ("motion_feedback", "otoliths", "extra_delay")
 
 
 def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hess", repeats=1, config=None,
-             known_delay=None, **draw):
+             known_delay=None, told_path=False, **draw):
     effects = () if effect == "none" else tuple(effect.split("+"))
     s = derive_seed(seed, "bench-diagnose", plant, output, task, effect)
     kw = dict(disturbance="wind", fs=50.0, T_m=70.0) if plant == "paper" else dict(fs=50.0, T_m=70.0)
@@ -114,6 +120,8 @@ def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hes
     path = write_trial(Path(folder) / name, trial)
     run = read_run(path)
     plants = read_plants(path.parent / "plants.json")
+    if told_path is not False:   # None: the key left out; (num, den): another path than the simulator's
+        plants = replace(plants, motion_path=told_path)
     base, more = [], []
     # With repeats, more runs of the condition (retests of the pilot: its run-to-run
     # scatter, its own remnant and forcing phases; the simulator's extra delay kept) and,
@@ -136,6 +144,15 @@ def run_case(folder, plant, output, task, effect, seed, paired=False, pilot="hes
     t = time.process_time()
     d = diagnose(run, plants, seed=seed, baseline_run=base or None, repeat_runs=more, config=config)
     return d, time.process_time() - t
+
+
+def _coefficients(ap, flag: str, text: str) -> tuple[list, list]:
+    """A transfer function's 'NUM;DEN' (comma-separated, highest power first), or the parser's error."""
+    try:
+        num, den = ([float(x) for x in part.split(",")] for part in text.split(";"))
+    except ValueError:
+        ap.error(f"{flag}: expected 'NUM;DEN' (comma-separated coefficients), got {text!r}")
+    return num, den
 
 
 def _row(plant, output, task, effect, row, n) -> tuple[str, bool]:
@@ -194,6 +211,9 @@ def main(argv=None) -> int:
     ap.add_argument("--motion-path", default=None, metavar="NUM;DEN",
                     help="the simulator's motion path (output -> cab angular velocity), polynomial "
                          "coefficients, highest power first, e.g. a washout; written to plants.json")
+    ap.add_argument("--told-motion-path", default=None, metavar="NUM;DEN|none",
+                    help="the motion path diagnose is told, where it differs from the simulator's "
+                         "(--motion-path): a user's approximation; none: the key left out")
     ap.add_argument("--feedforward", type=float, default=None, metavar="KFF",
                     help="a pursuit display: the generator's precision pilots add a feedforward path on "
                          "the target, KFF times the controlled element's inverse (tasks with a target)")
@@ -220,11 +240,11 @@ def main(argv=None) -> int:
     if args.layout == "sparse":
         draw.update(SPARSE_LAYOUT)
     if args.motion_path:
-        try:
-            num, den = ([float(x) for x in part.split(",")] for part in args.motion_path.split(";"))
-        except ValueError:
-            ap.error(f"--motion-path: expected 'NUM;DEN' (comma-separated coefficients), got {args.motion_path!r}")
-        draw["motion_path"] = (num, den)
+        draw["motion_path"] = _coefficients(ap, "--motion-path", args.motion_path)
+    told = False
+    if args.told_motion_path:
+        told = None if args.told_motion_path == "none" else _coefficients(ap, "--told-motion-path",
+                                                                            args.told_motion_path)
     print("SYNTHETIC DATA: every run below is drawn by the independent generator hesspipe.humanlike "
           f"({args.pilot} pilots).")
     rows, times, failures, skipped = {}, [], [], []
@@ -240,7 +260,7 @@ def main(argv=None) -> int:
                 try:
                     d, cpu = run_case(tmp, plant, output, task, effect, seed, args.paired,
                                       args.pilot, args.repeats, DiagnoseConfig(display=args.display),
-                                      args.known_delay, **draw)
+                                      args.known_delay, told, **draw)
                 except HesspipeError as exc:
                     failures.append(f"{plant}/{output}/{task}/{effect}/{seed}: {exc}")
                     print("  REFUSED", failures[-1], flush=True)

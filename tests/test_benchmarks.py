@@ -231,3 +231,32 @@ def test_run_in_benchmark_reads_a_whole_trial_as_its_window(capsys, monkeypatch)
                          rf"the same names (\d)/1; .* largest change of F ([\d.]+)%", out)
         assert line, out
         assert line.group(1) == "1" and line.group(2) == "1" and float(line.group(3)) < 1.0
+
+
+def test_diagnose_benchmark_tells_diagnose_the_path_it_is_given(tmp_path, monkeypatch):
+    # --told-motion-path: the plants diagnose receives carry the told path (or none), the
+    # simulator's stays in the trial's own plants.json.
+    from hesspipe.core.formats import read_plants
+    from hesspipe.humanlike.forcing import SPARSE_LAYOUT
+
+    m = _load("bench_diagnose")
+    seen = []
+    monkeypatch.setattr(m, "diagnose", lambda run, plants, **kw: seen.append(plants))
+    sim = ([0.7, 0.0, 0.0, 0.0], [0.05, 1.035, 0.7125, 0.25])
+    told = ([1.0, 0.0], [0.05, 1.0])
+    for path in (False, told, None):
+        m.run_case(tmp_path, "1/s", "angle", "both", "none", 0, pilot="precision", told_path=path,
+                   **SPARSE_LAYOUT, motion_path=sim)
+    written = read_plants(next(tmp_path.glob("**/plants.json")))
+    s = 1j * np.array([0.3, 1.0, 3.0])
+
+    def response(tf):
+        return np.polyval(np.ravel(tf.num[0][0]), s) / np.polyval(np.ravel(tf.den[0][0]), s)
+
+    want = np.polyval(sim[0], s) / np.polyval(sim[1], s)
+    assert np.allclose(response(written.motion_path), want)
+    assert np.allclose(response(seen[0].motion_path), want)
+    assert np.allclose(response(seen[1].motion_path), np.polyval(told[0], s) / np.polyval(told[1], s))
+    assert seen[2].motion_path is None
+    with pytest.raises(SystemExit):
+        m.main(["--told-motion-path", "1,x;2", "--seeds", "0"])

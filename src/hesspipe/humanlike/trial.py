@@ -66,7 +66,8 @@ class TrialSpec:
     actuator : dict
         ``tau`` (s, 0 = none), ``rate_limit_factor`` (None = no limit).
     motion_tf : (num, den) or None
-        Output -> cab angular velocity (hess pilot with motion feedback only).
+        Output -> cab angular velocity: the ``motion_path`` asked for, else the plant's own
+        where the pilot has motion feedback, else None.
     """
 
     name: str
@@ -297,8 +298,12 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
     rl = float(g_eff.uniform(*ranges["rate_limit_factor"])) if "rate_limit" in effects else None
     km_ratio = float(g_eff.uniform(*ranges["km_ratio"])) if "motion_feedback" in effects else 0.0
     motion_tf = None
-    if "motion_feedback" in effects:
-        motion_tf = tuple(opts["motion_path"]) if opts["motion_path"] is not None else plant.motion()
+    if opts["motion_path"] is not None:
+        # The cab moves whether or not the pilot uses it: a no-motion trial's plants file
+        # states the simulator's path too, as a laboratory's one file for both conditions does.
+        motion_tf = tuple(opts["motion_path"])
+    elif "motion_feedback" in effects:
+        motion_tf = plant.motion()
     actuator = {"tau": act_tau, "rate_limit_factor": rl}
 
     def yc(w):
@@ -315,6 +320,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         fixed["pm"] = ranges["pm"][0]
     if opts["pilot_params"] is not None:
         p = dict(opts["pilot_params"])
+        if "motion_feedback" not in effects:
+            p.pop("Km", None)   # a pilot without the effect feels no cab, whatever path it has
         p.setdefault("structure", pilot)
         p.setdefault("tau", p.get("tau_v", 0.0) + extra)
         p.setdefault("tau_v", p["tau"] - extra)
