@@ -91,8 +91,8 @@ def test_diagnose_takes_one_persons_runs_and_the_pipeline_finds_a_keyed_run(tmp_
     assert main(["diagnose", str(tmp_path / "all.csv"), "--plants", str(tmp_path / "p.json"),
                  "--columns", KEYED]) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert err[-1] == (f"hesspipe: error: {tmp_path / 'all.csv'}: runs of 2 persons (s01, s02); expected one "
-                       "person's runs, the run and its repeats: diagnose every run alone with --each")
+    assert err[-1] == (f"hesspipe: error: {tmp_path / 'all.csv'}#s01#1 and its repeats: runs of 2 persons "
+                       "(s01, s02); expected one person's runs: diagnose every run alone with --each")
     pilots = tmp_path / "pilots"
     pilots.mkdir()
     (pilots / "comparison.json").write_text(json.dumps({"pilots": [{"id": "all#s02#1",
@@ -128,3 +128,17 @@ def test_one_table_of_both_conditions_is_read_a_condition_at_a_time(tmp_path):
                                             r"condition\); found static, motion$"):
         read_file_runs(tmp_path / "all.csv", columns=cols + "=moving")
     assert columns_for_condition(KEYED, "motion") == KEYED   # no condition mapped: as given
+
+
+def test_the_library_refuses_repeats_of_another_person_in_its_own_terms(tmp_path):
+    # The check lives in diagnose itself, so a script that pools a long table's runs meets it
+    # too; the command line only adds its option to the advice.
+    from hesspipe.diagnose.workflow import diagnose
+    from test_compare import paper_plants
+
+    _long(tmp_path / "all.csv", [("s01", 1), ("s02", 2)])
+    first, other = read_file_runs(tmp_path / "all.csv", columns=KEYED)
+    with pytest.raises(HesspipeError) as err:
+        diagnose(first, paper_plants(), repeat_runs=[other])
+    assert str(err.value) == (f"{tmp_path / 'all.csv'}#s01#1 and its repeats: runs of 2 persons (s01, s02); "
+                              "expected one person's runs: diagnose every run alone")

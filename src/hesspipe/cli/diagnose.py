@@ -59,7 +59,8 @@ def register(sub) -> None:
     add_run_options(p)
     add_terms(p, field_terms("DiagnoseConfig", {"alpha": "--alpha", "max_effects": "--max-effects",
                                                   "max_pilot_delay": "--max-pilot-delay"}))
-    add_terms(p, {r"(^|: )workers: ": r"\1--workers: "})
+    add_terms(p, {r"(^|: )workers: ": r"\1--workers: ",
+                  r"diagnose every run alone$": "diagnose every run alone with --each"})
     add_seed(p, 0, "seed of the remnant draws")
     add_inputs(p, "run", "plants", "baseline_run")
     p.set_defaults(func=_diagnose)
@@ -93,11 +94,6 @@ def _diagnose(args) -> int:
 
     # A file may hold several runs (a starred column name): the two lists are read apart.
     run, *repeats = read_cli_runs(args.run, args, min_samples=WELCH_SEGMENT)
-    persons = list(dict.fromkeys(r.person for r in (run, *repeats) if r.person))
-    if len(persons) > 1:   # a long table of several persons: repeats are one person's runs
-        raise HesspipeError(f"{args.run[0]}: runs of {len(persons)} persons ({', '.join(persons[:4])}"
-                            f"{', ...' if len(persons) > 4 else ''}); expected one person's runs, the run and "
-                            "its repeats: diagnose every run alone with --each")
     base = None if args.baseline_run is None else read_cli_runs(args.baseline_run, args, min_samples=WELCH_SEGMENT)
     result = diagnose(run, plants, model=args.model, candidates=candidates, seed=args.seed, config=cfg,
                       baseline_run=base, repeat_runs=repeats)

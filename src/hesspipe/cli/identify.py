@@ -9,6 +9,7 @@ import math
 
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 from ..core.errors import HesspipeError
+from ..core.paper import FITNESS_BAND_HZ
 from ._options import add_run_options, add_seed, add_terms, read_cli_plants, read_cli_runs
 from ._outputs import add_inputs
 
@@ -91,7 +92,7 @@ def register(subparsers) -> None:
                    help=f"fit criterion (default {DEFAULT_CRITERION}): paper = Eq. 10 control PSD; "
                         "df = describing-function error at the excited lines weighted by their "
                         "uncertainty; output = control output error")
-    p.add_argument("--band", type=_band, default=(0.0, 5.0), metavar="LOW,HIGH",
+    p.add_argument("--band", type=_band, default=FITNESS_BAND_HZ, metavar="LOW,HIGH",
                    help="fitness band in Hz (default 0,5)")
     p.add_argument("--psd", choices=("paper", "scipy"), default="paper", help="PSD estimate")
     p.add_argument("--no-benchmark", action="store_true", help="skip the McRuer benchmark fit")

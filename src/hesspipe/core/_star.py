@@ -33,7 +33,7 @@ def run_columns(frame: Frame, names: Mapping[str, str], *, optional=(),
         The file's columns (:func:`read_frame`).
     names : mapping
         Role → column name, possibly with one star (and ``-`` before it: the sign flipped);
-        at most one each (:func:`hesspipe.core.formats._parse_columns` checks it).
+        at most one each (:func:`hesspipe.core.formats.parse_columns` checks it).
     optional : sequence of str
         Roles that may be missing in the file.
     hint : str, optional

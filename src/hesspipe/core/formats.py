@@ -27,6 +27,7 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
+from ._columns import OPTIONAL_COLUMNS, RUN_COLUMNS, columns_for_condition, parse_columns  # noqa: F401
 from ._long import KEY_COLUMNS, row_groups
 from ._plants import Plants, as_plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
 from ._quality import quality_notes
@@ -59,7 +60,6 @@ from .io import write_text
 from .paper import WELCH_SEGMENT
 from .provenance import says_synthetic
 
-RUN_COLUMNS = ("time", "disturbance", "output", "control")
 #: File endings of measured runs when a folder is a set of pilots (tab-separated files and
 #: LabVIEW's measurement files are the same table, MATLAB files and NumPy archives its columns
 #: as variables, a workbook's first sheet of numbers, LabVIEW's TDMS files channels, HDF5
@@ -68,9 +68,6 @@ RUN_COLUMNS = ("time", "disturbance", "output", "control")
 RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".npz", ".xlsx", ".xlsm", ".tdms", ".h5", ".hdf5")
 #: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
 TEXT_SUFFIXES = (".txt", ".dat")
-#: Columns a run may have: the target, and the displayed error e = reference - output (the
-#: reference where a laboratory logged the error and not the target).
-OPTIONAL_COLUMNS = ("reference", "error")
 
 #: Largest magnitude of a signal whose power spectrum is finite in float64 with room to spare.
 MAX_MAGNITUDE = 1e100
@@ -198,62 +195,6 @@ def as_runs(run_or_runs) -> list:
     return runs
 
 
-def _parse_columns(spec: str | Mapping[str, str] | None) -> dict[str, str]:
-    """Parse ``"control=stick,output=p"`` into ``{"control": "stick", ...}``."""
-    if not spec:
-        return {}
-    if isinstance(spec, Mapping):
-        pairs = dict(spec)
-    else:
-        pairs = {}
-        for item in str(spec).split(","):
-            if not item.strip():
-                continue
-            if "=" not in item:
-                raise HesspipeError(f"columns: expected ROLE=NAME pairs separated by commas, got {item!r}")
-            role, name = (s.strip() for s in item.split("=", 1))
-            pairs[role] = name
-    for role in pairs:
-        if role not in RUN_COLUMNS + OPTIONAL_COLUMNS + KEY_COLUMNS:
-            raise HesspipeError(f"columns: unknown role {role!r}; expected one of "
-                                f"{', '.join(RUN_COLUMNS + OPTIONAL_COLUMNS + KEY_COLUMNS)}")
-        if not isinstance(pairs[role], str) or not pairs[role].strip():
-            raise HesspipeError(f"columns: role {role!r}: expected a column name, got {pairs[role]!r}")
-        if role in KEY_COLUMNS and RUN_NUMBER in pairs[role]:
-            raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r}: expected the name of the column "
-                                "whose values tell runs apart, without '*'")
-        if "|" in pairs[role] and not all(alt.strip().lstrip("-").strip() for alt in pairs[role].split("|")):
-            raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r}: expected column names separated by "
-                                "'|', got an empty one")
-        if pairs[role].count(RUN_NUMBER) > 1:
-            raise HesspipeError(f"columns: role {role!r}: {pairs[role]!r} holds {pairs[role].count(RUN_NUMBER)} "
-                                f"'{RUN_NUMBER}'; expected at most one, standing for a run's number")
-    return pairs
-
-
-def columns_for_condition(columns: str | Mapping[str, str] | None, value: str) -> str | dict | None:
-    """`columns` reading one condition of a long table that holds several.
-
-    Parameters
-    ----------
-    columns : str or mapping or None
-        A role → column mapping (:func:`read_file_runs`).
-    value : str
-        The condition to read, e.g. ``"motion"``.
-
-    Returns
-    -------
-    str or dict or None
-        `columns` itself, unless it maps ``condition`` to a column without a value: then
-        the mapping with ``condition=COLUMN=value``.
-    """
-    mapping = _parse_columns(columns)
-    name = mapping.get("condition")
-    if name is None or "=" in name:
-        return columns
-    return {**mapping, "condition": f"{name}={value}"}
-
-
 def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None,
              resample: bool = False, min_samples: int = 2, rtol: float = UNIFORM_RTOL,
              sample_rate: float | None = None) -> Run:
@@ -312,7 +253,7 @@ def read_run(path: str | Path, *, columns: str | Mapping[str, str] | None = None
                           sample_rate=sample_rate)
     if len(runs) > 1:
         how, one = ((f"the columns mapped with '{RUN_NUMBER}'", "map one run's columns (x:2 for x:*)")
-                    if not set(KEY_COLUMNS) & set(_parse_columns(columns)) else
+                    if not set(KEY_COLUMNS) & set(parse_columns(columns)) else
                     ("the key columns", "keep one run's rows (run=COLUMN=VALUE)"))
         raise HesspipeError(f"{path}: {how} find {len(runs)} runs ({runs[0].id} to {runs[-1].id}); expected "
                             f"one here: {one}, or read the file's runs together")
@@ -359,7 +300,7 @@ def read_file_runs(path: str | Path, *, columns: str | Mapping[str, str] | None 
         match no column or find different runs (:func:`hesspipe.core._star.run_columns`).
     """
     path = Path(path)
-    mapping = _parse_columns(columns)
+    mapping = parse_columns(columns)
     names = {role: mapping.get(role, role) for role in RUN_COLUMNS + OPTIONAL_COLUMNS}
     # An optional role the caller mapped to a column is required: a misspelt reference
     # column read as no target at all would change the answer without a word.

@@ -17,6 +17,10 @@ EQ16 = ((-0.2554, 14.4, -272.6, 25.72), (1.0, 84.37, 452.2, 1510.0, 628.8))
 #: ``Lp = -1.0496`` 1/s), as ``(num, den)``.
 EQ14 = ((2.436,), (1.0, 1.0496))
 
+#: The band of the paper's fitness (Eq. 10) and of every analysis that follows it, Hz: the
+#: control spectra are compared, and the describing function's lines taken, from 0 to 5 Hz.
+FITNESS_BAND_HZ = (0.0, 5.0)
+
 #: Welch segment length of the paper's PSD estimate (Eqs. 5-9), samples; also the
 #: fewest samples a record needs to give one spectral segment.
 WELCH_SEGMENT = 1024

@@ -60,11 +60,9 @@ from ._refit import (  # noqa: F401 (DRIFT_HZ, EVIDENCE_BAND_HZ: re-exported, na
     _slow_pole,
     evidence_p,
 )
+from .settings import ALPHA
+from .settings import PLANT_FIT_OK as FIT_OK
 
-#: Plant-check fit (percent) below which the plants are taken to miss part of the aircraft.
-FIT_OK = 90.0
-#: Significance level of an aircraft candidate's improvement (Bonferroni over candidates).
-ALPHA = 0.01
 #: Share of the nominal residual power a candidate must remove to close the gap.
 CLOSE_SHARE = 0.5
 #: Residual power a simpler aircraft candidate may leave, relative to the best one's, and

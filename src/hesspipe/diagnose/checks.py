@@ -13,6 +13,10 @@ from ..pilot.blocks import from_tf, max_real_root
 from ..pilot.simulation import Contour
 from ..plants.validation import ResidualTests, fit_percent, residual_tests
 
+#: Level of the plant check's independence tests: the residual depends on an input where its
+#: p-value lies below this.
+PLANT_CHECK_LEVEL = 0.01
+
 # -- residual tests (plant check and control error) ----------------------------------------
 
 @dataclass(frozen=True)
@@ -47,8 +51,8 @@ class PlantCheck:
 
     @property
     def passes(self) -> bool:
-        """True if both independence p-values are at least 0.01."""
-        return all(p >= 0.01 for p in self.independence_p.values())
+        """True if both independence p-values are at least :data:`PLANT_CHECK_LEVEL`."""
+        return all(p >= PLANT_CHECK_LEVEL for p in self.independence_p.values())
 
     def to_dict(self) -> dict:
         """The check as a JSON-ready dict, ``passes`` and the test results included."""

@@ -17,7 +17,7 @@ import scipy.stats
 
 from ..core.errors import HesspipeError
 from ..core.formats import Plants, Run
-from ..core.paper import EQ16
+from ..core.paper import EQ14, EQ16
 from ..core.seeds import derive_seed
 from ..pilot.hess import PilotModel
 from ..pilot.simulation import synthetic_run
@@ -32,7 +32,7 @@ def validation_plants() -> Plants:
     """Plants of the hidden-effect tests: Yc = 2.436/(s + 1.0496) (Table 4 rolling
     approximation), Yd = the paper's Eq. 16."""
 
-    return Plants(ct.tf([2.436], [1.0, 1.0496]), ct.tf(list(EQ16_NUM), list(EQ16_DEN)),
+    return Plants(ct.tf(*(list(c) for c in EQ14)), ct.tf(list(EQ16_NUM), list(EQ16_DEN)),
                   {"source": "validation plants: Table 4 rolling approximation and Eq. 16"})
 
 

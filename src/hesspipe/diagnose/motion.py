@@ -35,6 +35,7 @@ import numpy as np
 import scipy.stats
 
 from ..core.errors import HesspipeError
+from ..core.paper import FITNESS_BAND_HZ
 from ..identification.lines import SEPARABLE, forcing_sets
 from ..identification.motion_test import ALTERNATIVES_IN_WORDS, PATH_ADVICE, forcing_lines, safe_motion_test, windowed
 from ..identification.paired_delay import paired_delay
@@ -315,7 +316,7 @@ def _df_delay(t: dict, named: bool) -> tuple[dict, float, dict | None]:
             t.get("delay_bound" if fit == "original" else "delay_bound_expanded"))
 
 
-def remnant_share(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> tuple[float, int]:
+def remnant_share(run, band_hz: tuple[float, float] = FITNESS_BAND_HZ) -> tuple[float, int]:
     """Share of the control's power (in `band_hz`, Hz) between the multisine forcing lines,
     and the number of lines (0: no line structure, share NaN).
 

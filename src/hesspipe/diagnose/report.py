@@ -6,6 +6,7 @@ import math
 
 from ..core.errors import HesspipeError
 from ..core.provenance import SYNTHETIC_BANNER
+from .checks import PLANT_CHECK_LEVEL
 from .fitting import _effect
 from .motion import path_words
 from .results import Diagnosis
@@ -33,14 +34,14 @@ def format_report(d: Diagnosis) -> str:
     # A reviewer read "NO" on a 99.8 % fit as a failed check before the next line explained it:
     # where the plants match, the tests are said to be about a small residual first.
     small = bool(d.plant_finding and d.plant_finding["verdict"] == "match" and not pc.passes
-                 and pc.fit_percent >= 90.0)
+                 and pc.fit_percent >= d.config.plant_fit_ok)
     of = f"the small residual ({100 - pc.fit_percent:.2g} % of the output): " if small else "residual "
     out.append(f"Plant check: fit {pc.fit_percent:.1f} % of the output from the measured control and "
                f"disturbance, the plants started from rest; {of}{'white' if pc.tests_control.white else 'NOT white'} "
                f"(p={pc.tests_control.whiteness_p:.2g}), independent of control: "
-               f"{'yes' if pc.independence_p['control'] >= 0.01 else 'NO'} "
+               f"{'yes' if pc.independence_p['control'] >= PLANT_CHECK_LEVEL else 'NO'} "
                f"(p={pc.independence_p['control']:.2g}), of disturbance: "
-               f"{'yes' if pc.independence_p['disturbance'] >= 0.01 else 'NO'} "
+               f"{'yes' if pc.independence_p['disturbance'] >= PLANT_CHECK_LEVEL else 'NO'} "
                f"(p={pc.independence_p['disturbance']:.2g})")
     if d.plant_finding and d.plant_finding["verdict"] != "match":
         out.append("  -> " + d.plant_finding["message"])

@@ -6,7 +6,15 @@ from dataclasses import dataclass
 
 from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 from ..core.config import Fields, Settings
+from ..core.paper import FITNESS_BAND_HZ
 from ..identification.motion_test import ALPHA as MOTION_ALPHA
+
+#: Significance level of a candidate's improvement (Bonferroni over the candidates), the
+#: default of ``DiagnoseConfig.alpha``.
+ALPHA = 0.01
+#: Plant-check fit (percent) below which the plants are taken to miss part of the aircraft,
+#: the default of ``DiagnoseConfig.plant_fit_ok``.
+PLANT_FIT_OK = 90.0
 
 #: Default band edges (Hz) for the band-wise disagreement.
 BAND_EDGES_HZ = (0.0, 0.25, 0.5, 1.0, 2.0, 3.5, 5.0)
@@ -81,9 +89,9 @@ class DiagnoseConfig(Settings):
     TABLE = "diagnose"
 
     candidates: tuple[str, ...] | None = None
-    band_hz: tuple[float, float] = (0.0, 5.0)
+    band_hz: tuple[float, float] = FITNESS_BAND_HZ
     band_edges_hz: tuple[float, ...] = BAND_EDGES_HZ
-    alpha: float = 0.01
+    alpha: float = ALPHA
     max_effects: int = 3
     free: tuple[str, ...] = CORE_FREE
     # Search effort (issue 13: < 3 s per 70 s diagnosis on one core). Where a record has
@@ -98,7 +106,7 @@ class DiagnoseConfig(Settings):
     starts: int = 3
     max_evaluations: int = 40
     max_lag: int = 25
-    plant_fit_ok: float = 90.0
+    plant_fit_ok: float = PLANT_FIT_OK
     resolution_db: float = 0.1
     dynamic_range_db: float = 40.0
     weighting: str = "random-share"

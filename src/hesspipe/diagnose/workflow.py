@@ -133,8 +133,28 @@ def _resolve_model(model):
     raise HesspipeError(f"diagnose: model: expected 'original', 'expanded' or a PilotModel, got {model!r}")
 
 
-def _resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ...]:
+def resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ...]:
+    """The candidate effects a diagnosis tries, checked.
 
+    Parameters
+    ----------
+    model : hesspipe.pilot.hess.PilotModel
+        The baseline model; its own effects are left out.
+    candidates : sequence of str, str or None
+        Effect ids (a comma-separated string too); None: ``cfg.candidates``, else every
+        registered effect.
+    cfg : DiagnoseConfig
+
+    Returns
+    -------
+    tuple of str
+        The ids, in order, without repeats.
+
+    Raises
+    ------
+    HesspipeError
+        An unknown id (naming the known ones).
+    """
     if isinstance(candidates, str):
         candidates = [c.strip() for c in candidates.split(",") if c.strip()]
     chosen = candidates if candidates is not None else cfg.candidates
@@ -192,7 +212,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     """
     cfg = config or DiagnoseConfig()
     base = _resolve_model(model)
-    cands = _resolve_candidates(base, candidates, cfg)
+    cands = resolve_candidates(base, candidates, cfg)
     cfg = replace(cfg, candidates=cands)  # what was actually tried, for the record
 
     check_seed(seed)
@@ -206,6 +226,11 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     for other in bases + repeats:
         check_control(other)
         _check_inputs(other, plants, cfg)
+    persons = list(dict.fromkeys(r.person for r in (run, *repeats) if r.person))
+    if len(persons) > 1:   # a long table of several persons: repeats are one person's runs
+        raise HesspipeError(f"{run.source or run.id} and its repeats: runs of {len(persons)} persons "
+                            f"({', '.join(persons[:4])}{', ...' if len(persons) > 4 else ''}); expected one "
+                            "person's runs: diagnose every run alone")
     check_repeats([run, *repeats], others=bases)
     check = plant_check(run, plants, max_lag=cfg.max_lag)
     # A failed plant check is a finding, never a refusal: the aircraft-side candidate that

@@ -10,7 +10,8 @@ extra delay, elevated remnant, Dutch roll, actuator lag, rate limit), written
 the way real loggers write files, each with a ``*.truth.json``.
 
 It shares no modelling code with the rest of hesspipe (it imports only
-``hesspipe.core.errors``, ``hesspipe.core.io`` and ``hesspipe.core.seeds``), so a result
+``hesspipe.core.errors``, ``hesspipe.core.io``, ``hesspipe.core.seeds`` and the paper's printed
+numbers, ``hesspipe.core.paper``), so a result
 measured on its output is not a result of the code under test agreeing with
 itself.
 

@@ -285,3 +285,19 @@ def is_stable(den, *, allow_integrators: int = 0) -> bool:
     if den.size <= 1:
         return True
     return bool(np.all(np.roots(den).real < 0))
+
+
+def tf_dict(t) -> dict:
+    """A transfer function as the plants file writes it.
+
+    Parameters
+    ----------
+    t : (num, den)
+        Polynomial coefficients, highest power of s first.
+
+    Returns
+    -------
+    dict
+        ``{"num": [...], "den": [...]}`` of floats.
+    """
+    return {"num": [float(x) for x in t[0]], "den": [float(x) for x in t[1]]}

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import pilots
-from .lti import freqresp
+from .lti import freqresp, tf_dict
 from .simulate import delay_steps
 
 #: Name and version of this generator, written in every truth file.
@@ -44,10 +44,6 @@ def _points(w, h) -> dict:
     return {"frequency_rad_s": np.asarray(w).tolist(), "re": h.real.tolist(),
             "im": h.imag.tolist(), "magnitude": np.abs(h).tolist(),
             "phase_deg": np.degrees(np.unwrap(np.angle(h))).tolist()}
-
-
-def _tf_dict(t) -> dict:
-    return {"num": [float(x) for x in t[0]], "den": [float(x) for x in t[1]]}
 
 
 def realised_pilot(spec, h: float) -> dict:
@@ -166,11 +162,11 @@ def build_truth(spec, sim: dict) -> dict:
         "effects": list(spec.effects),
         "units": {"frequency": "rad/s", "delay": "s", "angle": "deg", "share": "fraction of control variance"},
         "plant": {"name": plant.name, "disturbance": plant.disturbance, "output": plant.output,
-                  "nominal_control_to_output": _tf_dict(plant.nominal_yc),
-                  "nominal_disturbance_to_output": _tf_dict(plant.nominal_yd),
+                  "nominal_control_to_output": tf_dict(plant.nominal_yc),
+                  "nominal_disturbance_to_output": tf_dict(plant.nominal_yd),
                   "integrators": plant.integrators, **plant.info},
         "pilot": pilot_out,
-        "motion_path": _tf_dict(spec.motion_tf) if spec.motion_tf is not None else None,
+        "motion_path": tf_dict(spec.motion_tf) if spec.motion_tf is not None else None,
         "actuator": {"tau_s": spec.actuator["tau"],
                      "rate_limit_factor": spec.actuator["rate_limit_factor"],
                      "rate_limit_per_s": sim["rate_limit_per_s"],

@@ -61,7 +61,7 @@ from scipy.io import savemat
 
 from ..core.errors import HesspipeError
 from ..core.io import atomic_path, to_json, write_json
-from .lti import series
+from .lti import series, tf_dict
 from .plants import ANGLE_MOTION, PLATFORM, WASHOUT
 
 TIME_STYLES = ("g9", "ms", "epoch_ms", "epoch_us", "g17")
@@ -297,18 +297,15 @@ def plants_dict(spec) -> dict:
     """
     p = spec.plant
 
-    def tfd(t):
-        return {"num": [float(x) for x in t[0]], "den": [float(x) for x in t[1]]}
-
-    out = {"control_to_output": tfd(p.nominal_yc), "disturbance_to_output": tfd(p.nominal_yd),
+    out = {"control_to_output": tf_dict(p.nominal_yc), "disturbance_to_output": tf_dict(p.nominal_yd),
            "source": f"{LABEL} ({p.name}); nominal plants"
                      + (", rolling approximation of the flown aircraft" if "dutch_roll" in spec.effects else "")}
     default = series(PLATFORM, WASHOUT)
     motion = spec.motion_tf if spec.motion_tf is not None else p.motion()
     if not (np.array_equal(motion[0], default[0]) and np.array_equal(motion[1], default[1])):
-        out["motion_path"] = tfd(motion)
+        out["motion_path"] = tf_dict(motion)
     elif p.output == "angle":
-        out["motion_path"] = tfd(ANGLE_MOTION)
+        out["motion_path"] = tf_dict(ANGLE_MOTION)
     return out
 
 

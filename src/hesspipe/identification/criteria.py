@@ -9,7 +9,7 @@ gain gives ``|u| ~ |d|`` below crossover, so the PSD cannot see the gain there
     The pilot model's describing function against the nonparametric one
     (:mod:`hesspipe.identification.frf`) at the excited frequencies, each line's complex error
     divided by its uncertainty: ``J = sqrt(mean_k |H_model(j w_k) - H_k|^2 /
-    s_k^2)`` with ``s_k^2 = sigma_k^2 + (REL_FLOOR |H_k|)^2`` (the floor keeps a
+    s_k^2)`` with ``s_k^2 = sigma_k^2 + (REL_FLOOR |H_k|)^2`` (:func:`.frf_smooth.line_scale`; the floor keeps a
     few very clean lines from deciding alone where the structure cannot fit
     exactly), over the lines whose relative error is below FIT_RELIABLE.
     Dimensionless; ~1 means "within the measurement's noise".
@@ -32,14 +32,15 @@ from scipy.optimize import least_squares
 
 from ..core.choices import CRITERIA, DEFAULT_CRITERION  # noqa: F401  (re-exported)
 from ..core.errors import HesspipeError
+from ..core.paper import FITNESS_BAND_HZ
 from ..pilot.blocks import from_tf
 from ..pilot.crossover import loop_crossover, tracking_crossover
 from ..pilot.hess import PilotModel
 from ..pilot.mcruer import fit_precision
 from ..pilot.simulation import UNSTABLE_FITNESS, Simulator, unstable_fitness
 from .frf import estimate_frf
-from .frf_smooth import NM_PRIOR  # one prior for the df search and the frf smoother
-from .problem import Identification, SpectralObjective, _resolve, default_free
+from .frf_smooth import NM_PRIOR, line_scale  # one prior and one line floor for the df search and the frf smoother
+from .problem import STABLE_CAP, Identification, SpectralObjective, _resolve, default_free
 
 # scipy and the model modules are imported where they are used.
 
@@ -51,7 +52,6 @@ PHASE_AWARE_FREE = {1: ("Ke", "K1", "1/T1", "tau0", "wn", "zn"),
 (K2 stays at Table 1's value); the proprioceptive corners (1/T1, and 1/T2 for k = 2)
 shape the pilot's lag/lead around crossover, which Table 1 cannot know for a given pilot."""
 LOG_PARAMETERS = ("Ke", "K1", "K2", "Km", "Ko", "Kn")
-REL_FLOOR = 0.02
 STABILITY_MARGIN = 0.2
 """The search's stability residual starts once the slowest mode grows faster than
 (1 - STABILITY_MARGIN) times the record's growth limit (1/s,
@@ -217,8 +217,8 @@ class _Base:
             return unstable_fitness(rate, self.sim.growth_limit)
         r = self.residuals_loop(loop)
         value = float(np.sqrt(np.sum(r * r)))
-        # Stable fits stay below a tenth of the unstable value, as in hesspipe.identification.fit.
-        return min(value, UNSTABLE_FITNESS / 10) if np.isfinite(value) else UNSTABLE_FITNESS
+        # Stable fits stay below a tenth of the unstable value, as the paper criterion's do.
+        return min(value, STABLE_CAP) if np.isfinite(value) else UNSTABLE_FITNESS
 
     def __call__(self, values: Mapping[str, float], threshold=None) -> float:
         return self.score_loop(self.model.loop(self.params(values)))
@@ -257,7 +257,7 @@ class DFObjective(_Base):
         self.used = keep
         self.s = 1j * resp.freq_rad_s[keep]
         self.H = resp.H[keep]
-        scale = np.sqrt(resp.sigma[keep] ** 2 + (REL_FLOOR * np.abs(self.H)) ** 2)
+        scale = line_scale(resp.sigma[keep], self.H)
         # Reference (target) lines, when the run has its own: fitted beside the
         # disturbance's, each line weighted by its own uncertainty (model_df_reference).
         ref = getattr(frf, "reference", None)
@@ -271,7 +271,7 @@ class DFObjective(_Base):
             self.used_reference = keep_r
             self.s_ref = 1j * ref.freq_rad_s[keep_r]
             H_ref = ref.H[keep_r]
-            scale_ref = np.sqrt(ref.sigma[keep_r] ** 2 + (REL_FLOOR * np.abs(H_ref)) ** 2)
+            scale_ref = line_scale(ref.sigma[keep_r], H_ref)
             self.yc_ref = self.sim.yc_block.response(self.s_ref)
         self.H_all = np.concatenate((self.H, H_ref))
         self.scale = np.concatenate((scale, scale_ref))
@@ -489,7 +489,7 @@ def smart_start(objective: _Base, base: Mapping[str, float], frf) -> dict:
 def identify_phase_aware(run, plants, model, *, criterion: str, free, fixed, seed: int, k: int,
                          k_rule: str, limits, with_benchmark: bool, frf=None, starts: int = 4,
                          initial: Mapping[str, float] | None = None, fields=None,
-                         band=(0.0, 5.0), psd_method: str = "paper"):
+                         band=FITNESS_BAND_HZ, psd_method: str = "paper"):
     """:func:`hesspipe.identification.fit.identify` for the ``df`` and ``output`` criteria.
 
     Frees :data:`PHASE_AWARE_FREE` by default (and the effects' parameters),

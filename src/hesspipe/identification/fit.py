@@ -31,7 +31,7 @@ from scipy.optimize import differential_evolution
 from ..core.choices import OPTIMIZERS  # one list, in a light module: the command line reads it too
 from ..core.errors import HesspipeError
 from ..core.formats import as_plants, as_runs, siso_coefficients
-from ..core.paper import WELCH_SEGMENT
+from ..core.paper import FITNESS_BAND_HZ, WELCH_SEGMENT
 from ..core.seeds import check_seed
 from ..pilot.crossover import CrossoverLimits, loop_crossover, tracking_crossover
 from ..pilot.hess import PilotModel, model_from_name
@@ -69,7 +69,7 @@ def _benchmark_key(run, plants, band, psd_method) -> str:
     return h.hexdigest()
 
 
-def benchmark(run, plants, *, band=(0.0, 5.0), psd_method: str = "paper"):
+def benchmark(run, plants, *, band=FITNESS_BAND_HZ, psd_method: str = "paper"):
     """McRuer precision-model fit to `run` (cached per run, plants, band, method).
 
     Parameters
@@ -139,7 +139,7 @@ def check_control(run) -> None:
 
 def identify(run, plants, model="original", *, free: Sequence[str] | None = None,
              fixed: Mapping[str, float] | None = None, seed: int = 0, passes: int = 10,
-             optimizer: str = "apid", band=(0.0, 5.0), k: int | None = None,
+             optimizer: str = "apid", band=FITNESS_BAND_HZ, k: int | None = None,
              fields: Mapping[str, Field | tuple] | None = None, psd_method: str = "paper",
              with_benchmark: bool = True, with_identifiability: bool = True,
              limits: CrossoverLimits = CrossoverLimits(),

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..core.seeds import derive_seed
 from ..pilot.blocks import from_tf
-from ..pilot.crossover import FlatBand, flat_band
+from ..pilot.crossover import FlatBand, flat_band, phase_margin_deg
 from .frf_smooth import consistent, fit_smooth, smooth_crossover
 
 DRAWS = 400
@@ -267,11 +267,6 @@ def _down(x, f):
     return float(x[i] + t * (x[i + 1] - x[i])), int(i)
 
 
-def _wrap_deg(x):
-    pm = (x + 180.0) % 360.0 - 180.0
-    return 180.0 if pm == -180.0 else float(pm)
-
-
 def _starts(w, H, rel, yc_w) -> np.ndarray:
     """Where the local regression may start (rad/s), highest first: every fall of |L| through 1
     between reliable lines, or the highest reliable line if |L| is still above 1 there."""
@@ -293,7 +288,7 @@ def _raw_cross(w, H, yc_w) -> tuple[float, float]:
         return float("nan"), float("nan")
     t = (x - np.log(w[i])) / (np.log(w[i + 1]) - np.log(w[i]))
     ph = np.unwrap(np.angle(L[i:i + 2]))
-    return float(np.exp(x)), _wrap_deg(np.degrees(ph[0] + t * (ph[1] - ph[0])) + 180.0)
+    return float(np.exp(x)), phase_margin_deg(np.degrees(ph[0] + t * (ph[1] - ph[0])))
 
 
 def _cross(w, H, rel, plant, kernel: float = None, start: float = None
@@ -371,8 +366,7 @@ def _cross(w, H, rel, plant, kernel: float = None, start: float = None
             break
     cp = _wls(_phase_basis(w[None, :], wc0[:, None]), ph, k)
     phase = np.einsum("dp,dp->d", _phase_basis(wc, wc0), cp) + yc_ph[j] + tt * (yc_ph[j + 1] - yc_ph[j])
-    pm = (np.degrees(phase) + 360.0) % 360.0 - 180.0
-    pm = np.where(pm == -180.0, 180.0, pm)
+    pm = phase_margin_deg(np.degrees(phase))
     # ln|H| and the phase each carry half the complex relative variance
     r2 = ((lh - np.einsum("dnp,dp->dn", _mag_basis(w[None, :], wc0[:, None]), cm)) ** 2
           + (ph - np.einsum("dnp,dp->dn", _phase_basis(w[None, :], wc0[:, None]), cp)) ** 2)

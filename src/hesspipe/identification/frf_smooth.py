@@ -40,7 +40,7 @@ from scipy.optimize import least_squares
 from scipy.stats import chi2 as chi2_dist
 
 from ..core.seeds import derive_seed
-from ..pilot.crossover import flat_band
+from ..pilot.crossover import flat_band, phase_margin_deg
 
 NAMES = ("K", "tau", "TL", "TI", "wn", "zn")
 LOWER = np.array([-np.inf, 0.05, np.log(0.01), np.log(0.01), np.log(4.0), 0.05])
@@ -53,6 +53,26 @@ search bends a lightly damped peak onto a noisy high line. Shared with the df cr
 (:mod:`hesspipe.identification.criteria`)."""
 REL_FLOOR = 0.02
 """Relative error floor of a line (a noise-free line still has a model to fit within)."""
+
+
+def line_scale(sigma, H):
+    """A line's error scale with the floor: ``sqrt(sigma^2 + (REL_FLOOR |H|)^2)`` (the df
+    criterion's and this smoother's weights).
+
+    Parameters
+    ----------
+    sigma : array
+        The lines' standard errors, H's units.
+    H : array
+        The lines' complex describing function.
+
+    Returns
+    -------
+    numpy.ndarray
+        In H's units.
+    """
+    return np.sqrt(sigma ** 2 + (REL_FLOOR * np.abs(H)) ** 2)
+
 F_SCALE = 2.0
 """Cauchy loss scale: a line's error of two standard deviations."""
 TAU_PRIOR = (0.2, np.log(2.0))
@@ -154,7 +174,7 @@ def fit_smooth(w, H, sigma) -> SmoothFit | None:
     w, H, sigma = (np.asarray(a) for a in (w, H, sigma))
     if w.size < 4:
         return None
-    scale = np.sqrt(sigma ** 2 + (REL_FLOOR * np.abs(H)) ** 2)
+    scale = line_scale(sigma, H)
     wt = 1.0 / scale ** 2
     cands = []
     for sign, tau, wn, zn, (tl, ti) in _STARTS:
@@ -277,8 +297,7 @@ def smooth_crossover(fit: SmoothFit, block, w_lines, *, draws: int = DRAWS):
         return nan, nan, nan, nan, None
     rows = np.nonzero(np.isfinite(wcs))[0]
     ph = lns.imag[rows[:, None], i[rows, None] + [0, 1]]
-    pms = (180.0 + np.degrees(ph[:, 0] + t[rows] * (ph[:, 1] - ph[:, 0])) + 180.0) % 360.0 - 180.0
-    pms = np.where(pms == -180.0, 180.0, pms)
+    pms = phase_margin_deg(np.degrees(ph[:, 0] + t[rows] * (ph[:, 1] - ph[:, 0])))
     wc, pm = float(wcs[0]), float(pms[0])
     band = flat_band(grid, L, wc)
     if rows.size - 1 < LOST_MAX * draws:

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.paper import FITNESS_BAND_HZ
 from ._window import MIN_LINES, _lines, _window, period_note
 from .frf import NEIGHBOURS, _neighbour_bins, _neighbour_residual_power
 
@@ -103,7 +104,7 @@ def windowed(run):
                                reference=run.reference[cut])
 
 
-def forcing_lines(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> np.ndarray:
+def forcing_lines(run, band_hz: tuple[float, float] = FITNESS_BAND_HZ) -> np.ndarray:
     """Indices (into ``numpy.fft.rfft`` of the run as given) of the multisine forcing lines.
 
     Parameters
@@ -136,7 +137,7 @@ which the two paths act on one signal; only the model's shapes of the paths tell
 (multiloop identification needs as many forcing functions as loops)."""
 
 
-def forcing_sets(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> str:
+def forcing_sets(run, band_hz: tuple[float, float] = FITNESS_BAND_HZ) -> str:
     """Which multisine line sets a record has: "disturbance and target" (:data:`SEPARABLE`),
     "disturbance only", "target only" or "none".
 
@@ -345,7 +346,7 @@ class LineData:
     c_remnant: np.ndarray | None = None
 
 
-def line_data(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
+def line_data(run, band_hz: tuple[float, float] = FITNESS_BAND_HZ) -> LineData:
     """The lines of `run` in `band_hz` (Hz) over its analysis window, with their weights
     (:func:`line_variances`), or the reason they cannot be used (``LineData.reason``).
 
@@ -378,7 +379,7 @@ def line_data(run, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
                     c_remnant=c_remnant)
 
 
-def pooled_line_data(runs, band_hz: tuple[float, float] = (0.0, 5.0)) -> LineData:
+def pooled_line_data(runs, band_hz: tuple[float, float] = FITNESS_BAND_HZ) -> LineData:
     """The lines of repeated runs of one pilot in one condition, side by side, each line
     weighted by its own run's remnant (:func:`line_data`).
 

@@ -81,6 +81,7 @@ import numpy as np
 from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 from ..core.errors import HesspipeError
 from ..core.formats import as_runs
+from ..core.paper import FITNESS_BAND_HZ
 
 # The fits live in ._motion_fits; their constants are re-exported here, where the test's
 # callers read them.
@@ -131,7 +132,7 @@ ALTERNATIVES_IN_WORDS = ("nested F tests of Km alone, p = 0.5 P(F > f) for Km >=
 
 
 def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
-                band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
+                band_hz: tuple[float, float] = FITNESS_BAND_HZ, max_delay: float | None = None,
                 interval: float | None = None, display: str = DEFAULT_DISPLAY,
                 path_check: float | None = None) -> dict:
     """Likelihood-ratio test of motion feedback on one pilot's describing-function lines.
@@ -251,7 +252,7 @@ def _with_interval(result: dict, profile, interval: float | None) -> dict:
 
 
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
-                     band_hz: tuple[float, float] = (0.0, 5.0), max_delay: float | None = None,
+                     band_hz: tuple[float, float] = FITNESS_BAND_HZ, max_delay: float | None = None,
                      interval: float | None = None, display: str = DEFAULT_DISPLAY,
                      path_check: float | None = None) -> dict:
     """:func:`motion_test`, with a failure of the test reported in the result, not raised

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..core.errors import HesspipeError
 from ..core.formats import as_runs
+from ..core.paper import FITNESS_BAND_HZ
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
 from ._line_fit import _predict, pilot_start
@@ -47,7 +48,7 @@ def _lines(run, band_hz):
 
 
 def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], Mapping[str, float]], *,
-                 k: int = 1, band_hz: tuple[float, float] = (0.0, 5.0)) -> dict:
+                 k: int = 1, band_hz: tuple[float, float] = FITNESS_BAND_HZ) -> dict:
     """Visual delay of `run` minus that of `baseline_run` (s), one pilot's shared dynamics.
 
     Parameters

@@ -13,6 +13,7 @@ from typing import Mapping
 import numpy as np
 
 from ..core.errors import HesspipeError
+from ..core.paper import FITNESS_BAND_HZ
 from ..pilot.crossover import Crossover, crossover_fields, gain_scale
 from ..pilot.hess import LOOP_GAINS, STRUCTURAL, PilotModel, model_from_name
 from ..pilot.simulation import UNSTABLE_FITNESS, Simulator, unstable_fitness
@@ -53,7 +54,7 @@ class SpectralObjective:
     """
 
     def __init__(self, run, plants, model: PilotModel, base: Mapping[str, float], *,
-                 band=(0.0, 5.0), psd_method: str = "paper", noise_seed: int = 0):
+                 band=FITNESS_BAND_HZ, psd_method: str = "paper", noise_seed: int = 0):
         run = spectral_view(run)   # the same segments' span at every logging rate
         self.run = run
         self.model = model
@@ -244,7 +245,7 @@ class Identification:
     coding: str = "gray"
     seed: int = 0
     passes: int = 10
-    band: tuple = (0.0, 5.0)
+    band: tuple = FITNESS_BAND_HZ
     psd_method: str = "paper"
     run_id: str = ""
     synthetic: bool = False

@@ -26,7 +26,7 @@ import scipy.signal
 
 from ..core._time import decimate_signal
 from ..core.errors import HesspipeError
-from ..core.paper import WELCH_CORRECTION, WELCH_OVERLAP, WELCH_SEGMENT
+from ..core.paper import FITNESS_BAND_HZ, WELCH_CORRECTION, WELCH_OVERLAP, WELCH_SEGMENT
 
 
 @functools.lru_cache(maxsize=8)
@@ -140,7 +140,7 @@ def psd(x, fs: float, *, method: str = "paper", trim: float | None = None,
     raise HesspipeError(f"spectra: unknown method {method!r}; expected 'paper' or 'scipy'")
 
 
-def band_mask(freq_hz, band=(0.0, 5.0)) -> np.ndarray:
+def band_mask(freq_hz, band=FITNESS_BAND_HZ) -> np.ndarray:
     """Boolean mask of the bins with ``band[0] <= f <= band[1]``.
 
     Parameters
@@ -168,7 +168,7 @@ def band_mask(freq_hz, band=(0.0, 5.0)) -> np.ndarray:
     return mask
 
 
-def fitness(measured_psd, simulated_psd, freq_hz, band=(0.0, 5.0)) -> float:
+def fitness(measured_psd, simulated_psd, freq_hz, band=FITNESS_BAND_HZ) -> float:
     """RMS difference of two PSDs over the bins of `band` (paper Eq. 10); lower is better.
 
     Parameters

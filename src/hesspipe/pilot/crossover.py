@@ -162,6 +162,25 @@ def flat_mark(cross: Mapping) -> str:
     return "~" if crossed and (cross.get("flat_band") or {}).get("wide") else ""
 
 
+def phase_margin_deg(phase_deg):
+    """The phase margin of a loop whose phase at the crossover is `phase_deg` (deg): 180 + the
+    phase, wrapped into (-180, 180] deg; array or float as given.
+
+    Parameters
+    ----------
+    phase_deg : float or array
+        The loop's phase at its crossover, deg (negative: lagging).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Degrees; positive where the loop lags by less than 180 deg.
+    """
+    pm = (180.0 + np.asarray(phase_deg, dtype=float) + 180.0) % 360.0 - 180.0
+    pm = np.where(pm == -180.0, 180.0, pm)
+    return float(pm) if pm.ndim == 0 else pm
+
+
 def flat_band(w, L, wc: float) -> FlatBand | None:
     """The band around `wc` where |L| stays within :data:`FLAT_FACTOR` of 1.
 
@@ -283,9 +302,7 @@ def loop_crossover(loop, yc: Block, limits: CrossoverLimits = CrossoverLimits(),
         return Crossover(float("nan"), float("nan"), False, limits)
     i = down[0] if first else down[-1]
     wc = brentq(lambda x: float(gain_db(x)[0]), w[i], w[i + 1], xtol=1e-10, rtol=1e-12)
-    phase = np.degrees(np.angle(open_loop(wc)[0]))
-    pm = (180.0 + phase + 180.0) % 360.0 - 180.0
-    pm = 180.0 if pm == -180.0 else pm
+    pm = phase_margin_deg(np.degrees(np.angle(open_loop(wc)[0])))
     within = (limits.frequency_rad_s[0] <= wc <= limits.frequency_rad_s[1]
               and limits.phase_margin_deg[0] <= pm <= limits.phase_margin_deg[1])
     return Crossover(float(wc), float(pm), bool(within), limits, flat_band(w, L, wc))

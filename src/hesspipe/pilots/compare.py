@@ -39,13 +39,14 @@ from ..core.formats import (
     TEXT_SUFFIXES,
     Plants,
     Run,
-    _parse_columns,
     as_plants,
     as_runs,
     check_sample_rate,
+    parse_columns,
     plants_coefficients,
     read_file_runs,
 )
+from ..core.paper import FITNESS_BAND_HZ
 from ..core.seeds import derive_seed
 from ..identification.criteria import choose_k
 from ..identification.fit import benchmark as mcruer_benchmark
@@ -85,7 +86,7 @@ def _km_fixed(settings: CompareSettings, plants) -> float:
 
 
 def evaluate(run: Run, plants: Plants, model, params: Mapping[str, float], *,
-             band: tuple[float, float] = (0.0, 5.0), k: int = 1, benchmark: bool = False,
+             band: tuple[float, float] = FITNESS_BAND_HZ, k: int = 1, benchmark: bool = False,
              criterion: str = "paper", frf=None) -> dict:
     """Fitness and crossover of fixed parameters on a run, nothing identified.
 
@@ -481,7 +482,7 @@ def compare_pilots(paths_or_dir, plants: Plants, settings: CompareSettings | Non
                                          and all(isinstance(r, Run) for r in paths_or_dir)):
         runs, failures, paths = as_runs(paths_or_dir), [], []
     else:
-        _parse_columns(columns)  # a bad --columns is the user's one mistake, not every file's
+        parse_columns(columns)  # a bad column mapping is the user's one mistake, not every file's
         paths = list_runs(paths_or_dir)
         pilot_groups([p.stem for p in paths], pilot_id, {p.stem: str(p) for p in paths})  # before any work
         check_sample_rate(sample_rate)   # the user's one mistake, not every file's

@@ -15,8 +15,8 @@ from ..core._time import MAX_INTERVAL_S, MIN_INTERVAL_S
 from ..core.choices import CRITERIA, DEFAULT_CRITERION, DEFAULT_DISPLAY, DISPLAYS, OPTIMIZERS
 from ..core.config import Fields, Settings
 from ..core.errors import HesspipeError
-from ..core.formats import _parse_columns, record_samples
-from ..core.paper import WELCH_SEGMENT
+from ..core.formats import parse_columns, record_samples
+from ..core.paper import FITNESS_BAND_HZ, WELCH_SEGMENT
 from ..core.seeds import MAX_SEED
 from ..flight.target import FORCINGS as _FORCINGS
 from ..pilot.effects import EFFECTS
@@ -112,7 +112,7 @@ class CompareSettings(Settings):
     seed: int = 0
     optimizer: str = "apid"
     passes: int = 10
-    band: tuple[float, float] = (0.0, 5.0)
+    band: tuple[float, float] = FITNESS_BAND_HZ
     k: int | None = None
     km_fixed: float | None = None
     start: str = "warm"
@@ -216,7 +216,7 @@ class PilotsConfig(Settings):
     scheduler: str = ""
     optimizer: str = "apid"
     passes: int = 10
-    band_hz: tuple[float, float] = (0.0, 5.0)
+    band_hz: tuple[float, float] = FITNESS_BAND_HZ
     km_fixed: float | None = None
     start: str = "warm"
     restarts: int = 2
@@ -263,7 +263,7 @@ class PilotsConfig(Settings):
             raise f.fail("forcing", f"a forcing other than 'paper' is flown only by simulator 'jsbsim'; "
                                     f"got simulator {out['simulator']!r}")
         try:
-            _parse_columns(out["columns"])
+            parse_columns(out["columns"])
         except HesspipeError as exc:
             raise f.fail("columns", str(exc)) from None
         try:

@@ -116,7 +116,7 @@ def validate(config: dict, source: str) -> None:
     """
     from ..core.formats import read_file_runs, read_plants
     from ..diagnose.settings import DiagnoseConfig
-    from ..diagnose.workflow import _resolve_candidates
+    from ..diagnose.workflow import resolve_candidates
     from ..pilot.hess import model_from_name
     from ..pilots.batch import check_scheduler_address
     from ..pilots.compare import PilotsConfig, list_runs
@@ -155,7 +155,7 @@ def validate(config: dict, source: str) -> None:
     diagnose = DiagnoseConfig.from_table(table, source)
     _in_field(source, "diagnose.model", model_from_name, model or "original")
     _in_field(source, "diagnose.candidates",
-              lambda c: _resolve_candidates(model_from_name(model or "original"), c, diagnose),
+              lambda c: resolve_candidates(model_from_name(model or "original"), c, diagnose),
               diagnose.candidates)
     if run and not Path(run).is_file():
         raise HesspipeError(f"{source}: field 'diagnose.run': expected a run CSV file, {run} not found")

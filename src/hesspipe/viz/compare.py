@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..core.paper import FITNESS_BAND_HZ
 from ..identification.criteria import model_df
 from ..pilot.hess import model_from_name
 from . import save_figure
@@ -31,7 +32,7 @@ def plot_pilot(pilot, path: str | Path) -> Path:
     title = (f"{pilot.id}{' (synthetic)' if pilot.synthetic else ''}: control PSD; "
              f"improvement {100 * pilot.improvement:.0f} %" + (f", fixed Km = {km:g}" if km is not None else ""))
     fig = plot_psd_comparison(pilot.freq_hz, pilot.measured_psd, sims,
-                              band=(0.0, float(pilot.freq_hz[-1])) if len(pilot.freq_hz) else (0.0, 5.0),
+                              band=(0.0, float(pilot.freq_hz[-1])) if len(pilot.freq_hz) else FITNESS_BAND_HZ,
                               title=title, fitness=fits,
                               measured_label="synthetic 'measured' control" if pilot.synthetic
                               else "measured control")

@@ -7,6 +7,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from ..core.paper import FITNESS_BAND_HZ
 from . import save_figure, subplots
 
 _STYLES = [dict(color="k", ls=":", lw=1.8), dict(color="m", ls="-.", lw=1.5),
@@ -15,7 +16,7 @@ _STYLES = [dict(color="k", ls=":", lw=1.8), dict(color="m", ls="-.", lw=1.5),
 
 
 def plot_psd_comparison(freq_hz, measured, simulated: Mapping[str, np.ndarray], *,
-                        band=(0.0, 5.0), title: str | None = None, ax=None,
+                        band=FITNESS_BAND_HZ, title: str | None = None, ax=None,
                         measured_label: str = "measured control", fitness: Mapping[str, float] | None = None):
     """Draw a measured control PSD against simulated ones, on `ax` (new figure if None).
 
