@@ -326,3 +326,6 @@ def test_report_says_how_small_a_residual_the_failed_residual_tests_are_about(cl
     assert f"the small residual ({share:.2g} % of the output): " in line(failed)
     assert "of disturbance: NO" in line(failed)
     assert "small residual" not in line(d)
+    # "small" is the user's plant_fit_ok, not a number of the report's own
+    stricter = replace(failed, config=replace(failed.config, plant_fit_ok=min(100.0, d.plant_check.fit_percent + 0.01)))
+    assert "small residual" not in line(stricter) and "of disturbance: NO" in line(stricter)
