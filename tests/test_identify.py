@@ -74,7 +74,7 @@ def test_scipy_recovers_parameters_and_floor_and_reports_product(data):
 def test_the_summary_says_when_the_models_crossover_lies_in_a_wide_flat_band(data):
     from dataclasses import replace
 
-    from hesspipe.cli.identify import format_table
+    from hesspipe.identification.report import format_identification as format_table
     from hesspipe.pilot.crossover import FlatBand
 
     pl, _, run = data

@@ -106,80 +106,10 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def format_table(result) -> str:
-    """Readable summary of an :class:`~hesspipe.identification.fit.Identification`."""
-    lines = []
-    tag = "  [SYNTHETIC DATA]" if result.synthetic else ""
-    lines.append(f"run {result.run_id}: model {result.model}, criterion {result.criterion}, "
-                 f"optimizer {result.optimizer}, seed {result.seed}{tag}")
-    if result.k_rule:
-        lines.append(result.k_rule)
-    lines.append(f"{'parameter':<10} {'value':>10}  status")
-    for name, value in result.parameters.items():
-        status = "identified" if name in result.free else (
-            "fixed" if name in result.fixed else "default")
-        lines.append(f"{name:<10} {value:>10.4g}  {status}")
-    what = ("RMS PSD difference" if result.stable else
-            "unstable closed loop: the worst score, graded by its growth rate")
-    if result.criterion == "paper":
-        lines.append(f"fitness            {result.fitness:.6g}   ({what}, "
-                     f"{result.band[0]:g}-{result.band[1]:g} Hz; lower is better)")
-    else:
-        what = result.fitness_units if result.stable else what
-        lines.append(f"fitness            {result.fitness:.6g}   (criterion {result.criterion}: "
-                     f"{what}; lower is better)")
-    bench = result.benchmark_fitness
-    lines.append(f"benchmark fitness  {bench:.6g}   (McRuer precision model, same criterion and units)"
-                 if math.isfinite(bench) else "benchmark fitness  not computed")
-    edges = result.box_edges()
-    if edges:
-        lines.append("on the box's edge   " + ", ".join(f"{n} = {result.parameters[n]:.4g} ({e['side']} bound "
-                                                        f"{e['bound']:.4g})" for n, e in edges.items())
-                     + ": the optimum may lie beyond it (Ke and Km grow with 1 + K1 K2 where 1/T1 lies below "
-                       "the forcing; plants in other units than the run; a pilot the model cannot follow)")
-    # The tracking crossover first, as every table prints it; SPEC's last fall only where it differs.
-    last = result.crossover
-    c = result.primary_crossover if result.primary_crossover is not None else last
-    limits = (f"(assumed limits {c.limits.frequency_rad_s[0]:g}-{c.limits.frequency_rad_s[1]:g} "
-              f"rad/s, {c.limits.phase_margin_deg[0]:g}-{c.limits.phase_margin_deg[1]:g} deg)")
-    if math.isfinite(c.frequency_rad_s):
-        lines.append(f"crossover          {c.frequency_rad_s:.3f} rad/s, phase margin "
-                     f"{c.phase_margin_deg:.1f} deg, within limits: {'yes' if c.within_limits else 'no'} "
-                     + limits)
-        if c.flat_band is not None and c.flat_band.wide:
-            lines.append(f"                   the model's {c.flat_band.describe()}")
-    else:
-        lines.append("crossover          none found (the open loop's gain never crosses 1), within "
-                     "limits: no " + limits)
-    if c is not last and math.isfinite(last.frequency_rad_s) and last.frequency_rad_s != c.frequency_rad_s:
-        lines.append(f"last crossing      {last.frequency_rad_s:.3f} rad/s, phase margin "
-                     f"{last.phase_margin_deg:.1f} deg (|L| rises above 1 again above the crossover and "
-                     "falls through it last here)")
-    frf = result.frf
-    if isinstance(frf, str):
-        lines.append(f"nonparametric      {frf}")
-    elif frf is not None:
-        n = frf.crossover
-        where = f"({frf.method}; remnant {100 * frf.remnant_share:.0f} % of control power)"
-        if math.isfinite(n.frequency_rad_s):
-            lines.append(f"nonparametric      crossover {n.frequency_rad_s:.3f} +- {n.frequency_std:.3f} "
-                         f"rad/s, phase margin {n.phase_margin_deg:.1f} +- {n.phase_margin_std_deg:.1f} deg "
-                         + where + (f"; {n.note}" if n.note else ""))
-        else:
-            lines.append(f"nonparametric      crossover not found {where}: {n.note or 'no crossing'}")
-    lines.append(f"evaluations        {result.evaluations}")
-    ident = result.identifiability
-    lines.append(f"identifiability    {ident.get('summary', ident.get('method'))}")
-    for prod, val in ident.get("identified_products", {}).items():
-        lines.append(f"                   {prod} = {val:.4g} (only the product is determined)")
-    if not result.stable:
-        lines.append("warning: the best parameter set found gives an unstable closed loop")
-    return "\n".join(lines)
-
-
 def run(args) -> int:
     from ..core.formats import read_plants
     from ..identification.fit import identify
+    from ..identification.report import format_identification
     from ..identification.spectra import PaperWelch
     from ..pilot.hess import model_from_name
     from ._outputs import check_file_outputs, write_result_json
@@ -209,7 +139,7 @@ def run(args) -> int:
                       fields=dict(args.bits) or None, psd_method=args.psd,
                       with_benchmark=not args.no_benchmark, restarts=args.restarts, coding=args.coding,
                       criterion=args.criterion)
-    print(format_table(result))
+    print(format_identification(result))
     if args.json:
         write_result_json(args.json, result, run=args.run, plants=args.plants)
     if args.figure and result.criterion == "paper":
@@ -224,17 +154,10 @@ def run(args) -> int:
 
 def df_figure(path, result, where: str = "") -> None:
     """The model's (and the precision benchmark's) describing function over the measured one."""
-    from ..identification.criteria import model_df
-    from ..pilot.hess import model_from_name
-    from ..pilot.mcruer import precision_loop
-    from ..viz.frf import frf_figure
+    from ..viz.frf import frf_figure, model_curves
 
     if result.frf is None or isinstance(result.frf, str):
         raise HesspipeError(f"{where or result.run_id}: no describing-function figure: "
                             f"{result.frf or 'no nonparametric estimate'}")
-    loop = model_from_name(result.model).loop(result.parameters)
-    models = {f"{result.model} model ({result.criterion})": lambda s: model_df(loop, s)}
-    if result.benchmark_parameters:
-        bench = precision_loop(result.benchmark_parameters)
-        models["McRuer precision benchmark"] = lambda s: model_df(bench, s)
-    frf_figure(path, result.frf, models)
+    frf_figure(path, result.frf, model_curves(result.model, result.parameters, result.criterion,
+                                              result.benchmark_parameters))
