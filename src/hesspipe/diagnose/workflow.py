@@ -165,6 +165,85 @@ def resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ...
     return tuple(dict.fromkeys(c for c in chosen if c not in model.effects))
 
 
+def _fit_baseline(run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int, problem: Problem, base: PilotModel,
+                  dynamics: Mapping[str, float], k_df: int) -> tuple[_Fit, Problem, DiagnoseConfig]:
+    # The baseline model fitted to the control spectrum, and the problem and settings whose
+    # order k closed the loop. Starts, in order: the describing function's dynamics (the
+    # pilot's own), then the defaults, first with the configured order and then with Hess's
+    # rule's. The describing function's dynamics need not close the loop (an original model
+    # fitted to a motion pilot's lines can land on a 3 rad/s neuromuscular mode), and the
+    # configured order may not close it at all (k = 1 on a K/s^2-like plant); the
+    # baseline's own parameters get the same grid start as a candidate's (the output-error
+    # surface has several valleys in Ke and K1).
+    for k in dict.fromkeys((cfg.k, k_df)):
+        if k != cfg.k:
+            cfg = replace(cfg, k=k)
+            problem = Problem(run, plants, cfg, seed)
+        starts = ([{**base.defaults(k=k, gain=problem.gain), **dynamics}] if dynamics else []) + [
+            base.defaults(k=k, gain=problem.gain)]
+        for start in starts:
+            current = problem.fit(base, start, grid=problem.free_parameters(base))
+            if current.stable:
+                break
+        if current.stable:
+            break
+    if not current.stable:
+        raise HesspipeError(f"{run.source or run.id}: no stable {base.name} pilot found for these data "
+                            "and plants; cannot diagnose")
+    return current, problem, cfg
+
+
+def _spectral_rounds(problem: Problem, current: _Fit, remaining: list, named: list, steps: list,
+                     max_named: int, check: PlantCheck) -> _Fit:
+    # The candidates judged on the control spectrum, round by round: each fitted onto the
+    # current model, the best eligible one (Bonferroni over the round, delta BIC > 0, no
+    # veto) added, until none is or `named` holds `max_named`. Appends to `named` and
+    # `steps`; returns the final fit.
+    cfg = problem.cfg
+    rnd = 0
+    while remaining and len(named) < max_named:
+        rnd += 1
+        tried: list[tuple[Step, _Fit | None]] = []
+        for cand in remaining:
+            aug = current.model.with_effect(cand)
+            try:
+                new = tuple(p for p in _effect(cand).parameters)
+                fit = problem.fit(aug, current.parameters, grid=new)
+                if not fit.stable:
+                    raise HesspipeError("no stable parameter set found")
+            except Exception as exc:  # noqa: BLE001 — a failed candidate must not stop the others
+                tried.append((Step(round=rnd, candidate=cand, model=aug.name, status="failed",
+                                   error=f"{type(exc).__name__}: {exc}".splitlines()[0]), None))
+                continue
+            dof = len(fit.free) - len(current.free)
+            stat = (current.nll - fit.nll) / problem.likelihood.enbw
+            tried.append((Step(round=rnd, candidate=cand, model=aug.name, status="ok", statistic=stat,
+                               dof=dof, p_value=float(scipy.stats.chi2.sf(stat, max(dof, 1))),
+                               delta_bic=stat - dof * math.log(problem.likelihood.n_eff), gap=problem.likelihood.gap(fit.psd),
+                               log_rms_db=problem.likelihood.log_rms_db(fit.psd), parameters=fit.parameters,
+                               evaluations=fit.evaluations), fit))
+        ok = [(s, f) for s, f in tried if s.status == "ok"]
+        threshold = cfg.alpha / max(len(ok), 1)
+        # The Eq. 10 gap a candidate may not exceed: the current model's (see the module
+        # docstring, "Two measures").
+        gap_now = problem.likelihood.gap(current.psd)
+        tried = [(replace(s, threshold=threshold, gap_ok=bool(s.gap <= gap_now),
+                          veto=_veto(s, gap_now, check)) if s.status == "ok" else s, f)
+                 for s, f in tried]
+        eligible = [(s, f) for s, f in tried
+                    if s.status == "ok" and s.p_value < threshold and s.delta_bic > 0 and not s.veto]
+        best = min(eligible, key=lambda sf: (sf[0].p_value, -sf[0].delta_bic)) if eligible else None
+        accept = best is not None
+        for s, f in tried:
+            steps.append(replace(s, accepted=bool(accept and s is best[0])))
+        if not accept:
+            break
+        current = best[1]
+        named.append(best[0].candidate)
+        remaining.remove(best[0].candidate)
+    return current
+
+
 def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence[str] | str | None = None,
              seed: int = 0, config: DiagnoseConfig | None = None,
              baseline_run: Run | Sequence[Run] | None = None,
@@ -259,28 +338,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else (None, "")
     dynamics = {n: v for n, v in (ev.dynamics if ev else {}).items() if n not in cfg.free}
     k_df = ev.k if ev is not None and ev.k else k_df   # the order the motion test kept
-    # Starts, in order: the describing function's dynamics (the pilot's own), then the
-    # defaults, first with the configured order and then with Hess's rule's. The
-    # describing function's dynamics need not close the loop (an original model fitted
-    # to a motion pilot's lines can land on a 3 rad/s neuromuscular mode), and the
-    # configured order may not close it at all (k = 1 on a K/s^2-like plant); the
-    # baseline's own parameters get the same grid start as a candidate's (the
-    # output-error surface has several valleys in Ke and K1).
-    for k in dict.fromkeys((cfg.k, k_df)):
-        if k != cfg.k:
-            cfg = replace(cfg, k=k)
-            problem = Problem(run, plants, cfg, seed)
-        starts = ([{**base.defaults(k=k, gain=problem.gain), **dynamics}] if dynamics else []) + [
-            base.defaults(k=k, gain=problem.gain)]
-        for start in starts:
-            current = problem.fit(base, start, grid=problem.free_parameters(base))
-            if current.stable:
-                break
-        if current.stable:
-            break
-    if not current.stable:
-        raise HesspipeError(f"{run.source or run.id}: no stable {base.name} pilot found for these data "
-                            "and plants; cannot diagnose")
+    current, problem, cfg = _fit_baseline(run, plants, cfg, seed, problem, base, dynamics, k_df)
     baseline = current
     steps: list[Step] = []
     named: list[str] = [finding.named] if finding.verdict == "aircraft" else []
@@ -303,48 +361,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         # below would be spectral levels: on the independent generator's runs (which never
         # have one) it was named on baselines and in place of a delay. Not judged here.
         cands = tuple(c for c in cands if c != "otoliths")
-    remaining = list(cands)
-    rnd = 0
-    while remaining and len(named) - n_aircraft < cfg.max_effects:
-        rnd += 1
-        tried: list[tuple[Step, _Fit | None]] = []
-        for cand in remaining:
-            aug = current.model.with_effect(cand)
-            try:
-                new = tuple(p for p in _effect(cand).parameters)
-                fit = problem.fit(aug, current.parameters, grid=new)
-                if not fit.stable:
-                    raise HesspipeError("no stable parameter set found")
-            except Exception as exc:  # noqa: BLE001 — a failed candidate must not stop the others
-                tried.append((Step(round=rnd, candidate=cand, model=aug.name, status="failed",
-                                   error=f"{type(exc).__name__}: {exc}".splitlines()[0]), None))
-                continue
-            dof = len(fit.free) - len(current.free)
-            stat = (current.nll - fit.nll) / problem.likelihood.enbw
-            tried.append((Step(round=rnd, candidate=cand, model=aug.name, status="ok", statistic=stat,
-                               dof=dof, p_value=float(scipy.stats.chi2.sf(stat, max(dof, 1))),
-                               delta_bic=stat - dof * math.log(problem.likelihood.n_eff), gap=problem.likelihood.gap(fit.psd),
-                               log_rms_db=problem.likelihood.log_rms_db(fit.psd), parameters=fit.parameters,
-                               evaluations=fit.evaluations), fit))
-        ok = [(s, f) for s, f in tried if s.status == "ok"]
-        threshold = cfg.alpha / max(len(ok), 1)
-        # The Eq. 10 gap a candidate may not exceed: the current model's (see the module
-        # docstring, "Two measures").
-        gap_now = problem.likelihood.gap(current.psd)
-        tried = [(replace(s, threshold=threshold, gap_ok=bool(s.gap <= gap_now),
-                          veto=_veto(s, gap_now, check)) if s.status == "ok" else s, f)
-                 for s, f in tried]
-        eligible = [(s, f) for s, f in tried
-                    if s.status == "ok" and s.p_value < threshold and s.delta_bic > 0 and not s.veto]
-        best = min(eligible, key=lambda sf: (sf[0].p_value, -sf[0].delta_bic)) if eligible else None
-        accept = best is not None
-        for s, f in tried:
-            steps.append(replace(s, accepted=bool(accept and s is best[0])))
-        if not accept:
-            break
-        current = best[1]
-        named.append(best[0].candidate)
-        remaining.remove(best[0].candidate)
+    current = _spectral_rounds(problem, current, list(cands), named, steps, cfg.max_effects + n_aircraft, check)
 
     # Band verdicts are relative to the scatter the final model leaves (or the resolution):
     # a band disagrees if its mismatch is beyond what the rest of the record shows.
