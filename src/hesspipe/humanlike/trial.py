@@ -197,6 +197,38 @@ def _range(overrides: dict, key: str, default) -> tuple:
     return (lo, hi)
 
 
+def _checked_options(effects: tuple, task: str, pilot: str, overrides: dict) -> tuple:
+    # draw_trial's ranges and options with the overrides applied and checked (its Raises),
+    # the forcing's line numbers, and the gain drift's CV and correlation time.
+    ov = dict(overrides)
+    ranges = {k: _range(ov, k, v) for k, v in RANGES.items()}
+    opts = {k: ov.pop(k, v) for k, v in OPTIONS.items()}
+    if ov:
+        raise HesspipeError(f"draw_trial: unknown option(s) {', '.join(sorted(ov))}; expected "
+                            f"{', '.join(list(RANGES) + list(OPTIONS))}")
+    if opts["run_in"] is None:
+        opts["run_in"] = 60.0 if {"motion_feedback", "dutch_roll"} & set(effects) else 15.0
+    bad = [e for e in effects if e not in EFFECTS]
+    if bad:
+        raise HesspipeError(f"effects: unknown {', '.join(bad)}; expected {', '.join(EFFECTS)}")
+    if task not in ("disturbance", "tracking", "both"):
+        raise HesspipeError(f"task: expected 'disturbance', 'tracking' or 'both', got {task!r}")
+    if pilot not in ("precision", "hess"):
+        raise HesspipeError(f"pilot: expected 'precision' or 'hess', got {pilot!r}")
+    drift, drift_tc = float(opts["gain_drift"]), float(opts["drift_tc"])
+    if not 0.0 <= drift <= 0.5:
+        raise HesspipeError(f"gain_drift: expected a coefficient of variation in [0, 0.5], got {drift!r}")
+    if not drift_tc > 0.0:
+        raise HesspipeError(f"drift_tc: expected a correlation time > 0 s, got {drift_tc!r}")
+    n_log = opts["fs"] * opts["T_m"]
+    if abs(n_log - round(n_log)) > 1e-9 or n_log < 4:
+        raise HesspipeError(f"T_m: fs*T_m must be a whole number of samples, got {n_log:g}")
+    line_bins = _check_line_bins(opts["line_bins"], int(round(n_log)))
+    if "remnant" in effects and "remnant_share" not in overrides:
+        ranges["remnant_share"] = EFFECT_REMNANT
+    return ranges, opts, line_bins, drift, drift_tc
+
+
 def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "precision",
                effects=(), **overrides) -> TrialSpec:
     """Draw a human-like trial (pilot, forcing, remnant, effects) from a seed.
@@ -260,33 +292,8 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         For an unknown option, effect, task or pilot, or when no pilot in the
         draw budget meets the crossover and phase-margin ranges.
     """
-    ov = dict(overrides)
-    ranges = {k: _range(ov, k, v) for k, v in RANGES.items()}
-    opts = {k: ov.pop(k, v) for k, v in OPTIONS.items()}
-    if ov:
-        raise HesspipeError(f"draw_trial: unknown option(s) {', '.join(sorted(ov))}; expected "
-                            f"{', '.join(list(RANGES) + list(OPTIONS))}")
     effects = tuple(effects)
-    if opts["run_in"] is None:
-        opts["run_in"] = 60.0 if {"motion_feedback", "dutch_roll"} & set(effects) else 15.0
-    bad = [e for e in effects if e not in EFFECTS]
-    if bad:
-        raise HesspipeError(f"effects: unknown {', '.join(bad)}; expected {', '.join(EFFECTS)}")
-    if task not in ("disturbance", "tracking", "both"):
-        raise HesspipeError(f"task: expected 'disturbance', 'tracking' or 'both', got {task!r}")
-    if pilot not in ("precision", "hess"):
-        raise HesspipeError(f"pilot: expected 'precision' or 'hess', got {pilot!r}")
-    drift, drift_tc = float(opts["gain_drift"]), float(opts["drift_tc"])
-    if not 0.0 <= drift <= 0.5:
-        raise HesspipeError(f"gain_drift: expected a coefficient of variation in [0, 0.5], got {drift!r}")
-    if not drift_tc > 0.0:
-        raise HesspipeError(f"drift_tc: expected a correlation time > 0 s, got {drift_tc!r}")
-    n_log = opts["fs"] * opts["T_m"]
-    if abs(n_log - round(n_log)) > 1e-9 or n_log < 4:
-        raise HesspipeError(f"T_m: fs*T_m must be a whole number of samples, got {n_log:g}")
-    line_bins = _check_line_bins(opts["line_bins"], int(round(n_log)))
-    if "remnant" in effects and "remnant_share" not in overrides:
-        ranges["remnant_share"] = EFFECT_REMNANT
+    ranges, opts, line_bins, drift, drift_tc = _checked_options(effects, task, pilot, overrides)
     if not isinstance(plant, Plant):
         plant = make_plant(plant, output=opts["output"], disturbance=opts["disturbance"],
                            gain=opts["gain"], dutch_roll="dutch_roll" in effects)
