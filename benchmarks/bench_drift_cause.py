@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+import hesspipe.diagnose._refit as refit
 import hesspipe.diagnose.aircraft as aircraft
 import hesspipe.humanlike.trial as trial
 from hesspipe.core.formats import read_plants, read_run
@@ -100,7 +101,7 @@ def main(argv=None) -> int:
         versions = {"sampled": run.control, "block-mean": blocks.mean(axis=1),
                     "lowpass+sample": np.fft.irfft(U, u_fine.size)[::ratio]}
         print(f"{item}: fine control's power above {fs / 2:.0f} Hz {100 * above:.2f} %")
-        band, aircraft.DRIFT_HZ = aircraft.DRIFT_HZ, 0.0   # the refit without drift columns
+        band, refit.DRIFT_HZ = refit.DRIFT_HZ, 0.0   # the refit without drift columns (read by _refit)
         try:
             for name, u in versions.items():
                 p = aircraft._Paths(replace(run, control=u), plants)
@@ -112,7 +113,7 @@ def main(argv=None) -> int:
                       f"{100 * np.std(r) / np.std(p.cols['output'][p.sl]):5.1f} %, residual power "
                       f"below 0.1 Hz {100 * low:5.1f} %")
         finally:
-            aircraft.DRIFT_HZ = band
+            refit.DRIFT_HZ = band
     return 0
 
 

@@ -39,6 +39,7 @@ import bench_fly_pilot as B
 from hesspipe.flight.approach import FlightConfig
 from hesspipe.flight.closed_loop import fly_pilot_record
 from hesspipe.flight.target import TWO_INPUT
+from hesspipe.identification import _motion_fits as MF
 from hesspipe.identification import criteria as C
 from hesspipe.identification import motion_test as MT
 from hesspipe.identification.fit import identify
@@ -73,12 +74,13 @@ def _objective(cls):
 
 @contextlib.contextmanager
 def _tau_m_max(value):
-    old = MT.TAU_M_MAX
-    MT.TAU_M_MAX = value
+    # Patched where the fits read it: motion_test only re-exports it.
+    old = MF.TAU_M_MAX
+    MF.TAU_M_MAX = value
     try:
         yield
     finally:
-        MT.TAU_M_MAX = old
+        MF.TAU_M_MAX = old
 
 
 def _errors(p, tp, plants, wc):

@@ -260,3 +260,15 @@ def test_diagnose_benchmark_tells_diagnose_the_path_it_is_given(tmp_path, monkey
     assert seen[2].motion_path is None
     with pytest.raises(SystemExit):
         m.main(["--told-motion-path", "1,x;2", "--seeds", "0"])
+
+
+def test_km_levers_patches_the_delay_bound_where_the_fits_read_it(monkeypatch):
+    # motion_test re-exports TAU_M_MAX; a patch of the re-export left the fits' bound as it was.
+    from hesspipe.identification import _motion_fits
+
+    monkeypatch.syspath_prepend(str(BENCH))   # the benchmark imports its sibling bench_fly_pilot
+    m = _load("bench_km_levers")
+    before = _motion_fits.TAU_M_MAX
+    with m._tau_m_max(0.0):
+        assert _motion_fits.TAU_M_MAX == 0.0
+    assert _motion_fits.TAU_M_MAX == before

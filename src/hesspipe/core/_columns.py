@@ -72,7 +72,7 @@ def columns_for_condition(columns: str | Mapping[str, str] | None, value: str) -
     Parameters
     ----------
     columns : str or mapping or None
-        A role → column mapping (:func:`read_file_runs`).
+        A role → column mapping (:func:`~hesspipe.core.formats.read_file_runs`).
     value : str
         The condition to read, e.g. ``"motion"``.
 

@@ -89,7 +89,7 @@ def retest(spec: TrialSpec, seed: int, *, effects=None, name: str | None = None)
         over["actuator_tau"] = spec.actuator["tau"]
     if "rate_limit" in aircraft:
         over["rate_limit_factor"] = spec.actuator["rate_limit_factor"]
-    if "motion_feedback" in pilot_side and spec.motion_tf is not None:
+    if spec.motion_tf is not None:   # the same cab, whether or not the retest's pilot uses it
         over["motion_path"] = spec.motion_tf
     if "extra_delay" in pilot_side and spec.pilot.get("extra_delay"):
         # A repeat of the condition: the simulator's latency is the same on every run.

@@ -262,9 +262,10 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         logged sample, 20), ``n_lines`` (10 per set), ``output`` ("rate"/"angle"),
         ``disturbance`` ("input"/"wind"), ``gain``, ``d_rms``, ``r_rms``,
         ``remnant_at`` ("control"/"error"), ``tau_m`` (vestibular delay, s, 0),
-        ``motion_path`` ((num, den)), ``name``, ``style`` (CSV style; see
-        :mod:`hesspipe.humanlike.writer`), ``pilot_params`` (a complete pilot
-        dict: no pilot is drawn), ``gain_drift`` (0: a time-invariant pilot; else the
+        ``motion_path`` ((num, den): the cab's path from the output, felt by a pilot with
+        ``motion_feedback`` and stated in the plants file of every trial), ``name``, ``style``
+        (CSV style; see :mod:`hesspipe.humanlike.writer`), ``pilot_params`` (a complete pilot
+        dict: no pilot is drawn; its Km is dropped without ``motion_feedback``), ``gain_drift`` (0: a time-invariant pilot; else the
         coefficient of variation of the visual gain within the run, a first-order
         Gauss-Markov process of correlation time ``drift_tc``, s, 10: humans' gains wander
         over tens of seconds; a describing function averages the wander, whose sidebands

@@ -1,5 +1,5 @@
-"""The motion test's fits (private: :mod:`.motion_test` is the API and re-exports the names
-below). The original model's fit on the lines (the null), the vestibular alternatives in each
+"""The motion test's fits (private: :mod:`.motion_test` is the API and re-exports the
+constants below; a caller that patches one patches it here, where the fits read it). The original model's fit on the lines (the null), the vestibular alternatives in each
 display and Hess order with the nested test between them, and the visual delay's bound; the
 model, the weights and the statistics are described in :mod:`.motion_test`'s module doc."""
 

@@ -84,7 +84,7 @@ from ..core.formats import as_runs
 from ..core.paper import FITNESS_BAND_HZ
 
 # The fits live in ._motion_fits; their constants are re-exported here, where the test's
-# callers read them.
+# callers read them (to patch one, patch it in ._motion_fits, where the fits read it).
 from ._motion_fits import (  # noqa: F401
     ALPHA,
     EXPANDED_KEEP,
