@@ -40,8 +40,8 @@ def _model_curves(path) -> dict:
     import json
 
     from ..core.errors import HesspipeError
+    from ..identification.report import model_curves
     from ..pilot.hess import model_from_name
-    from ..viz.frf import model_curves
 
     try:
         obj = json.loads(open(path, encoding="utf-8-sig").read())

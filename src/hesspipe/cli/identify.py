@@ -154,7 +154,8 @@ def run(args) -> int:
 
 def df_figure(path, result, where: str = "") -> None:
     """The model's (and the precision benchmark's) describing function over the measured one."""
-    from ..viz.frf import frf_figure, model_curves
+    from ..identification.report import model_curves
+    from ..viz.frf import frf_figure
 
     if result.frf is None or isinstance(result.frf, str):
         raise HesspipeError(f"{where or result.run_id}: no describing-function figure: "

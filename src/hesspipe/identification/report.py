@@ -1,9 +1,11 @@
-"""The identification's results in words: the tables ``hesspipe identify`` and ``hesspipe frf``
-print (the command line only prints them)."""
+"""The identification's results for a reader: the tables ``hesspipe identify`` and ``hesspipe frf``
+print (the command line only prints them), and the model curves a describing function's figure
+draws over its points (:func:`hesspipe.viz.frf.frf_figure`)."""
 
 from __future__ import annotations
 
 import math
+from typing import Mapping
 
 import numpy as np
 
@@ -145,3 +147,36 @@ def format_frf(frf) -> str:
     for n in frf.notes:
         lines.append(f"note: {n}")
     return "\n".join(lines)
+
+
+def model_curves(model: str, parameters: Mapping[str, float], criterion: str = "paper",
+                 benchmark_parameters: Mapping[str, float] | None = None) -> dict:
+    """The describing functions :func:`hesspipe.viz.frf.frf_figure` draws over the points: an
+    identified model's and its McRuer precision benchmark's.
+
+    Parameters
+    ----------
+    model : str
+        The model's name (``original``, ``expanded``, ...).
+    parameters : mapping
+        Its complete parameters (units as the pilot model's).
+    criterion : str
+        The criterion it was identified by (for the label).
+    benchmark_parameters : mapping, optional
+        The precision benchmark's parameters; none: no benchmark curve.
+
+    Returns
+    -------
+    dict
+        Label -> callable ``H(s)``, the describing function U/E at ``s = j w``.
+    """
+    from ..pilot.hess import model_from_name
+    from ..pilot.mcruer import precision_loop
+    from .criteria import model_df
+
+    loop = model_from_name(model).loop(parameters)
+    out = {f"{model} model ({criterion})": lambda s: model_df(loop, s)}
+    if benchmark_parameters:
+        bench = precision_loop(benchmark_parameters)
+        out["McRuer precision benchmark"] = lambda s: model_df(bench, s)
+    return out

@@ -80,35 +80,3 @@ def frf_figure(path: str | Path, frf, models: Mapping[str, object] | None = None
     fig.tight_layout()
     return save_figure(fig, path, synthetic=frf.synthetic)
 
-
-def model_curves(model: str, parameters: Mapping[str, float], criterion: str = "paper",
-                 benchmark_parameters: Mapping[str, float] | None = None) -> dict:
-    """The describing functions :func:`frf_figure` draws over the points: an identified
-    model's and its McRuer precision benchmark's.
-
-    Parameters
-    ----------
-    model : str
-        The model's name (``original``, ``expanded``, ...).
-    parameters : mapping
-        Its complete parameters (units as the pilot model's).
-    criterion : str
-        The criterion it was identified by (for the label).
-    benchmark_parameters : mapping, optional
-        The precision benchmark's parameters; none: no benchmark curve.
-
-    Returns
-    -------
-    dict
-        Label -> callable ``H(s)``, the describing function U/E at ``s = j w``.
-    """
-    from ..identification.criteria import model_df
-    from ..pilot.hess import model_from_name
-    from ..pilot.mcruer import precision_loop
-
-    loop = model_from_name(model).loop(parameters)
-    out = {f"{model} model ({criterion})": lambda s: model_df(loop, s)}
-    if benchmark_parameters:
-        bench = precision_loop(benchmark_parameters)
-        out["McRuer precision benchmark"] = lambda s: model_df(bench, s)
-    return out
