@@ -13,9 +13,9 @@ from ..pilot.blocks import from_tf, max_real_root
 from ..pilot.simulation import Contour
 from ..plants.validation import ResidualTests, fit_percent, residual_tests
 
-#: Level of the plant check's independence tests: the residual depends on an input where its
-#: p-value lies below this.
-PLANT_CHECK_LEVEL = 0.01
+#: Level of the residual tests below (the plant check's, and the baseline's control error): a
+#: residual depends on an input where its independence p-value lies below this.
+RESIDUAL_TEST_LEVEL = 0.01
 
 # -- residual tests (plant check and control error) ----------------------------------------
 
@@ -50,9 +50,15 @@ class PlantCheck:
                 "disturbance": self.tests_disturbance.independence_p}
 
     @property
+    def independent(self) -> dict:
+        """Whether the residual is independent of each input ("control", "disturbance"): its
+        p-value at least :data:`RESIDUAL_TEST_LEVEL`."""
+        return {k: p >= RESIDUAL_TEST_LEVEL for k, p in self.independence_p.items()}
+
+    @property
     def passes(self) -> bool:
-        """True if both independence p-values are at least :data:`PLANT_CHECK_LEVEL`."""
-        return all(p >= PLANT_CHECK_LEVEL for p in self.independence_p.values())
+        """True if the residual is independent of both inputs."""
+        return all(self.independent.values())
 
     def to_dict(self) -> dict:
         """The check as a JSON-ready dict, ``passes`` and the test results included."""

@@ -6,7 +6,6 @@ import math
 
 from ..core.errors import HesspipeError
 from ..core.provenance import SYNTHETIC_BANNER
-from .checks import PLANT_CHECK_LEVEL
 from .fitting import _effect
 from .motion import path_words
 from .results import Diagnosis
@@ -66,9 +65,9 @@ def _plant_lines(d: Diagnosis) -> list[str]:
     out.append(f"Plant check: fit {pc.fit_percent:.1f} % of the output from the measured control and "
                f"disturbance, the plants started from rest; {of}{'white' if pc.tests_control.white else 'NOT white'} "
                f"(p={pc.tests_control.whiteness_p:.2g}), independent of control: "
-               f"{'yes' if pc.independence_p['control'] >= PLANT_CHECK_LEVEL else 'NO'} "
+               f"{'yes' if pc.independent['control'] else 'NO'} "
                f"(p={pc.independence_p['control']:.2g}), of disturbance: "
-               f"{'yes' if pc.independence_p['disturbance'] >= PLANT_CHECK_LEVEL else 'NO'} "
+               f"{'yes' if pc.independent['disturbance'] else 'NO'} "
                f"(p={pc.independence_p['disturbance']:.2g})")
     if d.plant_finding and d.plant_finding["verdict"] != "match":
         out.append("  -> " + d.plant_finding["message"])

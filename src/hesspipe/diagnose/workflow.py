@@ -55,7 +55,7 @@ from ..pilot.effects import EFFECTS, get_effect
 from ..pilot.hess import PilotModel, model_from_name
 from ..plants.validation import residual_tests
 from .aircraft import corrected, plant_finding
-from .checks import PlantCheck, plant_check
+from .checks import RESIDUAL_TEST_LEVEL, PlantCheck, plant_check
 from .fitting import Problem, _effect, _Fit
 from .motion import delay_step, df_evidence, motion_step, remnant_step
 from .results import Diagnosis, Step
@@ -114,14 +114,14 @@ def _control_error_tests(problem: Problem, fit: _Fit) -> dict | None:
     driven by the measured disturbance), for deterministic models only: with a remnant
     the error is coloured by design. Whiteness: Ljung-Box of
     :func:`hesspipe.plants.validation.residual_tests`, with its (prewhitened) independence of the
-    disturbance. 99 % level."""
+    disturbance, at :data:`.checks.RESIDUAL_TEST_LEVEL`."""
     if not fit.stable or problem.spectrum.stochastic(fit.model, fit.parameters):
         return None
     err = problem.run.control - problem.spectrum.control(fit.model, fit.parameters)
     tests = residual_tests(err, problem.run.disturbance, max_lag=problem.cfg.max_lag)
     p_ind = tests.independence_p
     return {"whiteness_p": tests.whiteness_p, "white": tests.white, "independence_p": p_ind,
-            "independent": p_ind >= 0.01, "rms": float(np.sqrt(np.mean(err ** 2)))}
+            "independent": p_ind >= RESIDUAL_TEST_LEVEL, "rms": float(np.sqrt(np.mean(err ** 2)))}
 
 
 def _resolve_model(model):
@@ -165,7 +165,7 @@ def resolve_candidates(model, candidates, cfg: DiagnoseConfig) -> tuple[str, ...
     return tuple(dict.fromkeys(c for c in chosen if c not in model.effects))
 
 
-def _fit_baseline(run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int, problem: Problem, base: PilotModel,
+def _fit_baseline(run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int, base: PilotModel,
                   dynamics: Mapping[str, float], k_df: int) -> tuple[_Fit, Problem, DiagnoseConfig]:
     # The baseline model fitted to the control spectrum, and the problem and settings whose
     # order k closed the loop. Starts, in order: the describing function's dynamics (the
@@ -176,9 +176,8 @@ def _fit_baseline(run: Run, plants: Plants, cfg: DiagnoseConfig, seed: int, prob
     # baseline's own parameters get the same grid start as a candidate's (the output-error
     # surface has several valleys in Ke and K1).
     for k in dict.fromkeys((cfg.k, k_df)):
-        if k != cfg.k:
-            cfg = replace(cfg, k=k)
-            problem = Problem(run, plants, cfg, seed)
+        cfg = cfg if k == cfg.k else replace(cfg, k=k)
+        problem = Problem(run, plants, cfg, seed)
         starts = ([{**base.defaults(k=k, gain=problem.gain), **dynamics}] if dynamics else []) + [
             base.defaults(k=k, gain=problem.gain)]
         for start in starts:
@@ -328,7 +327,6 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
     repeats = [corrected(r, plants, finding)[0] for r in repeats]
     run, plants = corrected(run, plants, finding)
     cands = tuple(c for c in cands if _effect(c).where != "aircraft")  # judged on the output above
-    problem = Problem(run, plants, cfg, seed)
 
     # Multisine lines: the describing function judges motion and delay and gives the
     # pilot's own dynamics (phase-aware); the baseline starts from them.
@@ -338,7 +336,7 @@ def diagnose(run: Run, plants: Plants, *, model="original", candidates: Sequence
         if {"motion_feedback", "extra_delay", "remnant"} & set(cands) else (None, "")
     dynamics = {n: v for n, v in (ev.dynamics if ev else {}).items() if n not in cfg.free}
     k_df = ev.k if ev is not None and ev.k else k_df   # the order the motion test kept
-    current, problem, cfg = _fit_baseline(run, plants, cfg, seed, problem, base, dynamics, k_df)
+    current, problem, cfg = _fit_baseline(run, plants, cfg, seed, base, dynamics, k_df)
     baseline = current
     steps: list[Step] = []
     named: list[str] = [finding.named] if finding.verdict == "aircraft" else []
