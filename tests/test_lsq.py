@@ -50,3 +50,28 @@ def test_no_start_converging_is_the_callers_error():
         raise FloatingPointError("overflow")
     with pytest.raises(HesspipeError, match="^motion test: nothing$"):
         best_least_squares(bad, [[0.0], [0.5]], np.array([-1.0]), np.array([1.0]), "motion test: nothing", keep=1)
+
+
+
+def test_tolerance_stops_sooner_with_the_rss_as_scipys_default_finds_it():
+    # Two decaying exponentials, an ill-conditioned valley like the Hess loop's gains: the
+    # searches' TOLERANCE stops sooner than scipy's 1e-8 and leaves the RSS (in noise-variance
+    # units, as the describing-function fits' are) within 1e-3 of where the default leaves it,
+    # far below what an F test reads.
+    from scipy import optimize
+
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 5.0, 60)
+
+    def model(x):
+        return x[0] * np.exp(-x[1] * t) + x[2] * np.exp(-x[3] * t)
+
+    data = model([1.0, 1.0, 0.8, 1.6]) + 0.01 * rng.standard_normal(t.size)
+    resid = lambda x: (model(x) - data) / 0.01  # noqa: E731
+    lo, hi, x0 = np.full(4, 0.0) + [0, 0.01, 0, 0.01], np.full(4, 10.0), [0.5, 0.5, 0.5, 3.0]
+    counted, n_ours = _counted(resid)
+    rss, _ = best_least_squares(counted, [x0], lo, hi, "no fit")
+    default, n_default = _counted(resid)
+    ref = optimize.least_squares(default, x0, bounds=(lo, hi), x_scale="jac", max_nfev=400)
+    assert rss == pytest.approx(float(np.sum(ref.fun ** 2)), abs=1e-3)
+    assert len(n_ours) < len(n_default)
