@@ -114,6 +114,8 @@ def test_flat_band_of_a_crossover_model_loop_and_of_a_flat_one():
     flat = flat_band(w, (3.0 / w) ** 0.3 + 0j, 3.0)
     assert flat.wide and flat.high_rad_s / flat.low_rad_s == pytest.approx(FLAT_FACTOR ** (2 / 0.3), rel=0.02)
     assert "within a factor 1.25 of 1" in flat.describe()
+    # a loop without phase lag has 180 deg of margin, as phase_margin_deg says (not -180)
+    assert flat.phase_margin_range_deg == (180.0, 180.0)
     assert flat_band(w, 3.0 / (1j * w), float("nan")) is None
 
 

@@ -213,7 +213,7 @@ def flat_band(w, L, wc: float) -> FlatBand | None:
         lo -= 1
     while hi < w.size - 1 and near[hi + 1]:
         hi += 1
-    pm = (180.0 + np.degrees(np.angle(L[lo:hi + 1])) + 180.0) % 360.0 - 180.0
+    pm = np.atleast_1d(phase_margin_deg(np.degrees(np.angle(L[lo:hi + 1]))))
     return FlatBand(float(min(w[lo], wc)), float(max(w[hi], wc)), (float(np.min(pm)), float(np.max(pm))))
 
 
