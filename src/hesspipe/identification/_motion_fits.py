@@ -269,6 +269,56 @@ def _either_order(ld: LineData, plants, start: Mapping[str, float], *, k: int, m
     return result, profile
 
 
+def _vestibular_tests(null: _Null, original_fit: tuple, forms, alternatives, km0: float, n_res: int,
+                      w) -> tuple[list[_Alternative], list[str], tuple]:
+    # :func:`_one_display`'s vestibular alternatives (each form x each set of extra
+    # parameters) fitted and tested against the original model's fit `original_fit` (rss, p,
+    # sol), which each alternative's exchange of optima may improve: returned are the tests,
+    # the core parameters shared with the original and the original's fit as it ends.
+    # The vestibular alternatives hold the visual equaliser at the original's value: they
+    # ask what the path adds to the pilot without it, not what Km and a re-shaped lead do
+    # together (conservative: the nuisance at its null estimate). With it free, Km and the
+    # lead together fitted a Hess-generated roll-angle baseline at p = 0.006 (0.015 held;
+    # bench_diagnose.py report seed 2), and the motion runs kept their p < 0.01.
+    base, free, lo, hi, eq, data = null.base, null.free, null.lo, null.hi, null.eq, null.data
+    rss_o, p_o, sol_o = original_fit
+    original, expanded = PilotModel(), PilotModel(("motion_feedback",))
+    km_hi = 1e3 * max(abs(base["Ke"]), 1.0)
+    keep = [n_ != eq for n_ in free]
+    core = [n_ for n_, kp in zip(free, keep) if kp]
+    fits = []
+    for form, extra in [(f, x) for f in forms for x in alternatives]:
+        free_e = core + extra
+        lo_e = np.append(lo[keep], [0.0] * len(extra))
+        hi_e = np.append(hi[keep], [km_hi, TAU_M_MAX][:len(extra)])
+        base_e = {**p_o, "Km": 0.0, "tau_m": 0.0, MULTIMODAL: float(form == "multimodal")}
+        delays = [[0.0], [0.15]] if "tau_m" in extra else [[]]
+        # From the original's optimum and from the given start: the original can reach
+        # a corner (K1 on its bound, no delay, a 4 rad/s "neuromuscular" mode) that mimics
+        # part of the vestibular path, from which no Km start climbs back to the truth's
+        # valley (generator, roll angle with a target, development seed 101: RSS 60.1 and
+        # p = 0.27 from there, 17.8 and p ~ 3e-11 with the given start).
+        starts_e = [[c[n_] for n_ in core] + [km] + tm for c in (p_o, base)
+                    for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"])) for tm in delays]
+        # Screened: 8-16 starts each to convergence were most of a diagnosis's time (a
+        # precision-pilot run: 48 of its 107 searches, 3.9 of 6.1 s).
+        rss_e, p_e, sol_e = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, w, keep=EXPANDED_KEEP)
+        # Exchange of optima: the original searched again from the expanded optimum's core
+        # parameters, so that LR measures what Km adds, not a better local optimum the
+        # expanded search happened to find for the shared parameters.
+        rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], *data, w)
+        if rss_o2 < rss_o:
+            rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
+        fits.append((extra, rss_e, p_e, (base_e, free_e, lo_e, hi_e), sol_e, form))
+    tests = []
+    for extra, rss_e, p_e, problem, sol_e, form in fits:
+        rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
+        q, dof_e = len(extra), n_res - len(free) - len(extra)
+        lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
+        tests.append(_Alternative(p, lr, rss_e, p_e, extra, problem, sol_e, dof_e, form))
+    return tests, core, (rss_o, p_o, sol_o)
+
+
 def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, max_delay: float | None,
                  display: str, path_check: float | None = None,
                  null: _Null | None = None) -> tuple[dict, Callable[[float], dict] | None]:
@@ -304,44 +354,8 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
     if dof < 1:
         return {"available": False, "n_lines": int(lines.size),
                 "reason": f"{lines.size} forcing lines leave no degrees of freedom for the test"}, None
-    km_hi = 1e3 * max(abs(base["Ke"]), 1.0)
-    # The vestibular alternatives hold the visual equaliser at the original's value: they
-    # ask what the path adds to the pilot without it, not what Km and a re-shaped lead do
-    # together (conservative: the nuisance at its null estimate). With it free, Km and the
-    # lead together fitted a Hess-generated roll-angle baseline at p = 0.006 (0.015 held;
-    # bench_diagnose.py report seed 2), and the motion runs kept their p < 0.01.
-    keep = [n_ != eq for n_ in free]
-    core = [n_ for n_, kp in zip(free, keep) if kp]
-    fits = []
-    for form, extra in [(f, x) for f in forms for x in alternatives]:
-        free_e = core + extra
-        lo_e = np.append(lo[keep], [0.0] * len(extra))
-        hi_e = np.append(hi[keep], [km_hi, TAU_M_MAX][:len(extra)])
-        base_e = {**p_o, "Km": 0.0, "tau_m": 0.0, MULTIMODAL: float(form == "multimodal")}
-        delays = [[0.0], [0.15]] if "tau_m" in extra else [[]]
-        # From the original's optimum and from the given start: the original can reach
-        # a corner (K1 on its bound, no delay, a 4 rad/s "neuromuscular" mode) that mimics
-        # part of the vestibular path, from which no Km start climbs back to the truth's
-        # valley (generator, roll angle with a target, development seed 101: RSS 60.1 and
-        # p = 0.27 from there, 17.8 and p ~ 3e-11 with the given start).
-        starts_e = [[c[n_] for n_ in core] + [km] + tm for c in (p_o, base)
-                    for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"])) for tm in delays]
-        # Screened: 8-16 starts each to convergence were most of a diagnosis's time (a
-        # precision-pilot run: 48 of its 107 searches, 3.9 of 6.1 s).
-        rss_e, p_e, sol_e = _fit(expanded, base_e, free_e, lo_e, hi_e, starts_e, *data, ld.w, keep=EXPANDED_KEEP)
-        # Exchange of optima: the original searched again from the expanded optimum's core
-        # parameters, so that LR measures what Km adds, not a better local optimum the
-        # expanded search happened to find for the shared parameters.
-        rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], *data, ld.w)
-        if rss_o2 < rss_o:
-            rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
-        fits.append((extra, rss_e, p_e, (base_e, free_e, lo_e, hi_e), sol_e, form))
-    tests = []
-    for extra, rss_e, p_e, problem, sol_e, form in fits:
-        rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
-        q, dof_e = len(extra), n_res - len(free) - len(extra)
-        lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
-        tests.append(_Alternative(p, lr, rss_e, p_e, extra, problem, sol_e, dof_e, form))
+    tests, core, (rss_o, p_o, sol_o) = _vestibular_tests(null, (rss_o, p_o, sol_o), forms, alternatives,
+                                                         km0, n_res, ld.w)
     # With both line sets, pre-planned alternatives - Km alone (the paper's path) and Km with
     # a vestibular delay, in each of VESTIBULAR_FORMS - and the smallest p, Bonferroni-corrected
     # (weighted, FORM_SHARES): the delay alone cost JSBSim-flown motion runs (tau_m = 0) their
