@@ -234,6 +234,53 @@ def _limit(label: str, what: str, t: float) -> HesspipeError:
                          "on speed, airborne and within the bank limit")
 
 
+def _forcing(config: FlightConfig, plants: Plants, target, reference, t: np.ndarray, gust_seed: int):
+    # (along, lateral) wind (ft/s) and the reference r at every step of `t`: the paper's
+    # side wind plus the excitation, or a two-input forcing's wind and target lines.
+    n = t.size
+    along, lateral = config.side_wind(t, config.duration_s)
+    if target is not None:
+        if reference is not None:
+            raise HesspipeError("reference: expected either a reference or a target forcing, not both")
+        wind, reference = target.signals(t, gust_seed,
+                                         from_tf(plants.disturbance_to_output).response)
+        if not target.paper_side_wind:  # its drift would hide the low wind lines
+            along, lateral = np.zeros(n), np.zeros(n)
+        lateral = lateral + wind
+    else:
+        lateral = lateral + config.wind_excitation.signal(t, gust_seed)
+    r = np.zeros(n) if reference is None else np.asarray(reference, dtype=float)
+    if r.shape != (n,) or not np.isfinite(r).all():
+        raise HesspipeError(f"reference: expected {n} finite samples (one per step), got shape {r.shape}")
+    return along, lateral, r
+
+
+def _fly(ac: AircraftConfig, workdir: Path, config: FlightConfig, aircraft_effects: AircraftEffects,
+         pilot, signals: tuple, max_bank_deg: float, label: str):
+    # JSBSim trimmed and flown in closed loop with `pilot` through `signals` (t, along,
+    # lateral, r, white), its own log silenced: (record, trim, terrain ft, yaw-damper edits).
+    jsbsim = _jsbsim()
+    logger = _quiet_logger()
+    previous = jsbsim.get_logger()
+    jsbsim.set_logger(logger)
+    try:
+        workdir = workdir.resolve()
+        aircraft_dir = workdir / "aircraft"
+        aircraft_dir.mkdir(parents=True, exist_ok=True)
+        if not (aircraft_dir / ac.model).exists():
+            _sanitised_aircraft(ac.model, aircraft_dir)
+        damper = [] if aircraft_effects.yaw_damper else _disable_yaw_damper(aircraft_dir, ac)
+        fdm = _load(ac, workdir, logger)
+        fdm.set_dt(config.dt_s)
+        trim = _trim(fdm, ac)
+        terrain = ac.record_terrain_ft if config.record_terrain_ft is None else config.record_terrain_ft
+        fdm["position/terrain-elevation-asl-ft"] = terrain
+        rec = _closed_loop(fdm, pilot, trim, *signals, config, aircraft_effects, max_bank_deg, label)
+    finally:
+        jsbsim.set_logger(previous)
+    return rec, trim, terrain, damper
+
+
 def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, params: Mapping[str, float],
                      *, seed: int, workdir: Path, config: FlightConfig = FlightConfig(),
                      aircraft_effects: AircraftEffects = AircraftEffects(), reference=None,
@@ -292,20 +339,7 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
     n = int(round(config.duration_s / dt))
     t = np.arange(n) * dt
     gust_seed, remnant_seed = derive_seed(seed, "gust"), derive_seed(seed, "remnant")
-    along, lateral = config.side_wind(t, config.duration_s)
-    if target is not None:
-        if reference is not None:
-            raise HesspipeError("reference: expected either a reference or a target forcing, not both")
-        wind, reference = target.signals(t, gust_seed,
-                                         from_tf(plants.disturbance_to_output).response)
-        if not target.paper_side_wind:  # its drift would hide the low wind lines
-            along, lateral = np.zeros(n), np.zeros(n)
-        lateral = lateral + wind
-    else:
-        lateral = lateral + config.wind_excitation.signal(t, gust_seed)
-    r = np.zeros(n) if reference is None else np.asarray(reference, dtype=float)
-    if r.shape != (n,) or not np.isfinite(r).all():
-        raise HesspipeError(f"reference: expected {n} finite samples (one per step), got shape {r.shape}")
+    along, lateral, r = _forcing(config, plants, target, reference, t, gust_seed)
     white = np.zeros(n)
     share = None
     if "remnant" in model.effects:
@@ -317,26 +351,9 @@ def fly_pilot_record(aircraft: str | AircraftConfig, plants: Plants, model, para
             p["Kn"] = _remnant_gain(model, p, plants, lateral, r, dt, remnant_seed, share)
     pilot = DiscretePilot(pilot_loop(model, p, plants), dt, sample_lag=SAMPLE_LAG)
 
-    jsbsim = _jsbsim()
-    logger = _quiet_logger()
-    previous = jsbsim.get_logger()
-    jsbsim.set_logger(logger)
-    try:
-        workdir = Path(workdir).resolve()
-        aircraft_dir = workdir / "aircraft"
-        aircraft_dir.mkdir(parents=True, exist_ok=True)
-        if not (aircraft_dir / ac.model).exists():
-            _sanitised_aircraft(ac.model, aircraft_dir)
-        damper = [] if aircraft_effects.yaw_damper else _disable_yaw_damper(aircraft_dir, ac)
-        fdm = _load(ac, workdir, logger)
-        fdm.set_dt(dt)
-        trim = _trim(fdm, ac)
-        terrain = ac.record_terrain_ft if config.record_terrain_ft is None else config.record_terrain_ft
-        fdm["position/terrain-elevation-asl-ft"] = terrain
-        rec = _closed_loop(fdm, pilot, trim, t, along, lateral, r, white, config, aircraft_effects,
-                           max_bank_deg, f"{ac.name} closed-loop pilot record (seed {seed})")
-    finally:
-        jsbsim.set_logger(previous)
+    rec, trim, terrain, damper = _fly(ac, Path(workdir), config, aircraft_effects, pilot,
+                                      (t, along, lateral, r, white), max_bank_deg,
+                                      f"{ac.name} closed-loop pilot record (seed {seed})")
     first = int(round(target.run_in_s / dt)) if target is not None else 0
     trim = dict(trim, record_terrain_ft=terrain, record_h_agl_ft=trim["h_sl_ft"] - terrain)
     plants_aircraft = _plants_aircraft(plants)
