@@ -52,7 +52,6 @@ def test_no_start_converging_is_the_callers_error():
         best_least_squares(bad, [[0.0], [0.5]], np.array([-1.0]), np.array([1.0]), "motion test: nothing", keep=1)
 
 
-
 def test_tolerance_stops_sooner_with_the_rss_as_scipys_default_finds_it():
     # Two decaying exponentials, an ill-conditioned valley like the Hess loop's gains: the
     # searches' TOLERANCE stops sooner than scipy's 1e-8 and leaves the RSS (in noise-variance
@@ -68,7 +67,7 @@ def test_tolerance_stops_sooner_with_the_rss_as_scipys_default_finds_it():
 
     data = model([1.0, 1.0, 0.8, 1.6]) + 0.01 * rng.standard_normal(t.size)
     resid = lambda x: (model(x) - data) / 0.01  # noqa: E731
-    lo, hi, x0 = np.full(4, 0.0) + [0, 0.01, 0, 0.01], np.full(4, 10.0), [0.5, 0.5, 0.5, 3.0]
+    lo, hi, x0 = np.array([0.0, 0.01, 0.0, 0.01]), np.full(4, 10.0), [0.5, 0.5, 0.5, 3.0]
     counted, n_ours = _counted(resid)
     rss, _ = best_least_squares(counted, [x0], lo, hi, "no fit")
     default, n_default = _counted(resid)
