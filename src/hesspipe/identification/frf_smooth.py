@@ -73,6 +73,7 @@ def line_scale(sigma, H):
     """
     return np.sqrt(sigma ** 2 + (REL_FLOOR * np.abs(H)) ** 2)
 
+
 F_SCALE = 2.0
 """Cauchy loss scale: a line's error of two standard deviations."""
 TAU_PRIOR = (0.2, np.log(2.0))
