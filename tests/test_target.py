@@ -5,7 +5,7 @@ import pytest
 
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Run
-from hesspipe.flight.target import TargetForcing, interleaved_lines
+from hesspipe.flight.target import TWO_INPUT, TargetForcing, interleaved_lines
 from hesspipe.identification.criteria import DFObjective, model_df, model_df_reference
 from hesspipe.identification.frf import estimate_frf
 from hesspipe.pilot.hess import PilotModel
@@ -217,9 +217,42 @@ def test_pilots_forcing_two_input_flies_a_run_in_and_records_both_line_sets(tmp_
     assert "Forcing: two-input" in " ".join(_simulator_note(tmp_path))  # the report says which forcing
     frf = estimate_frf(run)
     assert frf.method == "multisine" and frf.feedback.H.size == 12 and frf.reference.H.size == 12
-    for bad, field in (({"forcing": "two_input", "simulator": "fft"}, "forcing"), ({"forcing": "gusts"}, "forcing")):
-        with pytest.raises(HesspipeError, match=field):
-            PilotsConfig.from_table(bad, "x.toml")
+    with pytest.raises(HesspipeError, match="forcing"):
+        PilotsConfig.from_table({"forcing": "gusts"}, "x.toml")
+    # The default: the pipeline's cohort answers the motion question unless told otherwise.
+    assert PilotsConfig.from_table({}, "x.toml").forcing == "two_input"
+
+
+def test_the_frequency_domain_cohort_flies_the_two_input_forcing_too(tmp_path):
+    """`[pilots] simulator = "fft"` with the default forcing: both line sets in every record,
+    periodic over it (the FFT loop's steady state: no run-in), the reference column filled;
+    the motion test then tells the cohort with motion feedback from the one without."""
+    import json
+
+    from hesspipe.core.formats import read_run
+    from hesspipe.identification.motion_test import motion_test
+    from hesspipe.pilot.hess import PilotModel
+    from hesspipe.pilots.cohort import cohort_spec, synth_cohort
+    from hesspipe.pilots.settings import PilotsConfig
+    from test_pilotflight import PLANTS
+
+    assert PilotsConfig.from_table({"simulator": "fft"}, "x.toml").forcing == "two_input"
+    plants = PLANTS  # the JSBSim 737's fitted plants, which TWO_INPUT's levels were set for
+    spec = cohort_spec("crossover_model", duration_s=70.0, dt_s=0.025, target=TWO_INPUT)
+    p = {}
+    for effects in (("motion_feedback",), ()):
+        out = tmp_path / ("motion" if effects else "none")
+        # Seeds 0-5 (ad hoc, /tmp probe): p < 0.01 for 5 of 6 motion pilots, 0 of 6 without.
+        synth_cohort(plants, 1, 5, effects, out, spec=spec)
+        run = read_run(out / "pilot01.csv")
+        assert len(run) == 2800 and abs(run.time[0]) < 1e-9 and np.std(run.reference) > 0
+        frf = estimate_frf(run)
+        assert frf.method == "multisine" and frf.feedback.H.size == 12 and frf.reference.H.size == 12
+        cohort = json.loads((out / "cohort.json").read_text())
+        truth = json.loads((out / "pilot01.truth.json").read_text())
+        assert cohort["target"]["run_in_s"] == 0.0 and truth["disturbance"]["target"]["run_in_s"] == 0.0
+        p[effects] = motion_test(run, plants, PilotModel().complete({}, 1))["p_value"]
+    assert p[("motion_feedback",)] < 0.01 < p[()]
 
 
 def test_a_constant_in_the_reference_is_where_the_loop_operates_not_a_step():

@@ -59,13 +59,16 @@ Disturbance: the paper's side-wind profile (lateral component, :class:`hesspipe.
 plus a seeded gust excitation (:class:`hesspipe.flight.wind.Excitation`; default
 white noise through a first-order low-pass at 1 Hz, rms 3 ft/s) that excites
 the 0-5 Hz band the spectra are compared over; the slow profile alone barely
-moves the aircraft (SPEC.md). Records: 70 s at 50 Hz by default.
+moves the aircraft (SPEC.md). Or, with :attr:`CohortSpec.target`, a two-input forcing
+(:mod:`hesspipe.flight.target`): wind and roll-rate target multisines on interleaved lines,
+from which the describing-function motion test can answer (the pipeline's default,
+``[pilots] forcing = "two_input"``). Records: 70 s at 50 Hz by default.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Sequence
 
@@ -76,6 +79,7 @@ from ..core.formats import Plants, plants_coefficients, record_samples, write_ru
 from ..core.io import staged_output, write_json
 from ..core.provenance import versions
 from ..core.seeds import check_seed, derive_seed
+from ..flight.target import TargetForcing
 from ..flight.wind import Excitation, SideWind
 from ..pilot.blocks import from_tf
 from ..pilot.crossover import CrossoverLimits, crossover, gain_scale
@@ -135,6 +139,12 @@ class CohortSpec:
         Centre of the delay's log-normal (Table 1: 0.1 s).
     limits : CrossoverLimits
         What the crossover-model cohort keeps (default 1-5 rad/s, 20-60 deg).
+    target : hesspipe.flight.target.TargetForcing or None
+        None (default): the paper's task, the side wind and gusts above. A two-input
+        forcing: its wind lines (ft/s; with the side wind only if its ``paper_side_wind``)
+        and its roll-rate target (the run's ``reference``), periodic over the record. The
+        frequency-domain model is the loop's periodic steady state, so the forcing's
+        run-in is not simulated (a flight needs it, :mod:`hesspipe.flight.target`).
     """
 
     duration_s: float = 70.0
@@ -152,6 +162,7 @@ class CohortSpec:
     crossover_rad_s: tuple[float, float] | None = None
     tau0_s: float = 0.1
     limits: CrossoverLimits = field(default_factory=CrossoverLimits)
+    target: TargetForcing | None = None
 
     @classmethod
     def crossover_model(cls, **kw) -> "CohortSpec":
@@ -395,6 +406,42 @@ def disturbance(spec: CohortSpec, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return t, lateral + spec.gust.signal(t, seed)
 
 
+def forcing(spec: CohortSpec, seed: int, plants: Plants) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Time (s), lateral wind (ft/s) and reference (rad/s, None for the paper's task) of a record.
+
+    Parameters
+    ----------
+    spec : CohortSpec
+        Record length, sample interval and forcing (``spec.target``; None: :func:`disturbance`).
+    seed : int
+        Seed of the gusts, or of the two-input lines' phases.
+    plants : Plants
+        Its disturbance path, for an output-equivalent wind (``TargetForcing.wind_equivalent``).
+    """
+    if spec.target is None:
+        return (*disturbance(spec, seed), None)
+    n = int(round(spec.duration_s / spec.dt_s))
+    t = spec.dt_s * np.arange(n)
+    # No run-in: the FFT loop is periodic, so the record is the steady state a flight's
+    # run-in waits for, and the lines must be periodic over the whole record.
+    wind, reference = replace(spec.target, run_in_s=0.0).signals(
+        t, seed, from_tf(plants.disturbance_to_output).response)
+    if spec.target.paper_side_wind:
+        wind = wind + spec.side_wind(t, spec.duration_s)[1]
+    return t, wind, reference
+
+
+def _forcing_truth(spec: CohortSpec) -> dict:
+    # What the record was forced by, for the truth files and cohort.json.
+    if spec.target is None:
+        return {"side_wind": vars(spec.side_wind), "gust": spec.gust.describe("ft/s"),
+                "signal": "lateral component of the side wind + gust, ft/s"}
+    return {**({"side_wind": vars(spec.side_wind)} if spec.target.paper_side_wind else {}),
+            "target": {**spec.target.describe(), "run_in_s": 0.0},
+            "signal": "lateral wind on the disturbance lines, ft/s; the reference (roll rate, rad/s) on "
+                      "the target lines"}
+
+
 def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str] = ("motion_feedback",),
                 spec: CohortSpec = CohortSpec()):
     """One synthetic pilot: ``(run, truth)``.
@@ -421,11 +468,11 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
     gain = gain_scale(plants, spec.k)
     rng = np.random.default_rng(derive_seed(seed, "parameters"))
     gust_seed = derive_seed(seed, "gust")
-    t, wind = disturbance(spec, gust_seed)
+    t, wind, reference = forcing(spec, gust_seed, plants)
     remnant_seed = derive_seed(seed, "remnant")
     # A pilot who cannot stabilise the loop is not a pilot: redraw (from the same stream, so the
     # cohort stays reproducible) until the closed loop is stable on the record.
-    sim = Simulator(plants, wind, spec.dt_s, noise_seed=remnant_seed)
+    sim = Simulator(plants, wind, spec.dt_s, reference=reference, noise_seed=remnant_seed)
     corner = hess_corner(plants) if spec.crossover_rad_s is not None else None
     target = None
     for draws in range(1, MAX_DRAWS + 1):
@@ -445,7 +492,8 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
                             "around Table 1 with these plants; expected plants a pilot can fly")
     share = _lognormal(rng, spec.remnant_share, spec.remnant_spread, *SHARE_RANGE)
     params["Kn"] = remnant_gain(model, model.complete(params), sim, share)
-    run = synthetic_run(model, params, plants, wind, spec.dt_s, seed=remnant_seed, run_id=pilot_id)
+    run = synthetic_run(model, params, plants, wind, spec.dt_s, seed=remnant_seed, run_id=pilot_id,
+                        reference=reference)
     truth = {
         "id": pilot_id,
         "synthetic": True,
@@ -463,8 +511,7 @@ def synth_pilot(plants: Plants, pilot_id: str, seed: int, effects: Sequence[str]
                   "remnant": remnant_seed},
         "duration_s": spec.duration_s,
         "dt_s": spec.dt_s,
-        "disturbance": {"side_wind": vars(spec.side_wind), "gust": spec.gust.describe("ft/s"),
-                        "signal": "lateral component of the side wind + gust, ft/s"},
+        "disturbance": _forcing_truth(spec),
         "distributions": spec.describe(),
     }
     return run, truth
@@ -549,6 +596,7 @@ def synth_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str] = ("m
     out_dir = Path(out_dir)
     ids = pilot_ids(n)
     summary = []
+    forced = _forcing_truth(spec)
     with staged_output(out_dir, kind="cohort") as stage:
         for pid in ids:
             pseed = derive_seed(seed, pid)
@@ -563,7 +611,10 @@ def synth_cohort(plants: Plants, n: int, seed: int, effects: Sequence[str] = ("m
             "n": n, "seed": seed, "effects": list(_with_remnant(effects)),
             "spec": {"duration_s": spec.duration_s, "dt_s": spec.dt_s, "k": spec.k,
                      "distributions": spec.describe(),
-                     "side_wind": vars(spec.side_wind), "gust": spec.gust.describe("ft/s")},
+                     **({"side_wind": forced["side_wind"], "gust": forced["gust"]} if spec.target is None
+                        else {"forcing": forced})},
+            # The report reads the forcing here, as it does a flown cohort's.
+            **({} if spec.target is None else {"target": forced["target"]}),
             "plants": plants_coefficients(plants),
             "pilots": summary, "versions": versions()})
     return [out_dir / f"{pid}.csv" for pid in ids]

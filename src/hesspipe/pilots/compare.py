@@ -48,6 +48,7 @@ from ..core.formats import (
 )
 from ..core.paper import FITNESS_BAND_HZ
 from ..core.seeds import derive_seed
+from ..flight.target import named_forcing
 from ..identification.criteria import choose_k
 from ..identification.fit import benchmark as mcruer_benchmark
 from ..identification.fit import identify
@@ -562,7 +563,8 @@ def run_study(config: PilotsConfig, plants: Plants, out_dir: str | Path, *, seed
     else:
         source = out_dir / "cohort"
         synth_cohort(plants, config.n, seed, config.effects, source,
-                     spec=cohort_spec(config.cohort, duration_s=config.duration_s, dt_s=config.dt_s))
+                     spec=cohort_spec(config.cohort, duration_s=config.duration_s, dt_s=config.dt_s,
+                                      target=named_forcing(config.forcing)))
     result = compare_pilots(source, plants, settings, workers=config.workers or None,
                             scheduler=config.scheduler or None, columns=config.columns or None,
                             resample=config.resample, progress=progress, pilot_id=config.pilot_id or None,

@@ -128,9 +128,9 @@ class CompareSettings(Settings):
 
 #: How the pipeline's synthetic cohort is simulated (``[pilots] simulator``).
 SIMULATORS = ("jsbsim", "fft")
-#: The JSBSim cohort's forcing (``[pilots] forcing``): the paper's turning side wind with the
+#: The synthetic cohort's forcing (``[pilots] forcing``): the paper's turning side wind with the
 #: broadband gusts (no forcing lines), or :data:`hesspipe.flight.target.TWO_INPUT` (wind and
-#: roll-rate target multisines on interleaved lines, a run-in flown before the record).
+#: roll-rate target multisines on interleaved lines, a run-in flown before a JSBSim record).
 FORCINGS = tuple(_FORCINGS)
 
 
@@ -191,9 +191,13 @@ class PilotsConfig(Settings):
         How the synthetic pilots are drawn (:data:`COHORT_DRAWS`): "crossover_model"
         (default; within the crossover-model limits, :mod:`hesspipe.pilots.cohort`) or "table1".
     forcing : str
-        The JSBSim cohort's forcing (:data:`FORCINGS`): "paper" (default) or "two_input"
-        (:data:`hesspipe.flight.target.TWO_INPUT`: the flight is ``duration_s`` plus its
-        15 s run-in, the record the last ``duration_s``). Only with simulator "jsbsim".
+        The synthetic cohort's forcing (:data:`FORCINGS`): "two_input" (default,
+        :data:`hesspipe.flight.target.TWO_INPUT`: wind and roll-rate target multisines on
+        interleaved lines, from which the motion verdict can answer; a JSBSim flight is
+        ``duration_s`` plus its 15 s run-in, the record the last ``duration_s``; the
+        frequency-domain model's record is the loop's periodic steady state) or "paper" (the
+        paper's turning side wind with gusts: one forcing function, no lines, the verdict
+        "undetermined").
     plants : str
         A plants JSON for the runs in ``data`` (another task or simulator than the
         aircraft flown here: a yaw experiment's controlled element and ``motion_path``);
@@ -229,7 +233,7 @@ class PilotsConfig(Settings):
     criterion: str = DEFAULT_CRITERION
     display: str = DEFAULT_DISPLAY
     cohort: str = "crossover_model"
-    forcing: str = "paper"
+    forcing: str = "two_input"
     plants: str = ""
     pilot_id: str = ""
 
@@ -259,9 +263,6 @@ class PilotsConfig(Settings):
                 re.compile(out["pilot_id"])
             except re.error as exc:
                 raise f.fail("pilot_id", f"expected a regular expression, got {out['pilot_id']!r} ({exc})") from None
-        if out["forcing"] != "paper" and out["simulator"] != "jsbsim":
-            raise f.fail("forcing", f"a forcing other than 'paper' is flown only by simulator 'jsbsim'; "
-                                    f"got simulator {out['simulator']!r}")
         try:
             parse_columns(out["columns"])
         except HesspipeError as exc:

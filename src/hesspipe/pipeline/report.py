@@ -213,13 +213,15 @@ def _pilots(folder: Path, root: Path) -> list[str]:
 
 
 def _forcing_note(target) -> str:
-    """What the JSBSim cohort flew through (`[pilots] forcing`), from cohort.json's ``target``."""
+    """What the synthetic cohort was forced by (`[pilots] forcing`), from cohort.json's ``target``."""
     if not target:
         return "Forcing: the paper's turning side wind with gusts (no forcing lines)."
     return (f"Forcing: two-input — {target.get('lines_per_set')} lateral-wind lines "
             f"({target.get('wind_rms_ft_s')} ft/s RMS) and {target.get('lines_per_set')} roll-rate target lines "
-            f"({target.get('target_rms_rad_s')} rad/s RMS) interleaved, a {target.get('run_in_s')} s run-in flown "
-            "before the record" + ("" if target.get("paper_side_wind") else ", no paper's side wind") + ".")
+            f"({target.get('target_rms_rad_s')} rad/s RMS) interleaved, "
+            + (f"a {target.get('run_in_s')} s run-in flown before the record" if target.get("run_in_s")
+               else "periodic over the record (the loop's steady state)")
+            + ("" if target.get("paper_side_wind") else ", no paper's side wind") + ".")
 
 
 def _simulator_note(pilots_folder: Path) -> list[str]:
@@ -234,7 +236,8 @@ def _simulator_note(pilots_folder: Path) -> list[str]:
                 "them with the linear plants of stage two, i.e. data from another simulator than the "
                 "fitted plants. " + _forcing_note(cohort.get("target")), ""]
     return ["Simulator of the cohort: the linear frequency-domain model around the fitted plants "
-            "(`[pilots] simulator = \"fft\"`): identification and diagnose see the model's own output.", ""]
+            "(`[pilots] simulator = \"fft\"`): identification and diagnose see the model's own output. "
+            + _forcing_note(cohort.get("target")), ""]
 
 
 def _diagnose(folder: Path, root: Path) -> list[str]:
@@ -277,11 +280,11 @@ def _answer(folder: Path) -> list[str]:
     out = [f"**Does the pilot need motion?{note}** {v['sentence'][0].upper()}{v['sentence'][1:]}.", ""]
     cohort = _load(folder / "cohort" / "cohort.json")
     if v.get("answer") == "undetermined" and cohort is not None and not cohort.get("target"):
-        out += ["The cohort flew the paper's task: one forcing function (the side wind with its "
-                "gusts), in whose records the visual and vestibular paths act on the same signal. "
+        out += ["The cohort flew the paper's task (`[pilots] forcing = \"paper\"`): one forcing "
+                "function (the side wind with its gusts), in whose records the visual and vestibular paths act on the same signal. "
                 "`[pilots] forcing = \"two_input\"` flies it through wind and roll-rate target "
                 "multisines on interleaved lines, from which the describing-function test can "
-                "answer (README, \"The JSBSim cohort's forcing\").", ""]
+                "answer (the default; README, \"The synthetic cohort's forcing\").", ""]
     return out + [f"Method: {v['method']}.", ""]
 
 
