@@ -30,9 +30,13 @@ passes = 4
 restarts = 1
 workers = 1
 figures = false
+forcing = "paper"
 [diagnose]
 max_effects = 1
 """
+# SMALL flies the paper's forcing: these tests are about which stages run, and the two-input
+# default's motion tests on the lines would triple their time (43 s -> 118 s for the module).
+# The default forcing's own end-to-end run is test_the_default_forcing_answers_the_question.
 
 STAGES = ["flight", "plants", "analytic", "pilots", "diagnose", "report"]
 
@@ -75,6 +79,25 @@ def test_first_run_writes_every_stage_and_report(reference):
         truth = json.loads(files[f"pilots/cohort/{pid}.truth.json"].decode())
         assert truth["crossover"]["within_limits"] and truth["simulator"] == "jsbsim"
     assert "truth of the synthetic pilot" in report and "Within the limits (expanded model):" in report
+
+
+def test_the_default_forcing_answers_the_question(tmp_path):
+    """The built-in forcing (two-input) gives every record its lines, so the report's first
+    line is the motion verdict's answer, and diagnose tests motion on the lines."""
+    import json
+
+    cfg = tmp_path / "small.toml"
+    cfg.write_text(SMALL.replace('forcing = "paper"\n', ""))
+    out = tmp_path / "out"
+    assert main(["run", "--config", str(cfg), "--out", str(out)]) == 0
+    verdict = json.loads((out / "pilots" / "comparison.json").read_text())["motion_verdict"]
+    assert verdict["answer"] == "yes"  # a cohort with motion feedback (the default effects)
+    assert all(t["forcing"] == "disturbance and target" for t in verdict["per_pilot"].values())
+    report = (out / "report.md").read_text()
+    assert "**Does the pilot need motion? (SYNTHETIC DATA)** Yes:" in report
+    assert "Forcing: two-input" in report and 'forcing = \"paper\"' not in report
+    steps = json.loads((out / "diagnose" / "diagnosis.json").read_text())["steps"]
+    assert steps[0]["round"] == 0 and steps[0]["candidate"] == "motion_feedback"
 
 
 def test_second_run_reruns_nothing(reference, capsys):
