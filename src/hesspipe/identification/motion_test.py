@@ -93,7 +93,6 @@ from ._motion_fits import (  # noqa: F401
     TAU_M_MAX,
     VESTIBULAR_FORMS,
     VISUAL_EQUALISER,
-    _delay_bound,
     _either_order,
 )
 from ._path_check import PATH_ADVICE, PATH_VARIANTS  # noqa: F401
@@ -157,7 +156,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         Lines are used in this band, Hz.
     max_delay : float, optional
         Also test the original model's visual delay against this bound, s
-        (:func:`_delay_bound`; diagnose's extra delay).
+        (:func:`._motion_fits._delay_bound`; diagnose's extra delay).
     interval : float, optional
         Confidence level (e.g. 0.95) of a profile-likelihood interval of Km
         and of Km/|Ke| (:func:`._km_estimate._km_profile`; about twenty more fits each, so compare-pilots
@@ -196,7 +195,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         ``standard_errors_expanded`` (of the two fits' free parameters; diagnose reads the
         pilot's own delay from the model its verdict keeps),
         ``delay_bound`` and ``delay_bound_expanded`` (None without `max_delay`; else
-        :func:`_delay_bound`'s test of that fit's delay against it), ``display``,
+        :func:`._motion_fits._delay_bound`'s test of that fit's delay against it), ``display``,
         ``target_lines`` (whether the record has a target's lines) and ``feedforward``
         (the fitted ``Kff`` and ``T_ff``; None unless a pursuit display with target
         lines); with display "either" also ``display_p`` (display → p-value; "pursuit"
