@@ -71,6 +71,13 @@ def test_cli_import_stays_light():
     assert out.strip() == "[]"
 
 
+def test_forcing_choices_are_the_librarys_forcings():
+    from hesspipe.cli._options import FORCING_CHOICES
+    from hesspipe.flight.target import FORCINGS
+
+    assert FORCING_CHOICES == tuple(FORCINGS)
+
+
 @pytest.mark.parametrize("command", ["run", "status"])
 def test_an_unknown_aircraft_flag_is_blamed_on_the_flag(command, tmp_path, capsys):
     """The value came from the command line, not from pipeline/default.toml (nor from --config)."""

@@ -16,6 +16,10 @@ import sys
 from ..core.errors import HesspipeError
 from ..core.seeds import check_seed
 
+#: ``--forcing``'s choices: the names of :data:`hesspipe.flight.target.FORCINGS`, spelled here
+#: so that building ``--help`` imports no stage (tests/test_cli.py checks they are the same).
+FORCING_CHOICES = ("paper", "two_input")
+
 #: Library wording → command-line wording of the options added by :func:`add_run_options`.
 RUN_TERMS = {
     r"\bset resample\b": "pass --resample",

@@ -15,6 +15,7 @@ def register(sub) -> None:
                     "the paper's side wind plus the identification excitation. Writes DIR/ID.csv "
                     "(measured-run format, marked synthetic), DIR/ID.truth.json and DIR/ID.png.")
     from ..flight.aircraft import DEFAULT_AIRCRAFT
+    from ._options import FORCING_CHOICES
 
     p.add_argument("--aircraft",
                    help=f"aircraft file in aircraft/ to fly; may differ from the plants' aircraft "
@@ -41,7 +42,7 @@ def register(sub) -> None:
                    help="'off' removes the aircraft's yaw damper (default: %(default)s)")
     p.add_argument("--max-bank", type=float, default=15.0, metavar="DEG",
                    help="bank limit of the record, deg (default: %(default)s)")
-    p.add_argument("--forcing", choices=("paper", "two_input"), default="paper",
+    p.add_argument("--forcing", choices=FORCING_CHOICES, default="paper",
                    help="paper: the side wind and gusts of the identification excitation; two_input: "
                         "wind and roll-rate target multisines on interleaved lines, flown for a 15 s "
                         "run-in plus the duration, no paper's side wind (default: %(default)s)")

@@ -13,7 +13,7 @@ def register(sub) -> None:
                                    "in the measured-run format and <id>.truth.json beside each.")
     p.add_argument("--plants", required=True, metavar="PLANTS.json", help="plants JSON (Yc, Yd)")
     p.add_argument("--n", required=True, type=int, metavar="N", help="number of pilots")
-    from ._options import add_seed, add_terms
+    from ._options import FORCING_CHOICES, add_seed, add_terms
 
     add_seed(p, 0, "base seed")
     add_terms(p, {r"(^|: )effects: ": r"\1--effects: ", r"(^|: )n: ": r"\1--n: "})
@@ -28,7 +28,7 @@ def register(sub) -> None:
                    help="how pilots are drawn: table1 (around Table 1) or crossover_model (target "
                         "crossover 1.5-4 rad/s, kept within the crossover-model limits; the pipeline's "
                         "default); default: %(default)s")
-    p.add_argument("--forcing", choices=("paper", "two_input"), default="paper",
+    p.add_argument("--forcing", choices=FORCING_CHOICES, default="paper",
                    help="paper: the side wind and gusts; two_input: wind and roll-rate target "
                         "multisines on interleaved lines, periodic over the record, no paper's side "
                         "wind (the reference column holds the target; default: %(default)s)")
