@@ -79,6 +79,8 @@ def test_first_run_writes_every_stage_and_report(reference):
         truth = json.loads(files[f"pilots/cohort/{pid}.truth.json"].decode())
         assert truth["crossover"]["within_limits"] and truth["simulator"] == "jsbsim"
     assert "truth of the synthetic pilot" in report and "Within the limits (expanded model):" in report
+    # the paper's 50 % is of its PSD fitness: the df criterion's improvement is not set beside it bare
+    assert "the paper reports about 50 % on average of its Eq. 10 PSD fitness, not of criterion 'df'." in report
 
 
 def test_the_default_forcing_answers_the_question(tmp_path):
