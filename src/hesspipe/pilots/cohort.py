@@ -400,10 +400,19 @@ def disturbance(spec: CohortSpec, seed: int) -> tuple[np.ndarray, np.ndarray]:
     seed : int
         Seed of the gusts.
     """
-    n = int(round(spec.duration_s / spec.dt_s))
-    t = spec.dt_s * np.arange(n)
+    t = _record_times(spec)
     _, lateral = spec.side_wind(t, spec.duration_s)
     return t, lateral + spec.gust.signal(t, seed)
+
+
+def _record_times(spec: CohortSpec) -> np.ndarray:
+    return spec.dt_s * np.arange(int(round(spec.duration_s / spec.dt_s)))
+
+
+def _periodic_target(spec: CohortSpec) -> TargetForcing:
+    # No run-in: the FFT loop is periodic, so the record is the steady state a flight's
+    # run-in waits for, and the lines must be periodic over the whole record.
+    return replace(spec.target, run_in_s=0.0)
 
 
 def forcing(spec: CohortSpec, seed: int, plants: Plants) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -420,12 +429,8 @@ def forcing(spec: CohortSpec, seed: int, plants: Plants) -> tuple[np.ndarray, np
     """
     if spec.target is None:
         return (*disturbance(spec, seed), None)
-    n = int(round(spec.duration_s / spec.dt_s))
-    t = spec.dt_s * np.arange(n)
-    # No run-in: the FFT loop is periodic, so the record is the steady state a flight's
-    # run-in waits for, and the lines must be periodic over the whole record.
-    wind, reference = replace(spec.target, run_in_s=0.0).signals(
-        t, seed, from_tf(plants.disturbance_to_output).response)
+    t = _record_times(spec)
+    wind, reference = _periodic_target(spec).signals(t, seed, from_tf(plants.disturbance_to_output).response)
     if spec.target.paper_side_wind:
         wind = wind + spec.side_wind(t, spec.duration_s)[1]
     return t, wind, reference
@@ -437,7 +442,7 @@ def _forcing_truth(spec: CohortSpec) -> dict:
         return {"side_wind": vars(spec.side_wind), "gust": spec.gust.describe("ft/s"),
                 "signal": "lateral component of the side wind + gust, ft/s"}
     return {**({"side_wind": vars(spec.side_wind)} if spec.target.paper_side_wind else {}),
-            "target": {**spec.target.describe(), "run_in_s": 0.0},
+            "target": _periodic_target(spec).describe(),
             "signal": "lateral wind on the disturbance lines, ft/s; the reference (roll rate, rad/s) on "
                       "the target lines"}
 

@@ -283,8 +283,9 @@ def _answer(folder: Path) -> list[str]:
     cohort = _load(folder / "cohort" / "cohort.json")
     if v.get("answer") == "undetermined" and cohort is not None and not cohort.get("target"):
         out += ["The cohort flew the paper's task (`[pilots] forcing = \"paper\"`): one forcing "
-                "function (the side wind with its gusts), in whose records the visual and vestibular paths act on the same signal. "
-                "`[pilots] forcing = \"two_input\"` flies it through wind and roll-rate target "
+                "function (the side wind with its gusts), in whose records the visual and vestibular "
+                "paths act on the same signal. `[pilots] forcing = \"two_input\"` flies it through "
+                "wind and roll-rate target "
                 "multisines on interleaved lines, from which the describing-function test can "
                 "answer (the default; README, \"The synthetic cohort's forcing\").", ""]
     return out + [f"Method: {v['method']}.", ""]
