@@ -1,0 +1,95 @@
+"""Benchmark: motion named per run on an independent laboratory's files (SYNTHETIC DATA).
+
+The laboratories in ``benchmarks/labs/`` were written by reviewers who did not read hesspipe
+(numpy and scipy only; their files, plants and ``truth.json`` are the lab's own formats).
+This reads one generated laboratory as ``hesspipe diagnose FOLDER --each`` reads it (the
+lab's columns and plants file), diagnoses every run on its own and counts, per controlled
+element and condition, the runs named ``motion_feedback``: the motion users' motion runs,
+the non-users' motion runs, and the static runs (issue 13: >= 70 % of motion runs, <= 10 %
+of no-motion runs). The cohort verdicts are ``hesspipe pilots`` on each condition's folder
+(docs/status.md gives the commands).
+
+Usage::
+
+    python benchmarks/labs/lab7_awkward_yaw.py --seed 2026 --out /tmp/lab7
+    python benchmarks/bench_labs.py lab7 /tmp/lab7
+    python benchmarks/labs/lab8_simona_yaw.py 8080 /tmp/lab8
+    python benchmarks/bench_labs.py lab8 /tmp/lab8 [--elements SI,DI] [--conditions motion,static]
+
+Set ``OPENBLAS_NUM_THREADS=1`` for one core's CPU time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import statistics
+import sys
+import time
+from pathlib import Path
+
+from hesspipe.core.formats import read_plants
+from hesspipe.diagnose import DiagnoseConfig, diagnose
+from hesspipe.pilots.compare import list_runs, read_runs
+
+LABS = {
+    # name: (plants file per element, --columns, person id in the file name)
+    "lab7": ("plants/yaw_{el}.json", "time=t,reference=ft,disturbance=fd,output=psi,control=u", r"^(S[0-9]+)_"),
+    "lab8": ("plants_{el}.json", "time=Time [s],reference=Target [deg],disturbance=Dist [deg],"
+             "output=Yaw [deg],control=Stick [deg]", r"^(P[0-9]+)_"),
+}
+
+
+def motion_users(lab: str, truth: dict, element: str) -> set[str]:
+    """The persons the laboratory's truth says use the cab's motion in the motion condition."""
+    if lab == "lab7":
+        return {p for p, v in truth["elements"][element]["persons"].items() if v["uses_motion"]}
+    return {p for p, v in truth["persons"].items() if v["element"] == element and v["uses_motion"]}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("lab", choices=sorted(LABS))
+    ap.add_argument("root", help="the folder the laboratory's generator wrote")
+    ap.add_argument("--elements", default="SI,DI")
+    ap.add_argument("--conditions", default="motion,static")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    plants_name, columns, person = LABS[args.lab]
+    root = Path(args.root)
+    truth = json.loads((root / "truth.json").read_text())
+    print("SYNTHETIC DATA: an independent laboratory's generated files, diagnosed run by run")
+    totals: dict[str, list[int]] = {}
+    times = []
+    for el in args.elements.split(","):
+        plants = read_plants(root / plants_name.format(el=el))
+        users = motion_users(args.lab, truth, el)
+        for cond in args.conditions.split(","):
+            runs, failures = read_runs(list_runs(root / "data" / el / cond), columns=columns)
+            for f in failures:
+                print(f"  unread: {f.error}")
+            counts = {"users": [0, 0], "others": [0, 0]}
+            for run in runs:
+                t = time.process_time()
+                d = diagnose(run, plants, seed=args.seed, config=DiagnoseConfig())
+                times.append(time.process_time() - t)
+                who = "users" if cond == "motion" and re.match(person, run.id).group(1) in users else "others"
+                counts[who][0] += "motion_feedback" in d.named_effects
+                counts[who][1] += 1
+            print(f"{el} {cond:<7} motion named: users' runs {counts['users'][0]}/{counts['users'][1]}, "
+                  f"other runs {counts['others'][0]}/{counts['others'][1]}", flush=True)
+            for who, (k, n) in counts.items():
+                tot = totals.setdefault(f"{cond} {who}", [0, 0])
+                tot[0] += k
+                tot[1] += n
+    for key, (k, n) in totals.items():
+        if n:
+            print(f"all {key}: {k}/{n} ({100 * k / n:.0f} %)")
+    if times:
+        print(f"median CPU time per diagnosis {statistics.median(times):.2f} s ({len(times)} runs)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

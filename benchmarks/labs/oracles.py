@@ -1,0 +1,148 @@
+"""Oracles of the motion test on lab7's and lab8's files: how many motion runs any test could name (SYNTHETIC).
+
+Uses the laboratory's truth.json and its own model (numpy and scipy only, no hesspipe), on the
+describing-function lines (equation error U - Hv E + Km G Y, G the canals x neuromuscular x
+vestibular delay x the true motion path acting on Y), each line weighted by the TRUE remnant's
+power at its six nearest unforced bins (the oracle knows it; a real test estimates it):
+
+- "known": every parameter at its true value but Km; one-sided chi-square test of Km >= 0;
+- "structural": the lab's own pilot structure with Kv, TL, tv, wn, zn free (the visual and
+  neuromuscular nuisance a real test must fit), Km and tm added under the alternative;
+  chi-square test with 2 degrees of freedom.
+
+Prints per element, condition and motion use how many runs have p < 0.01.
+
+Usage::
+
+    python benchmarks/labs/oracles.py lab8 /tmp/lab8
+    python benchmarks/labs/oracles.py lab7 /tmp/lab7
+"""
+import csv
+import json
+import sys
+
+import numpy as np
+from scipy import stats
+from scipy.optimize import least_squares
+
+LABS = {
+    # window (start s, samples, rate Hz), lines (target + disturbance), columns (control, output, target),
+    # separator, decimal comma, canal on the cab's rate, true motion path from the output to the cab's rate
+    "lab8": dict(start=10.0, n=4500, fs=50, lines=[3, 8, 15, 27, 45, 74, 122, 5, 11, 20, 35, 58, 95, 157],
+                 cols=("Stick [deg]", "Yaw [deg]", "Target [deg]"), sep=";",
+                 canal=lambda s: 5.9 * s * (0.11 * s + 1) / ((5.9 * s + 1) * (0.005 * s + 1)),
+                 path=lambda s: s * 0.7 * s**2 / (s**2 + 0.7 * s + 0.25) * 900 / (s**2 + 42 * s + 900)
+                 * np.exp(-0.03 * s)),
+    "lab7": dict(start=8.0, n=8192, fs=100, lines=[2, 5, 11, 17, 27, 41, 59, 83, 119, 179,
+                                                  3, 7, 13, 19, 29, 43, 61, 89, 127, 187],
+                 cols=("u", "psi", "ft"), sep=",",
+                 canal=lambda s: s * (0.11 * s + 1) / (5.9 * s + 1),
+                 path=lambda s: s * 0.7 * s**2 / (s**2 + 0.7 * s + 0.25) * np.exp(-0.05 * s)),
+}
+LAB = LABS["lab8"]
+LINES = np.array(sorted(LAB["lines"]))
+FORCED = set(LINES.tolist())
+
+
+def use(lab):
+    global LAB, LINES, FORCED
+    LAB = LABS[lab]
+    LINES = np.array(sorted(LAB["lines"]))
+    FORCED = set(LINES.tolist())
+
+
+def read(path):
+    rows = [r for r in csv.reader(open(path, encoding="utf-8-sig"), delimiter=LAB["sep"])
+            if r and not r[0].startswith("#")]
+    d = np.array([[float(x.replace(",", ".")) if LAB["sep"] == ";" else float(x) for x in r] for r in rows[1:]])
+    i0 = int(round(LAB["start"] * LAB["fs"]))
+    return {k: d[i0:i0 + LAB["n"], i] for i, k in enumerate(rows[0])}
+
+
+def spectra(x):
+    u, y, r = LAB["cols"]
+    return np.fft.rfft(x[u]), np.fft.rfft(x[y]), np.fft.rfft(x[r] - x[y])
+
+
+def visual(s, Kv, TL, tv, wn, zn):
+    Hn = wn**2 / (s**2 + 2 * zn * wn * s + wn**2)
+    return Kv * (TL * s + 1) * np.exp(-s * tv) * Hn, Hn
+
+
+def vestibular(s, Hn, tm):
+    return LAB["canal"](s) * Hn * np.exp(-s * tm) * LAB["path"](s)
+
+
+def weights(U, Y, E, s, p, Km):
+    Hv, Hn = visual(s, p["Kv"], p["TL"], p["tv"], p["wnm"], p["znm"])
+    noise = U - Hv * E + Km * vestibular(s, Hn, p["tm"]) * Y
+    out = []
+    for L in LINES:
+        nb = sorted((j for j in range(L - 6, L + 7) if j not in FORCED and j > 0), key=lambda j: abs(j - L))[:6]
+        out.append(np.mean(np.abs(noise[nb]) ** 2))
+    return np.array(out)
+
+
+def known(U, Y, E, s, p, sig):
+    Hv, Hn = visual(s, p["Kv"], p["TL"], p["tv"], p["wnm"], p["znm"])
+    a, g = (U - Hv * E)[LINES], (vestibular(s, Hn, p["tm"]) * Y)[LINES]
+    k = max(0.0, -np.sum((np.conj(g) * a).real / sig) / np.sum(np.abs(g) ** 2 / sig))
+    d = 2 * (np.sum(np.abs(a) ** 2 / sig) - np.sum(np.abs(a + k * g) ** 2 / sig))
+    return 0.5 * stats.chi2.sf(d, 1) if d > 0 else 1.0
+
+
+def structural(U, Y, E, s, p, sig):
+    sl, Ul, Yl, El, w = s[LINES], U[LINES], Y[LINES], E[LINES], 1 / np.sqrt(sig)
+
+    def resid(q, h1):
+        Hv, Hn = visual(sl, *q[:5])
+        r = Ul - Hv * El + (q[5] * vestibular(sl, Hn, q[6]) * Yl if h1 else 0)
+        r = r * w
+        return np.concatenate([r.real, r.imag])
+
+    lo, hi = [1e-3, 0, 0.05, 3, 0.05], [50, 5, 0.5, 30, 1.5]
+    fits0 = [least_squares(resid, np.clip(st, np.add(lo, 1e-6), np.subtract(hi, 1e-6)), bounds=(lo, hi), args=(False,))
+             for st in ([p["Kv"], p["TL"], 0.25, 10, 0.3], [p["Kv"] * 0.7, max(p["TL"], 0.5) * 0.5, 0.2, 8, 0.5],
+                        [p["Kv"] * 1.3, p["TL"] * 1.5 + 0.1, 0.3, 14, 0.2])]
+    f0 = min(fits0, key=lambda f: f.cost)
+    f1 = min((least_squares(resid, np.concatenate([f0.x, [km * abs(f0.x[0]), tm]]), bounds=(lo + [0, 0], hi + [50, 0.3]),
+                            args=(True,)) for km in (0.1, 0.5) for tm in (0.05, 0.15)), key=lambda f: f.cost)
+    return stats.chi2.sf(max(4 * (f0.cost - f1.cost), 0.0), 2)   # cost = sum(r^2)/2; chi2 = 2 sum(r^2)
+
+
+def runs(lab, truth):
+    """(element, condition, uses motion, file, parameters in lab8's names) of every run."""
+    if lab == "lab8":
+        for v in truth["persons"].values():
+            for key, r in v["runs"].items():
+                yield v["element"], key.split("_")[0], v["uses_motion"], r["file"], r["params"]
+        return
+    for el, e in truth["elements"].items():
+        for v in e["persons"].values():
+            for cond, rr in v["runs"].items():
+                for r in rr.values():
+                    yield el, cond, v["uses_motion"], r["file"], dict(
+                        Kv=r["Ke"], TL=r["T_L"], tv=r["tau_v"], wnm=r["wn"], znm=r["zeta"], tm=r["tau_m"] or 0.1, Km=r["Km"] or 0.0)
+
+
+def main(lab, root):
+    use(lab)
+    truth = json.load(open(f"{root}/truth.json"))
+    w0 = 2 * np.pi * LAB["fs"] / LAB["n"]
+    tally = {}
+    for el, cond, user, file, p in runs(lab, truth):
+        cond = "motion" if cond.startswith("motion") else "static"
+        U, Y, E = spectra(read(f"{root}/{file}"))
+        s = 1j * np.arange(U.size) * w0
+        sig = weights(U, Y, E, s, p, p["Km"] if cond == "motion" else 0.0)
+        for name, test in (("known", known), ("structural", structural)):
+            t = tally.setdefault((name, el, cond, user), [0, 0])
+            t[0] += test(U, Y, E, s, p, sig) < 0.01
+            t[1] += 1
+    print(f"SYNTHETIC DATA: {lab}'s files; oracle motion tests (p < 0.01)")
+    for (name, el, cond, user), (k, n) in sorted(tally.items()):
+        print(f"{name:<10} {el} {cond:<6} {'user' if user else 'non-user':<8} {k}/{n}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])
