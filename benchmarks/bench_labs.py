@@ -15,6 +15,7 @@ Usage::
     python benchmarks/bench_labs.py lab7 /tmp/lab7
     python benchmarks/labs/lab8_simona_yaw.py 8080 /tmp/lab8
     python benchmarks/bench_labs.py lab8 /tmp/lab8 [--elements SI,DI] [--conditions motion,static]
+        [--display either|compensatory|pursuit]
 
 Set ``OPENBLAS_NUM_THREADS=1`` for one core's CPU time.
 """
@@ -54,6 +55,7 @@ def main(argv=None) -> int:
     ap.add_argument("root", help="the folder the laboratory's generator wrote")
     ap.add_argument("--elements", default="SI,DI")
     ap.add_argument("--conditions", default="motion,static")
+    ap.add_argument("--display", default="either", help="DiagnoseConfig.display (the laboratories' is compensatory)")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     plants_name, columns, person = LABS[args.lab]
@@ -72,7 +74,7 @@ def main(argv=None) -> int:
             counts = {"users": [0, 0], "others": [0, 0]}
             for run in runs:
                 t = time.process_time()
-                d = diagnose(run, plants, seed=args.seed, config=DiagnoseConfig())
+                d = diagnose(run, plants, seed=args.seed, config=DiagnoseConfig(display=args.display))
                 times.append(time.process_time() - t)
                 who = "users" if cond == "motion" and re.match(person, run.id).group(1) in users else "others"
                 counts[who][0] += "motion_feedback" in d.named_effects
