@@ -39,28 +39,24 @@ LABS = {
                  canal=lambda s: s * (0.11 * s + 1) / (5.9 * s + 1),
                  path=lambda s: s * 0.7 * s**2 / (s**2 + 0.7 * s + 0.25) * np.exp(-0.05 * s)),
 }
-LAB = LABS["lab8"]
-LINES = np.array(sorted(LAB["lines"]))
-FORCED = set(LINES.tolist())
 
 
-def use(lab):
-    global LAB, LINES, FORCED
-    LAB = LABS[lab]
-    LINES = np.array(sorted(LAB["lines"]))
-    FORCED = set(LINES.tolist())
+def lines(lab):
+    """The lab's forcing lines (FFT bins of its window), sorted, and the same as a set."""
+    out = np.array(sorted(lab["lines"]))
+    return out, set(out.tolist())
 
 
-def read(path):
-    rows = [r for r in csv.reader(open(path, encoding="utf-8-sig"), delimiter=LAB["sep"])
+def read(path, lab):
+    rows = [r for r in csv.reader(open(path, encoding="utf-8-sig"), delimiter=lab["sep"])
             if r and not r[0].startswith("#")]
-    d = np.array([[float(x.replace(",", ".")) if LAB["sep"] == ";" else float(x) for x in r] for r in rows[1:]])
-    i0 = int(round(LAB["start"] * LAB["fs"]))
-    return {k: d[i0:i0 + LAB["n"], i] for i, k in enumerate(rows[0])}
+    d = np.array([[float(x.replace(",", ".")) if lab["sep"] == ";" else float(x) for x in r] for r in rows[1:]])
+    i0 = int(round(lab["start"] * lab["fs"]))
+    return {k: d[i0:i0 + lab["n"], i] for i, k in enumerate(rows[0])}
 
 
-def spectra(x):
-    u, y, r = LAB["cols"]
+def spectra(x, lab):
+    u, y, r = lab["cols"]
     return np.fft.rfft(x[u]), np.fft.rfft(x[y]), np.fft.rfft(x[r] - x[y])
 
 
@@ -69,34 +65,37 @@ def visual(s, Kv, TL, tv, wn, zn):
     return Kv * (TL * s + 1) * np.exp(-s * tv) * Hn, Hn
 
 
-def vestibular(s, Hn, tm):
-    return LAB["canal"](s) * Hn * np.exp(-s * tm) * LAB["path"](s)
+def vestibular(s, Hn, tm, lab):
+    return lab["canal"](s) * Hn * np.exp(-s * tm) * lab["path"](s)
 
 
-def weights(U, Y, E, s, p, Km):
+def weights(U, Y, E, s, p, Km, lab):
     Hv, Hn = visual(s, p["Kv"], p["TL"], p["tv"], p["wnm"], p["znm"])
-    noise = U - Hv * E + Km * vestibular(s, Hn, p["tm"]) * Y
+    noise = U - Hv * E + Km * vestibular(s, Hn, p["tm"], lab) * Y
+    bins, forced = lines(lab)
     out = []
-    for L in LINES:
-        nb = sorted((j for j in range(L - 6, L + 7) if j not in FORCED and j > 0), key=lambda j: abs(j - L))[:6]
+    for L in bins:
+        nb = sorted((j for j in range(L - 6, L + 7) if j not in forced and j > 0), key=lambda j: abs(j - L))[:6]
         out.append(np.mean(np.abs(noise[nb]) ** 2))
     return np.array(out)
 
 
-def known(U, Y, E, s, p, sig):
+def known(U, Y, E, s, p, sig, lab):
     Hv, Hn = visual(s, p["Kv"], p["TL"], p["tv"], p["wnm"], p["znm"])
-    a, g = (U - Hv * E)[LINES], (vestibular(s, Hn, p["tm"]) * Y)[LINES]
+    bins = lines(lab)[0]
+    a, g = (U - Hv * E)[bins], (vestibular(s, Hn, p["tm"], lab) * Y)[bins]
     k = max(0.0, -np.sum((np.conj(g) * a).real / sig) / np.sum(np.abs(g) ** 2 / sig))
     d = 2 * (np.sum(np.abs(a) ** 2 / sig) - np.sum(np.abs(a + k * g) ** 2 / sig))
     return 0.5 * stats.chi2.sf(d, 1) if d > 0 else 1.0
 
 
-def structural(U, Y, E, s, p, sig):
-    sl, Ul, Yl, El, w = s[LINES], U[LINES], Y[LINES], E[LINES], 1 / np.sqrt(sig)
+def structural(U, Y, E, s, p, sig, lab):
+    bins = lines(lab)[0]
+    sl, Ul, Yl, El, w = s[bins], U[bins], Y[bins], E[bins], 1 / np.sqrt(sig)
 
     def resid(q, h1):
         Hv, Hn = visual(sl, *q[:5])
-        r = Ul - Hv * El + (q[5] * vestibular(sl, Hn, q[6]) * Yl if h1 else 0)
+        r = Ul - Hv * El + (q[5] * vestibular(sl, Hn, q[6], lab) * Yl if h1 else 0)
         r = r * w
         return np.concatenate([r.real, r.imag])
 
@@ -105,14 +104,15 @@ def structural(U, Y, E, s, p, sig):
              for st in ([p["Kv"], p["TL"], 0.25, 10, 0.3], [p["Kv"] * 0.7, max(p["TL"], 0.5) * 0.5, 0.2, 8, 0.5],
                         [p["Kv"] * 1.3, p["TL"] * 1.5 + 0.1, 0.3, 14, 0.2])]
     f0 = min(fits0, key=lambda f: f.cost)
-    f1 = min((least_squares(resid, np.concatenate([f0.x, [km * abs(f0.x[0]), tm]]), bounds=(lo + [0, 0], hi + [50, 0.3]),
-                            args=(True,)) for km in (0.1, 0.5) for tm in (0.05, 0.15)), key=lambda f: f.cost)
+    f1 = min((least_squares(resid, np.concatenate([f0.x, [km * abs(f0.x[0]), tm]]),
+                            bounds=(lo + [0, 0], hi + [50, 0.3]), args=(True,))
+              for km in (0.1, 0.5) for tm in (0.05, 0.15)), key=lambda f: f.cost)
     return stats.chi2.sf(max(4 * (f0.cost - f1.cost), 0.0), 2)   # cost = sum(r^2)/2; chi2 = 2 sum(r^2)
 
 
-def runs(lab, truth):
+def runs(name, truth):
     """(element, condition, uses motion, file, parameters in lab8's names) of every run."""
-    if lab == "lab8":
+    if name == "lab8":
         for v in truth["persons"].values():
             for key, r in v["runs"].items():
                 yield v["element"], key.split("_")[0], v["uses_motion"], r["file"], r["params"]
@@ -121,25 +121,27 @@ def runs(lab, truth):
         for v in e["persons"].values():
             for cond, rr in v["runs"].items():
                 for r in rr.values():
+                    # a static run's tau_m is null (never used: Km is 0 there)
                     yield el, cond, v["uses_motion"], r["file"], dict(
-                        Kv=r["Ke"], TL=r["T_L"], tv=r["tau_v"], wnm=r["wn"], znm=r["zeta"], tm=r["tau_m"] or 0.1, Km=r["Km"] or 0.0)
+                        Kv=r["Ke"], TL=r["T_L"], tv=r["tau_v"], wnm=r["wn"], znm=r["zeta"],
+                        tm=r["tau_m"] or 0.1, Km=r["Km"] or 0.0)
 
 
-def main(lab, root):
-    use(lab)
+def main(name, root):
+    lab = LABS[name]
     truth = json.load(open(f"{root}/truth.json"))
-    w0 = 2 * np.pi * LAB["fs"] / LAB["n"]
+    w0 = 2 * np.pi * lab["fs"] / lab["n"]
     tally = {}
-    for el, cond, user, file, p in runs(lab, truth):
+    for el, cond, user, file, p in runs(name, truth):
         cond = "motion" if cond.startswith("motion") else "static"
-        U, Y, E = spectra(read(f"{root}/{file}"))
+        U, Y, E = spectra(read(f"{root}/{file}", lab), lab)
         s = 1j * np.arange(U.size) * w0
-        sig = weights(U, Y, E, s, p, p["Km"] if cond == "motion" else 0.0)
+        sig = weights(U, Y, E, s, p, p["Km"] if cond == "motion" else 0.0, lab)
         for name, test in (("known", known), ("structural", structural)):
             t = tally.setdefault((name, el, cond, user), [0, 0])
-            t[0] += test(U, Y, E, s, p, sig) < 0.01
+            t[0] += test(U, Y, E, s, p, sig, lab) < 0.01
             t[1] += 1
-    print(f"SYNTHETIC DATA: {lab}'s files; oracle motion tests (p < 0.01)")
+    print(f"SYNTHETIC DATA: {name}'s files; oracle motion tests (p < 0.01)")
     for (name, el, cond, user), (k, n) in sorted(tally.items()):
         print(f"{name:<10} {el} {cond:<6} {'user' if user else 'non-user':<8} {k}/{n}")
 
