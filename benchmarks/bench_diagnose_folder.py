@@ -30,6 +30,22 @@ from hesspipe.diagnose import DiagnoseConfig, diagnose
 from hesspipe.pilots.compare import list_runs, read_runs
 
 
+def read_folder(folder, columns=None) -> list:
+    """The runs of `folder` (or a file) read as ``hesspipe diagnose FOLDER --each`` reads them;
+    each file that cannot be read is printed as one "unread" line."""
+    found, failures = read_runs(list_runs(folder), columns=columns)
+    for f in failures:
+        print(f"  unread: {f.error}")
+    return found
+
+
+def timed_diagnose(run, plants, config: DiagnoseConfig, seed: int = 0):
+    """``(diagnosis, CPU seconds)`` of one run (``time.process_time``: one core's work)."""
+    t = time.process_time()
+    d = diagnose(run, plants, seed=seed, config=config)
+    return d, time.process_time() - t
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folders", nargs="+", help="folders (or files) of runs")
@@ -45,19 +61,15 @@ def main(argv=None) -> int:
         plants = read_plants(args.plants)
         runs = []
         for folder in args.folders:
-            found, failures = read_runs(list_runs(folder), columns=args.columns)
-            for f in failures:
-                print(f"  unread: {f.error}")
-            runs += found[::max(args.every, 1)]
+            runs += read_folder(folder, args.columns)[::max(args.every, 1)]
     except HesspipeError as exc:
         print(f"bench_diagnose_folder: error: {exc}", file=sys.stderr)
         return 1
     for config in configs:
         display, times = config.display, []
         for run in runs:
-            t = time.process_time()
-            d = diagnose(run, plants, seed=args.seed, config=config)
-            times.append(time.process_time() - t)
+            d, cpu = timed_diagnose(run, plants, config, args.seed)
+            times.append(cpu)
             print(f"  {display:<13} {run.source}: {list(d.named_effects)} {times[-1]:.2f} s", flush=True)
         if times:
             print(f"{display}: median CPU time per diagnosis {statistics.median(times):.2f} s "

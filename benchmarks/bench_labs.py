@@ -27,12 +27,13 @@ import json
 import re
 import statistics
 import sys
-import time
 from pathlib import Path
 
 from hesspipe.core.formats import read_plants
-from hesspipe.diagnose import DiagnoseConfig, diagnose
-from hesspipe.pilots.compare import list_runs, read_runs
+from hesspipe.diagnose import DiagnoseConfig
+
+sys.path.insert(0, str(Path(__file__).parent))
+from bench_diagnose_folder import read_folder, timed_diagnose  # noqa: E402  (the same reading and timing)
 
 LABS = {
     # name: (plants file per element, --columns, person id in the file name)
@@ -59,6 +60,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     plants_name, columns, person = LABS[args.lab]
+    config = DiagnoseConfig(display=args.display)
     root = Path(args.root)
     truth = json.loads((root / "truth.json").read_text())
     print("SYNTHETIC DATA: an independent laboratory's generated files, diagnosed run by run")
@@ -68,14 +70,10 @@ def main(argv=None) -> int:
         plants = read_plants(root / plants_name.format(el=el))
         users = motion_users(args.lab, truth, el)
         for cond in args.conditions.split(","):
-            runs, failures = read_runs(list_runs(root / "data" / el / cond), columns=columns)
-            for f in failures:
-                print(f"  unread: {f.error}")
             counts = {"users": [0, 0], "others": [0, 0]}
-            for run in runs:
-                t = time.process_time()
-                d = diagnose(run, plants, seed=args.seed, config=DiagnoseConfig(display=args.display))
-                times.append(time.process_time() - t)
+            for run in read_folder(root / "data" / el / cond, columns):
+                d, cpu = timed_diagnose(run, plants, config, args.seed)
+                times.append(cpu)
                 who = "users" if cond == "motion" and re.match(person, run.id).group(1) in users else "others"
                 counts[who][0] += "motion_feedback" in d.named_effects
                 counts[who][1] += 1
