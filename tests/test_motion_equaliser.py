@@ -123,3 +123,22 @@ def test_the_paired_delay_test_takes_the_order_the_motion_test_kept(tmp_path):
     assert abs(dv["delay_s"] - spec.pilot["tau"]) < 0.06, dv
     assert abs(dv["baseline_delay_s"] - spec.pilot["tau"]) < 0.06, dv
     assert not dv["named"]
+
+
+def test_no_fit_gives_the_pilot_a_visual_delay_shorter_than_the_papers(tmp_path):
+    # A precision pilot (0.16 s delay, 0.19 s lag, a weak vestibular path) on a single
+    # integrator: unbounded, the original model's delay went to 0 s, the lag and a missing
+    # delay standing in for the vestibular path's lead, as on lab8's single-integrator users
+    # (benchmarks/labs). Every fit now keeps tau0 >= MIN_VISUAL_DELAY (Table 1's 0.1 s).
+    from hesspipe.identification.motion_test import MIN_VISUAL_DELAY
+
+    spec = draw_trial("1/s", 6, task="both", pilot="precision", output="angle", fs=50.0, T_m=70.0,
+                      tau_m=0.1, effects=("motion_feedback",), km_ratio=(0.05, 0.1), name="pilot")
+    assert spec.pilot["tau"] < 0.17 and spec.pilot["TI"] > 0.15 and spec.pilot["Km"] > 0
+    run = read_run(write_trial(tmp_path, simulate_trial(spec)))
+    t = motion_test(run, read_plants(tmp_path / "plants.json"), PilotModel().defaults(1), k=1,
+                    display="compensatory")
+    assert MIN_VISUAL_DELAY == 0.1
+    assert t["parameters_original"]["tau0"] >= MIN_VISUAL_DELAY - 1e-9
+    assert t["parameters_expanded"]["tau0"] >= MIN_VISUAL_DELAY - 1e-9
+    assert t["parameters_original"]["tau0"] < spec.pilot["tau"]   # the bound is what holds it

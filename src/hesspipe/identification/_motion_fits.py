@@ -88,6 +88,21 @@ no-motion runs of the generator's precision pilots (single and double integrator
 display, development seeds 100-109), and a lag's phase was read as 0.1 s of extra delay."""
 
 
+MIN_VISUAL_DELAY = 0.1
+"""Lower bound of the test's visual delay tau0, s, in every fit (original and expanded): the
+paper's Table 1 value, the shortest of hesspipe's model pilots and below the 0.15-0.35 s
+identified for humans (SPEC.md "Describing functions"). Unbounded, the original model made
+a vestibular path's lead with a shorter delay and the lag ``TI_v`` (VISUAL_EQUALISER): on
+lab8's single-integrator motion users (benchmarks/labs, Km/Kv 0.02-0.1, visual delays
+0.22-0.25 s) its delay went to 0.02-0.12 s and the test named 14 of 32 runs (display
+"compensatory"), a fit of the laboratory's own structure 21; with this bound 16 (static
+0 of 40 both times). At 0.15 s it named 18, but then also a JSBSim-flown static Table 1
+pilot (tau0 = 0.1 s; benchmarks/bench_fly_pilot.py --diag-cohorts table1 --diag-cases
+baseline: 1 of 6). It weakens the evidence of a generator precision pilot with a 0.16 s delay,
+a 0.19 s lag and a weak vestibular path (p 0.0104 -> 0.068, named at 0.01 neither way;
+tests/test_motion_equaliser.py)."""
+
+
 def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, data, w) -> dict:
     """Likelihood-ratio test of "the visual delay is at most `bound` (s)" in `model` (the
     original, or the expanded where the vestibular path is named).
@@ -106,7 +121,7 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
         return {"bound_s": float(bound), "f": 0.0, "p_value": 1.0, "dof": int(dof),
                 "bounded_tau0": float(optima[0][i])}
     hi_b = np.array(hi, dtype=float)
-    hi_b[i] = bound
+    hi_b[i] = max(bound, lo[i])   # a bound below the fits' own floor leaves the floor
     clip = [[*x[:i], min(x[i], bound), *x[i + 1:]] for x in [*optima, *starts]]
     rss_b, p_b, _ = _fit(model, base, free, lo, hi_b, clip, *data, w)
     f, p = _nested_f(rss_b, rss, 1, dof)
@@ -174,7 +189,7 @@ def _null_fit(ld: LineData, plants, start: Mapping[str, float], k: int, display:
     free = ["Ke", "K1", "1/T1", "tau0", "wn", "zn"] + (["1/T2"] if k == 2 else []) + [eq]
     sign = 1.0 if base["Ke"] >= 0 else -1.0
     big = 1e3 * max(abs(base["Ke"]), 1.0)
-    lo = np.array([0.0 if sign > 0 else -big, 1e-3, 1e-4, 0.0, 1.0, 0.02] + ([1e-3] if k == 2 else [])
+    lo = np.array([0.0 if sign > 0 else -big, 1e-3, 1e-4, MIN_VISUAL_DELAY, 1.0, 0.02] + ([1e-3] if k == 2 else [])
                   + [0.0])
     hi = np.array([big if sign > 0 else 0.0, 100.0, 10.0, 0.6, 60.0, 2.0] + ([20.0] if k == 2 else [])
                   + [eq_hi])

@@ -90,6 +90,7 @@ from ._motion_fits import (  # noqa: F401
     EXPANDED_KEEP,
     FEEDFORWARD,
     FORM_SHARES,
+    MIN_VISUAL_DELAY,
     TAU_M_MAX,
     VESTIBULAR_FORMS,
     VISUAL_EQUALISER,
