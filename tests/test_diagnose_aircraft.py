@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import read_plants, read_run
 from hesspipe.diagnose.aircraft import corrected, plant_finding
 from hesspipe.diagnose.checks import plant_check
@@ -220,9 +221,13 @@ def test_a_named_motion_path_tests_the_delay_of_its_own_fit(tmp_path_factory, mo
     from hesspipe.identification.motion_test import motion_test
     from hesspipe.pilot.hess import PilotModel
     k = choose_k(plants)[0]
-    t = motion_test(run, plants, PilotModel().complete({}, k), k=k, max_delay=0.05)
+    # 0.15 s: below the pilot's delay, above the fits' own floor (MIN_VISUAL_DELAY), under which
+    # a bound is refused.
+    with pytest.raises(HesspipeError, match="max_delay: expected more than"):
+        motion_test(run, plants, PilotModel().complete({}, k), k=k, max_delay=0.05)
+    t = motion_test(run, plants, PilotModel().complete({}, k), k=k, max_delay=0.15)
     own = t["delay_bound_expanded"]
-    assert t["parameters_expanded"]["tau0"] > 0.05 and own["bounded_tau0"] <= 0.05 + 1e-9
+    assert t["parameters_expanded"]["tau0"] > 0.15 and own["bounded_tau0"] <= 0.15 + 1e-9
     assert own["parameters"]["Km"] > 0 and "Km" not in t["delay_bound"]["parameters"]
     assert own["f"] > 0 and own["p_value"] < 0.01 and own["f"] != t["delay_bound"]["f"]
     assert t["standard_errors_expanded"]["tau0"] < 0.05

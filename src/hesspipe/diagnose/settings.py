@@ -121,7 +121,7 @@ class DiagnoseConfig(Settings):
     #: tracking studies report up to about 0.35 s (SPEC: 0.2-0.3 s typical), and the fitted
     #: delay of a human-like pilot came out up to 0.05 s above the true one (sampling, model
     #: structure; independent generator's baselines, development seeds 100-104). Only delay
-    #: beyond it is named extra_delay (diagnose.motion.delay_bound_test). At least the motion
+    #: beyond it is named extra_delay (diagnose.motion.delay_bound_test). More than the motion
     #: test's shortest visual delay (``motion_test.MIN_VISUAL_DELAY``, 0.1 s).
     max_pilot_delay: float = 0.40
     #: Spread (standard deviation) of the difference between one pilot's visual delays on
@@ -163,7 +163,7 @@ class DiagnoseConfig(Settings):
                     weighting=f.string("weighting", choices=("random-share", "uniform")),
                     k=f.integer("k", min=1, max=2),
                     motion_alpha=f.number("motion_alpha", min=0.0, max=0.5, strict_min=True),
-                    max_pilot_delay=f.number("max_pilot_delay", min=MIN_VISUAL_DELAY, max=2.0),
+                    max_pilot_delay=f.number("max_pilot_delay", min=MIN_VISUAL_DELAY, max=2.0, strict_min=True),
                     retest_delay_sd=f.number("retest_delay_sd", min=0.0, max=1.0),
                     remnant_share=f.number("remnant_share", min=0.0, max=1.0),
                     display=f.string("display", choices=DISPLAYS))

@@ -121,7 +121,7 @@ def _delay_bound(model, base, free, lo, hi, starts, optima, bound, rss, dof, dat
         return {"bound_s": float(bound), "f": 0.0, "p_value": 1.0, "dof": int(dof),
                 "bounded_tau0": float(optima[0][i])}
     hi_b = np.array(hi, dtype=float)
-    hi_b[i] = max(bound, lo[i])   # a bound below the fits' own floor leaves the floor
+    hi_b[i] = bound
     clip = [[*x[:i], min(x[i], bound), *x[i + 1:]] for x in [*optima, *starts]]
     rss_b, p_b, _ = _fit(model, base, free, lo, hi_b, clip, *data, w)
     f, p = _nested_f(rss_b, rss, 1, dof)

@@ -157,7 +157,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         Lines are used in this band, Hz.
     max_delay : float, optional
         Also test the original model's visual delay against this bound, s
-        (:func:`._motion_fits._delay_bound`; diagnose's extra delay).
+        (:func:`._motion_fits._delay_bound`; diagnose's extra delay); above
+        :data:`MIN_VISUAL_DELAY`, the fits' own lower bound.
     interval : float, optional
         Confidence level (e.g. 0.95) of a profile-likelihood interval of Km
         and of Km/|Ke| (:func:`._km_estimate._km_profile`; about twenty more fits each, so compare-pilots
@@ -213,6 +214,9 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     """
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
+    if max_delay is not None and not max_delay > MIN_VISUAL_DELAY:
+        raise HesspipeError(f"max_delay: expected more than the fits' shortest visual delay "
+                            f"MIN_VISUAL_DELAY = {MIN_VISUAL_DELAY:g} s, got {max_delay:g} s")
     runs = as_runs(run)
     ld = line_data(runs[0], band_hz) if len(runs) == 1 else pooled_line_data(runs, band_hz)
     forcing = {"forcing": forcing_sets(runs[0], band_hz)}
