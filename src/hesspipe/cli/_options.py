@@ -13,6 +13,7 @@ import argparse
 import re
 import sys
 
+from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
 from ..core.errors import HesspipeError
 from ..core.seeds import check_seed
 
@@ -183,3 +184,13 @@ def add_seed(parser: argparse.ArgumentParser, default: int | None = 0, help: str
     tail = f" (default: {default})" if default is not None else ""
     parser.add_argument("--seed", type=seed_arg, default=default, metavar="N",
                         help=f"{help}, an integer 0 <= N < 2**63{tail}")
+
+
+def add_display(parser: argparse.ArgumentParser, seen_by: str = "the pilot") -> None:
+    """``--display``, what the pilot saw (:data:`hesspipe.core.choices.DISPLAYS`)."""
+    parser.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
+                        help=f"what {seen_by} saw (default {DEFAULT_DISPLAY}): compensatory (the error "
+                             "alone), pursuit (target and output apart: the motion test fits the "
+                             "feedforward humans add) or either (not known: motion only if the test "
+                             "finds it for both, where the record shows that feedforward; else for "
+                             "compensatory)")

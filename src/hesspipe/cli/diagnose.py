@@ -9,10 +9,10 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from ..core.choices import DEFAULT_DISPLAY, DISPLAYS
-
 
 def register(sub) -> None:
+    from ._options import add_display, add_run_options, add_seed, add_terms, field_terms
+
     p = sub.add_parser(
         "diagnose", help="locate model/data disagreement, name missing effects, show the gap shrink",
         description="Check the plants against RUN.csv's output (a failed check is a finding: the "
@@ -41,10 +41,7 @@ def register(sub) -> None:
                         "longest): one record holds the pilot's and the simulator's delay as one, so "
                         "only delay beyond this is named extra_delay; give the pilot's known delay "
                         "(a model pilot's, or the baseline condition's identified one) plus a margin")
-    p.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
-                   help=f"what the pilot saw (default {DEFAULT_DISPLAY}): compensatory (the error alone), "
-                        "pursuit (target and output apart: the motion test fits the feedforward humans "
-                        "add) or either (not known: motion only if the test finds it for both)")
+    add_display(p)
     p.add_argument("--each", action="store_true",
                    help="diagnose every run on its own (RUN may then be a folder of runs): a line per "
                         "run and how often each effect was named, as a motion / no-motion check counts")
@@ -53,7 +50,6 @@ def register(sub) -> None:
     p.add_argument("--json", metavar="OUT.json", help="write the diagnosis as JSON (with --each: every "
                                                       "run's and the tally, in one file)")
     p.add_argument("--figure", metavar="OUT.png", help="write the PSD figure")
-    from ._options import add_run_options, add_seed, add_terms, field_terms
     from ._outputs import add_inputs
 
     add_run_options(p)

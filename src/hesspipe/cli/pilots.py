@@ -6,10 +6,12 @@ from __future__ import annotations
 # (tests/test_api.py), and each command loads only its own stage.
 import sys
 
-from ..core.choices import CRITERIA, DEFAULT_CRITERION, DEFAULT_DISPLAY, DISPLAYS, OPTIMIZERS
+from ..core.choices import CRITERIA, DEFAULT_CRITERION, OPTIMIZERS
 
 
 def register(sub) -> None:
+    from ._options import add_display, add_run_options, add_seed, add_terms, field_terms
+
     # The stage, its package and its command share one name; compare-pilots is kept for old scripts.
     p = sub.add_parser("pilots", aliases=["compare-pilots"],
                        help="identify original / expanded-fixed-Km / expanded models per pilot",
@@ -31,7 +33,6 @@ def register(sub) -> None:
                         "each file name (its group 'pilot', else its first group), e.g. '^(s[0-9]+)_'; "
                         "the motion verdict then combines each pilot's runs and counts pilots "
                         "(default: each file is a pilot)")
-    from ._options import add_run_options, add_seed, add_terms, field_terms
     from ._outputs import add_inputs
 
     add_run_options(p)
@@ -51,10 +52,7 @@ def register(sub) -> None:
     p.add_argument("--criterion", choices=CRITERIA, default=DEFAULT_CRITERION,
                    help=f"fit criterion (default {DEFAULT_CRITERION}, as identify): paper = Eq. 10 "
                         "control PSD; df = describing-function error; output = control output error")
-    p.add_argument("--display", choices=DISPLAYS, default=DEFAULT_DISPLAY,
-                   help=f"what the pilots saw (default {DEFAULT_DISPLAY}): compensatory (the error alone), "
-                        "pursuit (target and output apart: the motion test fits the feedforward humans "
-                        "add) or either (not known: motion only if the test finds it for both)")
+    add_display(p, "the pilots")
     p.add_argument("--start", choices=("warm", "random"), default="warm",
                    help="warm (default): the expanded search starts from the original's optimum "
                         "plus fixed Km and the models exchange optima, so improvements measure Km, "

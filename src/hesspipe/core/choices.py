@@ -18,7 +18,9 @@ DISPLAYS = ("compensatory", "pursuit", "either")
 """What the pilot saw: the error alone (the paper's task), or the target and the output apart,
 where humans add a feedforward path on the target (the motion test's nuisance,
 :data:`hesspipe.identification.motion_test.FEEDFORWARD`), or not known: "either" names motion
-only when the test says so for both displays."""
+only when the test says so for both displays where the record shows that feedforward, and
+elsewhere as the compensatory test does
+(:data:`hesspipe.identification.motion_test.EITHER_FEEDFORWARD`)."""
 
 DEFAULT_DISPLAY = "either"
 """The display assumed when a setting does not say: not known, since a recording rarely says

@@ -84,7 +84,8 @@ class DiagnoseConfig(Settings):
         What the pilot saw: the error alone, target and output apart (the motion test
         then fits the feedforward humans add on the target;
         :func:`hesspipe.identification.motion_test.motion_test`), or not known (motion only
-        where the test finds it for both).
+        where the test finds it for both, where the record shows the feedforward; else as
+        for compensatory).
     """
 
     TABLE = "diagnose"

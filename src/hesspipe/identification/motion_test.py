@@ -120,8 +120,9 @@ from .lines import (  # noqa: F401
 
 EITHER_EXACT = 0.5
 """With display "either" the pursuit test runs where the compensatory p is below this. The
-reported p (the larger of the two) is then exact wherever it is below 0.5, and elsewhere the
-compensatory p, a lower bound of it that is at least 0.5: every decision at a level below
+reported p (the larger of the two where the pursuit result counts, :data:`EITHER_FEEDFORWARD`)
+is then exact wherever it is below 0.5, and elsewhere the compensatory p, a lower bound of it
+that is at least 0.5: every decision at a level below
 0.5 is exact - diagnose's, and the cohort's median-pilot test, whose p is at least 0.5 when
 its median pilot's is (:func:`hesspipe.pilots.verdict.median_pilot_p`)."""
 
@@ -248,7 +249,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     # An intersection-union test (Berger 1982): significant only if significant with the
     # display's feedforward and without it. Under "no motion" with either display the
     # matching test rejects with probability <= alpha, so the pair does too, whichever
-    # display the pilot had. Its p is the larger of the two, so the pursuit fits are only
+    # display the pilot had. Its p is at least the first, so the pursuit fits are only
     # needed where the first p is below EITHER_EXACT. (Run only where the first test was
     # significant, the reported p of the generator's pursuit no-motion pilots leaned low
     # below it, and the cohort's median-pilot test said yes for 9-11 % of their cohorts.)

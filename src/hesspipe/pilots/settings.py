@@ -106,7 +106,8 @@ class CompareSettings(Settings):
         What the pilots saw (:data:`hesspipe.core.choices.DISPLAYS`): "compensatory" (the
         error alone), "pursuit" (target and output apart: the motion test fits the
         feedforward humans then add, :func:`hesspipe.identification.motion_test.motion_test`)
-        or "either" (not known: motion only where the test finds it for both).
+        or "either" (not known: motion only where the test finds it for both, where the
+        record shows the feedforward; else as for "compensatory").
     """
 
     seed: int = 0
