@@ -122,9 +122,9 @@ EITHER_EXACT = 0.5
 """With display "either" the pursuit test runs where the compensatory p is below this. The
 reported p (the larger of the two where the pursuit result counts, :data:`EITHER_FEEDFORWARD`)
 is then exact wherever it is below 0.5, and elsewhere the compensatory p, a lower bound of it
-that is at least 0.5: every decision at a level below
-0.5 is exact - diagnose's, and the cohort's median-pilot test, whose p is at least 0.5 when
-its median pilot's is (:func:`hesspipe.pilots.verdict.median_pilot_p`)."""
+that is at least 0.5: every decision at a level below 0.5 is exact - diagnose's, and the
+cohort's median-pilot test, whose p is at least 0.5 when its median pilot's is
+(:func:`hesspipe.pilots.verdict.median_pilot_p`)."""
 
 ALTERNATIVES_IN_WORDS = ("nested F tests of Km alone, p = 0.5 P(F > f) for Km >= 0, and with target and "
                          "disturbance lines also with a vestibular delay and, in Hess's order 2, with the "
