@@ -10,7 +10,11 @@ power at its six nearest unforced bins (the oracle knows it; a real test estimat
   neuromuscular nuisance a real test must fit), Km and tm added under the alternative;
   chi-square test with 2 degrees of freedom.
 
-Prints per element, condition and motion use how many runs have p < 0.01.
+Prints per element, condition and motion use how many runs have p < 0.01; then, per element
+and condition, the cohort verdict the structural oracle would give by hesspipe's rule (each
+person's runs combined by Fisher's method, then the median-person order-statistic test,
+Wilkinson 1951: "yes" below 0.01): what any test of the lab's own model could say about the
+cohort (`hesspipe pilots`' verdict is measured against it).
 
 Usage::
 
@@ -111,39 +115,54 @@ def structural(U, Y, E, s, p, sig, lab):
 
 
 def runs(name, truth):
-    """(element, condition, uses motion, file, parameters in lab8's names) of every run."""
+    """(element, condition, uses motion, file, parameters in lab8's names, person) of every run."""
     if name == "lab8":
-        for v in truth["persons"].values():
+        for person, v in truth["persons"].items():
             for key, r in v["runs"].items():
-                yield v["element"], key.split("_")[0], v["uses_motion"], r["file"], r["params"]
+                yield v["element"], key.split("_")[0], v["uses_motion"], r["file"], r["params"], person
         return
     for el, e in truth["elements"].items():
-        for v in e["persons"].values():
+        for person, v in e["persons"].items():
             for cond, rr in v["runs"].items():
                 for r in rr.values():
                     # a static run's tau_m is null (never used: Km is 0 there)
                     yield el, cond, v["uses_motion"], r["file"], dict(
                         Kv=r["Ke"], TL=r["T_L"], tv=r["tau_v"], wnm=r["wn"], znm=r["zeta"],
-                        tm=r["tau_m"] or 0.1, Km=r["Km"] or 0.0)
+                        tm=r["tau_m"] or 0.1, Km=r["Km"] or 0.0), person
+
+
+def median_person_p(ps):
+    """P(Binomial(n, p_(r)) >= r), r = ceil(n / 2): at least half of the persons show it."""
+    ps = np.sort(np.asarray(ps, dtype=float))
+    r = int(np.ceil(ps.size / 2))
+    return float(stats.binom.sf(r - 1, ps.size, ps[r - 1]))
 
 
 def main(name, root):
     lab = LABS[name]
     truth = json.load(open(f"{root}/truth.json"))
     w0 = 2 * np.pi * lab["fs"] / lab["n"]
-    tally = {}
-    for el, cond, user, file, p in runs(name, truth):
+    tally, persons = {}, {}
+    for el, cond, user, file, p, person in runs(name, truth):
         cond = "motion" if cond.startswith("motion") else "static"
         U, Y, E = spectra(read(f"{root}/{file}", lab), lab)
         s = 1j * np.arange(U.size) * w0
         sig = weights(U, Y, E, s, p, p["Km"] if cond == "motion" else 0.0, lab)
-        for name, test in (("known", known), ("structural", structural)):
-            t = tally.setdefault((name, el, cond, user), [0, 0])
-            t[0] += test(U, Y, E, s, p, sig, lab) < 0.01
+        for test_name, test in (("known", known), ("structural", structural)):
+            t = tally.setdefault((test_name, el, cond, user), [0, 0])
+            p_run = test(U, Y, E, s, p, sig, lab)
+            t[0] += p_run < 0.01
             t[1] += 1
+            if test_name == "structural":
+                persons.setdefault((el, cond), {}).setdefault(person, []).append(p_run)
     print(f"SYNTHETIC DATA: {name}'s files; oracle motion tests (p < 0.01)")
-    for (name, el, cond, user), (k, n) in sorted(tally.items()):
-        print(f"{name:<10} {el} {cond:<6} {'user' if user else 'non-user':<8} {k}/{n}")
+    for (test_name, el, cond, user), (k, n) in sorted(tally.items()):
+        print(f"{test_name:<10} {el} {cond:<6} {'user' if user else 'non-user':<8} {k}/{n}")
+    for (el, cond), by in sorted(persons.items()):
+        ps = [stats.combine_pvalues(v, method="fisher").pvalue for v in by.values()]
+        mp = median_person_p(ps)
+        print(f"structural cohort {el} {cond:<6} median-person p = {mp:.2g} ({'yes' if mp < 0.01 else 'no'}); "
+              f"persons with p < 0.01: {sum(q < 0.01 for q in ps)}/{len(ps)}")
 
 
 if __name__ == "__main__":
