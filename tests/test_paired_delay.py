@@ -203,3 +203,25 @@ def test_a_pilot_delay_below_the_motion_tests_floor_is_refused_naming_the_flag(c
     assert main(["diagnose", "run.csv", "--plants", "plants.json", "--max-pilot-delay", value]) != 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("hesspipe: error: --max-pilot-delay: expected a number > 0.1 ")
+
+
+def test_a_delay_ending_on_its_bound_keeps_its_error(tmp_path, monkeypatch):
+    # Roll rate, disturbance alone (bench_diagnose --paired's draw, seed 3): the joint fit's
+    # delays trade with the neuromuscular mode and lie far below the truth's (0.39 and
+    # 0.35 s). With the box's floor raised to 0.1 s the baseline's ends on it; held there,
+    # its error was NaN, the test counted it as none and named a 0.06 s difference at
+    # p = 0.0009 (p = 0.067 with the floor at 0).
+    from hesspipe.identification import paired_delay as pd
+
+    s = derive_seed(3, "bench-diagnose", "roll", "rate", "disturbance", "extra_delay")
+    spec = draw_trial("roll", s, task="disturbance", pilot="hess", effects=("extra_delay",), fs=50.0,
+                      T_m=70.0, output="rate", name="run")
+    base = retest(spec, derive_seed(s, "baseline-run"), effects=(), name="base")
+    run, b = [read_run(write_trial(tmp_path, simulate_trial(x))) for x in (spec, base)]
+    plants = read_plants(tmp_path / "plants.json")
+    monkeypatch.setattr(pd, "TAU0_BOX", (0.1, 0.6))
+    d = diagnose(run, plants, baseline_run=b)
+    dv = d.delay_verdict
+    assert dv["baseline_delay_s"] == pytest.approx(0.1, abs=1e-6)      # on the bound
+    assert np.isfinite(dv["se_s"]) and 0.01 < dv["se_s"] < 0.1
+    assert dv["p_value"] > 0.01 and "extra_delay" not in d.named_effects

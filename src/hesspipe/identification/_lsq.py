@@ -76,7 +76,7 @@ def _solve(resid, x0, lo, hi, max_nfev: int):
     return (rss, sol) if np.isfinite(rss) else None
 
 
-def held_covariance(sol, rss: float, dof: int) -> np.ndarray:
+def held_covariance(sol, rss: float, dof: int, released=()) -> np.ndarray:
     """Covariance of a weighted least-squares solution's parameters (the residual variance
     estimated as rss / dof: the lines' common scale is left to the data), with the
     parameters that ended on a bound held there: their rows and columns are NaN.
@@ -93,9 +93,13 @@ def held_covariance(sol, rss: float, dof: int) -> np.ndarray:
         Its residual sum of squares.
     dof : int
         Degrees of freedom of the residual.
+    released : sequence of int
+        Parameters whose uncertainty is wanted even on a bound: never held (the local
+        curvature stands for their error where a NaN would be read as none).
     """
     n = sol.jac.shape[1]
     active = np.asarray(getattr(sol, "active_mask", np.zeros(n)), dtype=int) != 0
+    active[np.asarray(released, dtype=int)] = False
     keep = np.flatnonzero(~active)
     cov = np.full((n, n), math.nan)
     if keep.size == 0:
