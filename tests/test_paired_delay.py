@@ -24,12 +24,13 @@ from hesspipe.humanlike import draw_trial, retest, simulate_trial, write_trial
 from humanlike_trials import repeated_trials
 
 
-def _pair(folder, effect, seed):
+def _pair(folder, effect, seed, task="both"):
     """(run, baseline run, plants, true delay difference s) as benchmarks/bench_diagnose.py
-    --paired draws them for roll-rate tracking with disturbance and target."""
+    --paired draws them for roll-rate tracking (`task`: with disturbance and target, or
+    "disturbance" alone)."""
     effects = () if effect == "none" else (effect,)
-    s = derive_seed(seed, "bench-diagnose", "roll", "rate", "both", effect)
-    spec = draw_trial("roll", s, task="both", pilot="hess", effects=effects, fs=50.0, T_m=70.0,
+    s = derive_seed(seed, "bench-diagnose", "roll", "rate", task, effect)
+    spec = draw_trial("roll", s, task=task, pilot="hess", effects=effects, fs=50.0, T_m=70.0,
                       output="rate", name="run")
     base = retest(spec, derive_seed(s, "baseline-run"), effects=(), name="base")
     runs = [read_run(write_trial(folder, simulate_trial(x))) for x in (spec, base)]
@@ -213,12 +214,7 @@ def test_a_delay_ending_on_its_bound_keeps_its_error(tmp_path, monkeypatch):
     # p = 0.0009 (p = 0.067 with the floor at 0).
     from hesspipe.identification import paired_delay as pd
 
-    s = derive_seed(3, "bench-diagnose", "roll", "rate", "disturbance", "extra_delay")
-    spec = draw_trial("roll", s, task="disturbance", pilot="hess", effects=("extra_delay",), fs=50.0,
-                      T_m=70.0, output="rate", name="run")
-    base = retest(spec, derive_seed(s, "baseline-run"), effects=(), name="base")
-    run, b = [read_run(write_trial(tmp_path, simulate_trial(x))) for x in (spec, base)]
-    plants = read_plants(tmp_path / "plants.json")
+    run, b, plants, _ = _pair(tmp_path, "extra_delay", 3, task="disturbance")
     monkeypatch.setattr(pd, "TAU0_BOX", (0.1, 0.6))
     d = diagnose(run, plants, baseline_run=b)
     dv = d.delay_verdict
