@@ -117,10 +117,20 @@ def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
                 results[i] = func(item)
                 bar.update(1)
             return results
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=_mp_context(),
-                                   initializer=_worker_init)
+        context = _mp_context()
+        held = _STOPS if _forks_here(context) else frozenset()
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=context,
+                                   initializer=_worker_init, initargs=(held,))
         try:
-            futures = {pool.submit(func, item): i for i, item in enumerate(items)}
+            # The pool forks its workers on the first submit. A stop arriving meanwhile would
+            # run its handler inside an at-fork hook (logging's), where Python prints it as
+            # "Exception ignored" with a traceback and goes on; held, it is delivered when the
+            # mask is put back, here, and stops the batch like any other.
+            previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+            try:
+                futures = {pool.submit(func, item): i for i, item in enumerate(items)}
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, previous)
             for future in as_completed(futures):
                 results[futures[future]] = future.result()
                 bar.update(1)
@@ -133,10 +143,29 @@ def run_batch(func: Callable, items: Sequence, *, workers: int | None = None,
     return results
 
 
-def _worker_init() -> None:
+#: The stop signals held while a pool forks its workers (see :func:`run_batch`).
+_STOPS = frozenset({signal.SIGTERM, signal.SIGINT})
+
+
+def _forks_here(context) -> bool:
+    """True if `context` forks this very thread (only then do at-fork hooks run in it; a
+    signal mask is a thread's own, so only the main thread's, where handlers run, matters)."""
+    return (context.get_start_method() == "fork"
+            and threading.current_thread() is threading.main_thread())
+
+
+def _worker_init(held: frozenset = frozenset()) -> None:
     """Worker processes die quietly on SIGTERM (a forked worker inherits the CLI's
-    handler, which would print a traceback), and with the process that started them."""
+    handler, which would print a traceback), and with the process that started them.
+
+    Parameters
+    ----------
+    held : frozenset of int
+        Signals the parent held while it forked (inherited blocked); released here, after
+        SIGTERM's default action is back.
+    """
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, held)
     # Killed outright (SIGKILL), the parent cannot stop its pool: the workers, blocked on a
     # queue whose other end they hold themselves, would wait for ever and keep its stdout open.
     parent = os.getppid()
