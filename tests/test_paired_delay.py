@@ -8,6 +8,7 @@ writes. The retest's pilot is the first trial's with the generator's run-to-run 
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -121,6 +122,18 @@ def test_the_allowed_spread_shrinks_with_the_runs_of_each_condition():
     assert many["spread_s"] == pytest.approx(0.01) and many["named"]              # z = 3
     assert paired_delay_test({**joint, "runs": 1, "baseline_runs": 3}, 0.02, 0.01)["spread_s"] == \
         pytest.approx(0.02 * np.sqrt((1 + 1 / 3) / 2))
+
+
+def test_a_difference_without_an_error_is_not_named():
+    # A covariance that could not be computed (se NaN) is no evidence; read as zero it made
+    # z grow without limit (any positive difference named).
+    joint = {"difference_s": 0.2, "se_s": math.nan, "delay_s": 0.5, "baseline_delay_s": 0.3}
+    t = paired_delay_test(joint, 0.02, 0.01)
+    assert not t["named"] and math.isnan(t["p_value"]) and math.isnan(t["z"])
+    # Three runs each whose own delays scatter: that spread weighs the difference instead.
+    seen = paired_delay_test({**joint, "runs": 3, "baseline_runs": 3, "run_delays_s": [0.45, 0.5, 0.55],
+                              "baseline_run_delays_s": [0.25, 0.3, 0.35]}, 0.02, 0.01)
+    assert seen["named"] and math.isfinite(seen["p_value"])
 
 
 def test_the_runs_own_delays_set_a_floor_under_the_spread():

@@ -277,6 +277,8 @@ def paired_delay_test(joint: dict, retest_sd_s: float, alpha: float) -> dict:
     disturbance alone) each run's delay also takes up that run's own gain and
     neuromuscular changes, which the joint fit's standard error does not see (baseline
     sets named on 2 of 20 development seeds with three runs each, 0 of 20 with the floor).
+    Where the joint fit's standard error is NaN (its covariance could not be computed) and
+    the runs show no spread of their own, z and p are NaN and nothing is named.
 
     Parameters
     ----------
@@ -291,12 +293,17 @@ def paired_delay_test(joint: dict, retest_sd_s: float, alpha: float) -> dict:
     diff, se = joint["difference_s"], joint["se_s"]
     n, m = int(joint.get("runs", 1)), int(joint.get("baseline_runs", 1))
     spread = retest_sd_s * math.sqrt((1.0 / n + 1.0 / m) / 2.0)
-    var = spread ** 2 + (se * se if math.isfinite(se) else 0.0)
+    var = spread ** 2 + se * se
     seen = observed_delay_variance(joint)
-    if seen is not None and seen > var:
+    if seen is not None and (math.isnan(var) or seen > var):
         var = seen
-    z = diff / math.sqrt(var) if var > 0 else (math.inf if diff > 0 else -math.inf)
-    p = float(scipy.stats.norm.sf(z))
+    if math.isnan(var):
+        # The joint fit's error could not be computed: the difference cannot be weighed, and
+        # reading the unknown error as none would name any growth at all.
+        z = p = math.nan
+    else:
+        z = diff / math.sqrt(var) if var > 0 else (math.inf if diff > 0 else -math.inf)
+        p = float(scipy.stats.norm.sf(z))
     return {"named": bool(p < alpha), "delay_s": float(joint["delay_s"]), "se_s": float(se),
             "baseline_delay_s": float(joint["baseline_delay_s"]), "retest_sd_s": float(retest_sd_s),
             "spread_s": float(spread), "runs": n, "baseline_runs": m,

@@ -102,7 +102,7 @@ def _describing_function_lines(d: Diagnosis) -> list[str]:
         # A delay held on its bound has no standard error (NaN): none is printed then.
         se = f" +/- {dv['se_s']:.3f}" if dv.get("se_s") is not None and math.isfinite(dv["se_s"]) else ""
         out.append(f"Visual delay on the describing function: {dv['delay_s']:.3f}{se} s "
-                   f"{against}: p={dv['p_value']:.2g} "
+                   f"{against}: p={dv['p_value']:.2g}{'' if math.isfinite(dv['p_value']) else ' (no error to weigh the difference by)'} "
                    f"(needs < {dv['alpha']:g}) -> {'extra_delay NAMED' if dv['named'] else 'no extra delay'}")
     rv = d.remnant_verdict
     if rv is not None:
