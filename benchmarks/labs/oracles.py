@@ -9,6 +9,10 @@ power at its six nearest unforced bins (the oracle knows it; a real test estimat
 - "structural": the lab's own pilot structure with Kv, TL, tv, wn, zn free (the visual and
   neuromuscular nuisance a real test must fit), Km and tm added under the alternative;
   chi-square test with 2 degrees of freedom.
+- "measured": the structural test with weights a real test can have instead of the true
+  remnant's: at each line, U - H E at its six nearest unforced bins with H = U/E measured
+  at the line (no model and no truth enters; the residual under any right model is the
+  remnant there, up to how far H moves between the line and its neighbours).
 
 Prints per element, condition and motion use how many runs have p < 0.01; then, per element
 and condition, the cohort verdict the structural oracle would give by hesspipe's rule (each
@@ -84,6 +88,17 @@ def weights(U, Y, E, s, p, Km, lab):
     return np.array(out)
 
 
+def measured_weights(U, Y, E, lab):
+    """Each line's remnant power as a real test measures it: ``mean |U_j - H E_j|^2`` over the
+    six nearest unforced bins j, H = U/E at the line."""
+    bins, forced = lines(lab)
+    out = []
+    for L in bins:
+        nb = sorted((j for j in range(L - 6, L + 7) if j not in forced and j > 0), key=lambda j: abs(j - L))[:6]
+        out.append(np.mean(np.abs(U[nb] - U[L] / E[L] * E[nb]) ** 2))
+    return np.array(out)
+
+
 def known(U, Y, E, s, p, sig, lab):
     Hv, Hn = visual(s, p["Kv"], p["TL"], p["tv"], p["wnm"], p["znm"])
     bins = lines(lab)[0]
@@ -148,9 +163,10 @@ def main(name, root):
         U, Y, E = spectra(read(f"{root}/{file}", lab), lab)
         s = 1j * np.arange(U.size) * w0
         sig = weights(U, Y, E, s, p, p["Km"] if cond == "motion" else 0.0, lab)
-        for test_name, test in (("known", known), ("structural", structural)):
+        for test_name, test, w in (("known", known, sig), ("structural", structural, sig),
+                                   ("measured", structural, measured_weights(U, Y, E, lab))):
             t = tally.setdefault((test_name, el, cond, user), [0, 0])
-            p_run = test(U, Y, E, s, p, sig, lab)
+            p_run = test(U, Y, E, s, p, w, lab)
             t[0] += p_run < 0.01
             t[1] += 1
             if test_name == "structural":
