@@ -25,8 +25,9 @@ comparing fits:
   units error) and swapped columns (every assignment of the three columns to the
   control, disturbance and output roles), and the disturbance entering where the file
   does not say (at the controlled element's input, or at its output). Only a sign, a
-  units-size scale, a swap or a disturbance's entry that fits the output better than every
-  aircraft candidate is a wrong-file verdict.
+  units-size scale, a swap or a disturbance's entry that fits the output at ``fit_ok``,
+  removes ``close_share`` of the plants' residual power as an aircraft candidate must, and
+  fits better than every aircraft candidate is a wrong-file verdict.
 
 Everything is a finding in the result, never an exception. The responses are computed
 once on the shifted FFT contour of :func:`hesspipe.diagnose.checks.forced_response`, so
@@ -453,10 +454,16 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
 
     def credible(e):
         # A file error must make the plants reproduce the output, and a swap must do so
-        # with path gains of a sane size (any two closed-loop signals correlate).
+        # with path gains of a sane size (any two closed-loop signals correlate). It must
+        # also close the gap as an aircraft candidate must: where the disturbance enters
+        # at the controlled element's input, control and disturbance pass one path, a swap
+        # fits exactly as the columns as read do, and an exact plant at 89.8-90.0 % (an
+        # integrating display) had its columns swapped for a 0.1 % gain (4 of 40 generator
+        # roll-angle trials), the pilot then identified from the disturbance.
         q = e.parameters
         sane = all(1 / SCALE_RATIO <= abs(q[k]) <= SCALE_RATIO for k in ("gain_control", "gain_disturbance"))
-        return e.id != "gains" and e.fit_percent >= fit_ok and (sane or not q["swapped"])
+        return (e.id != "gains" and e.fit_percent >= fit_ok and (sane or not q["swapped"])
+                and _residual_share(e, ref) <= 1.0 - close_share)
 
     best_air = max(supported or air, key=lambda e: e.fit_percent)
     # Parsimony: a supported candidate with fewer parameters is preferred when it leaves at
