@@ -457,9 +457,10 @@ def plant_finding(run, plants, check, *, fit_ok: float = FIT_OK, close_share: fl
         # with path gains of a sane size (any two closed-loop signals correlate). It must
         # also close the gap as an aircraft candidate must: where the disturbance enters
         # at the controlled element's input, control and disturbance pass one path, a swap
-        # fits exactly as the columns as read do, and an exact plant at 89.8-90.0 % (an
-        # integrating display) had its columns swapped for a 0.1 % gain (4 of 40 generator
-        # roll-angle trials), the pilot then identified from the disturbance.
+        # fits exactly as the columns as read do, and an exact plant at 89.4-90.0 % (an
+        # integrating display) had its columns swapped for a 0.1 % gain (5 of 80 generator
+        # roll-angle trials at its default 60 Hz and 45 s), the pilot then identified from
+        # the disturbance.
         q = e.parameters
         sane = all(1 / SCALE_RATIO <= abs(q[k]) <= SCALE_RATIO for k in ("gain_control", "gain_disturbance"))
         return (e.id != "gains" and e.fit_percent >= fit_ok and (sane or not q["swapped"])
