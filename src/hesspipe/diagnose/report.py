@@ -101,8 +101,9 @@ def _describing_function_lines(d: Diagnosis) -> list[str]:
                    f"against a human's longest {dv['max_pilot_delay_s']:g} s")
         # A delay held on its bound has no standard error (NaN): none is printed then.
         se = f" +/- {dv['se_s']:.3f}" if dv.get("se_s") is not None and math.isfinite(dv["se_s"]) else ""
+        unweighed = "" if math.isfinite(dv["p_value"]) else " (no error to weigh the difference by)"
         out.append(f"Visual delay on the describing function: {dv['delay_s']:.3f}{se} s "
-                   f"{against}: p={dv['p_value']:.2g}{'' if math.isfinite(dv['p_value']) else ' (no error to weigh the difference by)'} "
+                   f"{against}: p={dv['p_value']:.2g}{unweighed} "
                    f"(needs < {dv['alpha']:g}) -> {'extra_delay NAMED' if dv['named'] else 'no extra delay'}")
     rv = d.remnant_verdict
     if rv is not None:
