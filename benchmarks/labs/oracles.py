@@ -80,23 +80,20 @@ def vestibular(s, Hn, tm, lab):
 def weights(U, Y, E, s, p, Km, lab):
     Hv, Hn = visual(s, p["Kv"], p["TL"], p["tv"], p["wnm"], p["znm"])
     noise = U - Hv * E + Km * vestibular(s, Hn, p["tm"], lab) * Y
-    bins, forced = lines(lab)
-    out = []
-    for L in bins:
-        nb = sorted((j for j in range(L - 6, L + 7) if j not in forced and j > 0), key=lambda j: abs(j - L))[:6]
-        out.append(np.mean(np.abs(noise[nb]) ** 2))
-    return np.array(out)
+    return np.array([np.mean(np.abs(noise[nb]) ** 2) for _, nb in neighbours(lab)])
 
 
-def measured_weights(U, Y, E, lab):
+def measured_weights(U, E, lab):
     """Each line's remnant power as a real test measures it: ``mean |U_j - H E_j|^2`` over the
     six nearest unforced bins j, H = U/E at the line."""
+    return np.array([np.mean(np.abs(U[nb] - U[L] / E[L] * E[nb]) ** 2) for L, nb in neighbours(lab)])
+
+
+def neighbours(lab):
+    """(line, its six nearest unforced bins) for each of the lab's forcing lines."""
     bins, forced = lines(lab)
-    out = []
-    for L in bins:
-        nb = sorted((j for j in range(L - 6, L + 7) if j not in forced and j > 0), key=lambda j: abs(j - L))[:6]
-        out.append(np.mean(np.abs(U[nb] - U[L] / E[L] * E[nb]) ** 2))
-    return np.array(out)
+    return [(L, sorted((j for j in range(L - 6, L + 7) if j not in forced and j > 0), key=lambda j: abs(j - L))[:6])
+            for L in bins]
 
 
 def known(U, Y, E, s, p, sig, lab):
@@ -164,7 +161,7 @@ def main(name, root):
         s = 1j * np.arange(U.size) * w0
         sig = weights(U, Y, E, s, p, p["Km"] if cond == "motion" else 0.0, lab)
         for test_name, test, w in (("known", known, sig), ("structural", structural, sig),
-                                   ("measured", structural, measured_weights(U, Y, E, lab))):
+                                   ("measured", structural, measured_weights(U, E, lab))):
             t = tally.setdefault((test_name, el, cond, user), [0, 0])
             p_run = test(U, Y, E, s, p, w, lab)
             t[0] += p_run < 0.01
