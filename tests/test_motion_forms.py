@@ -1,9 +1,11 @@
-"""The motion test's two vestibular forms (identification.motion_test.VESTIBULAR_FORMS): Hess's,
-inside the proprioceptive loop, and the multimodal pilot models', at the neuromuscular system.
+"""The motion test's vestibular forms (identification.motion_test.VESTIBULAR_FORMS): Hess's,
+inside the proprioceptive loop; the multimodal pilot models', at the neuromuscular system (order
+2); Hess's without the visual lag (order 1, UNEQUALISED).
 
 The lines are built in the frequency domain from a multimodal person on a double integrator
 (Zaal et al. 2009's structure: U = Hnm (Kv (1 + TL s) e^(-tau_v s) E - Km Hscc s e^(-tau_m s) Y)
-+ N), so the test meets a structure it does not share, and SYNTHETIC."""
++ N) or on a single integrator (Kv e^(-tau_v s) / (1 + TI s), gain only without a lag), so the
+test meets a structure it does not share, and SYNTHETIC."""
 
 from __future__ import annotations
 
@@ -15,7 +17,14 @@ import pytest
 from hesspipe.core.formats import read_plants
 from hesspipe.identification._line_fit import MULTIMODAL, _predict
 from hesspipe.identification.lines import LineData
-from hesspipe.identification.motion_test import ALPHA, FORM_SHARES, VESTIBULAR_FORMS, _either_order
+from hesspipe.identification.motion_test import (
+    ALPHA,
+    FORM_SHARES,
+    FORMS_BY_ORDER,
+    UNEQUALISED,
+    VESTIBULAR_FORMS,
+    _either_order,
+)
 from hesspipe.pilot.hess import PilotModel
 from hesspipe.pilot.motion import motion_block
 
@@ -25,28 +34,34 @@ D_BINS = np.array([5, 11, 23, 37, 53, 71, 97, 127, 163, 211])   # disturbance li
 R_BINS = D_BINS + 2                                              # target lines, interleaved
 
 
-def _plants(tmp_path):
+KC1 = 1.5                     # the single integrator's gain, rad/s per unit
+
+
+def _plants(tmp_path, order: int = 2):
     path = tmp_path / "plants.json"
-    path.write_text(json.dumps({"control_to_output": {"num": [KC], "den": [1, 0, 0]},
-                                "disturbance_to_output": {"num": [KC], "den": [1, 0, 0]},
+    el = {"num": [KC if order == 2 else KC1], "den": [1, 0, 0] if order == 2 else [1, 0]}
+    path.write_text(json.dumps({"control_to_output": el, "disturbance_to_output": el,
                                 "motion_path": {"num": [1, 0], "den": [0.01, 1]}}))
     return read_plants(path)
 
 
-def _lines(km: float, seed: int, remnant: float = 0.03) -> LineData:
-    # A multimodal person closed around Yc = KC/s^2 (disturbance at the plant input), the
-    # target's lines and the disturbance's apart; remnant added to U at every line.
+def _lines(km: float, seed: int, remnant: float = 0.03, order: int = 2, lag: float = 0.0) -> LineData:
+    # A multimodal person closed around Yc = KC/s^2 (order 2) or KC1/s (order 1, with a visual
+    # `lag`, s), disturbance at the plant input, the target's lines and the disturbance's
+    # apart; remnant added to U at every line.
     lines = np.sort(np.concatenate([D_BINS, R_BINS]))
     s = 1j * 2.0 * np.pi * lines / T
     hnm = 10.0 ** 2 / (s ** 2 + 2 * 0.35 * 10.0 * s + 10.0 ** 2)
     hscc = 5.9 * s * (0.11 * s + 1) / ((5.9 * s + 1) * (0.005 * s + 1))
-    tl = 1.2 * (1 - 0.3 * (km > 0))          # the visual lead, shortened where motion helps
-    hpe = hnm * 0.35 * (1 + tl * s) * np.exp(-0.22 * s)
+    if order == 2:
+        tl = 1.2 * (1 - 0.3 * (km > 0))          # the visual lead, shortened where motion helps
+        hpe, yc, d = hnm * 0.35 * (1 + tl * s) * np.exp(-0.22 * s), KC / s ** 2, 0.1
+    else:
+        hpe, yc, d = hnm * 2.0 * np.exp(-0.24 * s) / (1 + lag * s), KC1 / s, 0.3
     hpy = hnm * km * hscc * s * np.exp(-0.12 * s)
-    yc = KC / s ** 2
     rng = np.random.default_rng(seed)
     R = np.where(np.isin(lines, R_BINS), 1.0, 0.0) * np.exp(2j * np.pi * rng.random(lines.size))
-    D = np.where(np.isin(lines, D_BINS), 0.1, 0.0) * np.exp(2j * np.pi * rng.random(lines.size))
+    D = np.where(np.isin(lines, D_BINS), d, 0.0) * np.exp(2j * np.pi * rng.random(lines.size))
     sd = remnant * np.abs(hpe)
     N = sd * (rng.standard_normal(lines.size) + 1j * rng.standard_normal(lines.size)) / np.sqrt(2)
     Y = yc * (hpe * R + D + N) / (1 + yc * (hpe + hpy))
@@ -106,5 +121,32 @@ def test_the_forms_are_hess_first_and_share_the_level():
     # Hess's form is the paper's model, where the Km estimate is read, and the primary alternative.
     assert VESTIBULAR_FORMS[0] == "hess"
     assert set(FORM_SHARES) == set(VESTIBULAR_FORMS)
-    assert sum(FORM_SHARES.values()) == pytest.approx(1.0)
-    assert FORM_SHARES["hess"] > FORM_SHARES["multimodal"]
+    for k, forms in FORMS_BY_ORDER.items():
+        assert forms[0] == "hess" and len(forms) == 2 and set(forms) <= set(VESTIBULAR_FORMS)
+        assert sum(FORM_SHARES[f] for f in forms) == pytest.approx(1.0)
+        assert FORM_SHARES["hess"] > FORM_SHARES[forms[1]]
+
+
+def test_a_single_integrator_persons_motion_is_tested_in_both_order_1_forms(tmp_path):
+    r, _ = _either_order(_lines(0.3, 1, remnant=0.1, order=1), _plants(tmp_path, 1),
+                         PilotModel().defaults(k=1, gain=1.0 / KC1), k=1, max_delay=None,
+                         display="compensatory")
+    alts = r["alternatives"]
+    assert r["k"] == 1
+    assert set(alts) == {"Km", "Km+tau_m", "unequalised Km", "unequalised Km+tau_m"}
+    shares = {a: FORM_SHARES[UNEQUALISED if a.startswith(UNEQUALISED) else "hess"] / 2 for a in alts}
+    assert r["p_value"] == pytest.approx(min(1.0, min(alts[a] / shares[a] for a in alts)))
+    assert r["p_value"] < ALPHA
+    assert alts["unequalised Km"] < ALPHA
+
+
+@pytest.mark.parametrize("seed", [2, 3])
+def test_the_unequalised_form_is_not_admitted_where_the_lag_fits_better(tmp_path, seed):
+    # A static person with a 0.6 s visual lag: without the lag the original misfits, and Km
+    # takes up some of it (p 0.8-0.92 for Km with its delay), but that fit stays worse than the
+    # original with the lag, so the form's alternatives are not admitted (p exactly 1).
+    r, _ = _either_order(_lines(0.0, seed, remnant=0.1, order=1, lag=0.6), _plants(tmp_path, 1),
+                         PilotModel().defaults(k=1, gain=1.0 / KC1), k=1, max_delay=None,
+                         display="compensatory")
+    assert r["k"] == 1 and r["p_value"] >= ALPHA
+    assert r["alternatives"]["unequalised Km+tau_m"] == 1.0

@@ -87,7 +87,7 @@ class MotionVerdict:
         that names motion (or None): the path given may be wrong
         (:func:`hesspipe.identification.motion_test.motion_test`'s ``path_check``).
     vestibular_form : str
-        The form of the test's alternative that fitted best ("hess" or "multimodal",
+        The form of the test's alternative that fitted best ("hess", "multimodal" or "unequalised",
         :data:`hesspipe.identification.motion_test.VESTIBULAR_FORMS`; "" without a test).
     """
 

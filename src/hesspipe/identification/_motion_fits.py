@@ -51,13 +51,14 @@ motion runs, with this one on 0 of 20 and 12 of 20 (benchmarks/bench_diagnose.py
 --feedforward 0.7 [--display pursuit]); on compensatory pilots it costs nothing there (18/19
 and 0/20 either way, seeds 0-9)."""
 
-VESTIBULAR_FORMS = ("hess", "multimodal")
-"""Where the test's vestibular path joins the pilot in Hess's order k = 2 with both line sets
-(otherwise Hess's form alone). "hess": the paper's expanded model, the sensation beside the
-visual drive inside the proprioceptive loop, whose lead then leads the vestibular path too;
-"multimodal": the multimodal pilot models' (Zaal et al. 2009), each channel with its own
-equalisation, summed at the neuromuscular system
-(:data:`~hesspipe.identification._line_fit.MULTIMODAL`). A laboratory's persons of that
+VESTIBULAR_FORMS = ("hess", "multimodal", "unequalised")
+"""The forms of the test's vestibular alternatives; with both line sets each order fits two
+(:data:`FORMS_BY_ORDER`), otherwise Hess's form alone. "hess": the paper's expanded model, the
+sensation beside the visual drive inside the proprioceptive loop, whose lead then leads the
+vestibular path too; "multimodal": the multimodal pilot models' (Zaal et al. 2009), each
+channel with its own equalisation, summed at the neuromuscular system
+(:data:`~hesspipe.identification._line_fit.MULTIMODAL`); "unequalised": Hess's form without
+the visual lag (:data:`UNEQUALISED`). A laboratory's persons of that
 form (yaw, double integrator, visual lead 0.7-1.8 s cut by a fifth to a half with motion,
 Zaal's canals on the cab's rate; an independent reviewer's 1 kHz simulator) were named on
 14 of 24 motion runs in Hess's form alone, where a fit of their own structure found 21.
@@ -66,11 +67,28 @@ the neuromuscular block alone is not identified (only NM / (1 + NM K1 K2) is, th
 :mod:`.motion_test`'s module doc): there the multimodal form's path took up a static pitch person's misfit
 (wn on its bound of 1 rad/s; p = 0.0008, the other order's Hess form 0.41)."""
 
-FORM_SHARES = {"hess": 0.75, "multimodal": 0.25}
+FORMS_BY_ORDER = {1: ("hess", "unequalised"), 2: ("hess", "multimodal")}
+"""The two :data:`VESTIBULAR_FORMS` fitted in each of Hess's orders where the record has both
+line sets, Hess's first."""
+
+UNEQUALISED = "unequalised"
+"""The order-1 form whose null and alternative both go without the visual lag ``TI_v``
+(:data:`VISUAL_EQUALISER`), as McRuer's adjustment rules have a human on a K/s-like element:
+gain only (McRuer & Jex 1967; the multimodal models of yaw and roll tracking with motion,
+Zaal et al. 2009, Pool et al. 2011). Nested within itself (its own null: the original fitted
+without the lag), and admitted only where its vestibular alternative fits the lines at least
+as well as the original with the lag: the cab's lead must explain the record as well as the
+lag it replaces, with as many parameters. With the lag held in Hess's form a short delay and a
+lag took up the vestibular path of persons without either (lab8's single-integrator users,
+benchmarks/labs: visual delays 0.2-0.26 s, no lag, Km/Kv 0.04; the original's delay on its
+bound of 0.1 s with a 0.165 s lag, p 0.095-0.32 on three of four runs, 0.001-0.004 in this
+form)."""
+
+FORM_SHARES = {"hess": 0.75, "multimodal": 0.25, UNEQUALISED: 0.25}
 """The test's level shared between :data:`VESTIBULAR_FORMS` where both are fitted (a weighted
 Bonferroni correction: each alternative's p divided by its share of the level, the share
 split equally among a form's alternatives; Hess's two alternatives then have p times 8/3,
-the multimodal two p times 8). Hess's form is the paper's model and the test's primary
+the other form's two p times 8). Hess's form is the paper's model and the test's primary
 alternative. With equal shares (p times 4) a generated precision pilot on a double
 integrator (bench_motion_calibration.py, seed 3) was lost at p = 0.014 that Hess's form
 alone named at 0.007; the laboratory's multimodal persons were named as often either way
@@ -166,6 +184,8 @@ class _Null:
     p: dict
     sol: object
     sol_n: object
+    rss_n: float
+    p_n: dict
 
     def score(self, n_res: int) -> float:
         return _score(self.rss, len(self.free), n_res)
@@ -215,14 +235,14 @@ def _null_fit(ld: LineData, plants, start: Mapping[str, float], k: int, display:
 
     if quick:
         rss_q, p_q, sol_q = _fit(original, base, free, lo, hi, starts, *data, ld.w, keep=1)
-        return _Null(k, base, free, lo, hi, starts, eq, data, yc_inv, rss_q, p_q, sol_q, sol_q)
+        return _Null(k, base, free, lo, hi, starts, eq, data, yc_inv, rss_q, p_q, sol_q, sol_q, rss_q, p_q)
     # An unweighted first fit serves as one more start (it no longer sets the weights).
     _, p0, _ = _fit(original, base, free, lo, hi, starts, *data, np.ones(ld.lines.size))
     rss_o, p_o, sol_o = _fit(original, base, free, lo, hi, [[p0[n_] for n_ in free]] + starts, *data, ld.w)
     # The original without the equaliser as well: its search sometimes ends below the one
     # with it (a lag that stopped on its bound of 0 elsewhere), and its optimum is a start.
     n_core = len(free) - 1
-    _, _, sol_n = _fit(original, base, free[:n_core], lo[:n_core], hi[:n_core],
+    rss_n, p_n, sol_n = _fit(original, base, free[:n_core], lo[:n_core], hi[:n_core],
                        [x[:n_core] for x in [[p_o[n_] for n_ in free]] + starts], *data, ld.w)
     # Both optima are origins of the full search, with the lead at its start as well: with the
     # lead held at the original's optimum in the vestibular fits (below), F hangs on which of
@@ -232,7 +252,7 @@ def _null_fit(ld: LineData, plants, start: Mapping[str, float], k: int, display:
                              [[*sol_n.x, 0.0], [*sol_n.x, eq_start], [*sol_o.x[:-1], eq_start]], *data, ld.w)
     if rss_x < rss_o:
         rss_o, p_o, sol_o = rss_x, p_x, sol_x
-    return _Null(k, base, free, lo, hi, starts, eq, data, yc_inv, rss_o, p_o, sol_o, sol_n)
+    return _Null(k, base, free, lo, hi, starts, eq, data, yc_inv, rss_o, p_o, sol_o, sol_n, rss_n, p_n)
 
 
 def _residuals(ld: LineData) -> int:
@@ -294,9 +314,12 @@ def _vestibular_tests(null: _Null, original_fit: tuple, forms, alternatives, km0
     # ask what the path adds to the pilot without it, not what Km and a re-shaped lead do
     # together (conservative: the nuisance at its null estimate). With it free, Km and the
     # lead together fitted a Hess-generated roll-angle baseline at p = 0.006 (0.015 held;
-    # bench_diagnose.py report seed 2), and the motion runs kept their p < 0.01.
+    # bench_diagnose.py report seed 2), and the motion runs kept their p < 0.01. The
+    # UNEQUALISED form holds it at 0 and is nested in the original fitted so (the null's
+    # rss_n, p_n), whose exchange of optima it makes as Hess's does with the original.
     base, free, lo, hi, eq, data = null.base, null.free, null.lo, null.hi, null.eq, null.data
     rss_o, p_o, sol_o = original_fit
+    unequalised = [null.rss_n, null.p_n]
     original, expanded = PilotModel(), PilotModel(("motion_feedback",))
     km_hi = 1e3 * max(abs(base["Ke"]), 1.0)
     keep = [n_ != eq for n_ in free]
@@ -306,14 +329,15 @@ def _vestibular_tests(null: _Null, original_fit: tuple, forms, alternatives, km0
         free_e = core + extra
         lo_e = np.append(lo[keep], [0.0] * len(extra))
         hi_e = np.append(hi[keep], [km_hi, TAU_M_MAX][:len(extra)])
-        base_e = {**p_o, "Km": 0.0, "tau_m": 0.0, MULTIMODAL: float(form == "multimodal")}
+        origin = unequalised[1] if form == UNEQUALISED else p_o
+        base_e = {**origin, "Km": 0.0, "tau_m": 0.0, MULTIMODAL: float(form == "multimodal")}
         delays = [[0.0], [0.15]] if "tau_m" in extra else [[]]
         # From the original's optimum and from the given start: the original can reach
         # a corner (K1 on its bound, no delay, a 4 rad/s "neuromuscular" mode) that mimics
         # part of the vestibular path, from which no Km start climbs back to the truth's
         # valley (generator, roll angle with a target, development seed 101: RSS 60.1 and
         # p = 0.27 from there, 17.8 and p ~ 3e-11 with the given start).
-        starts_e = [[c[n_] for n_ in core] + [km] + tm for c in (p_o, base)
+        starts_e = [[c[n_] for n_ in core] + [km] + tm for c in (origin, base)
                     for km in (1e-6, km0, 10 * km0, 0.5 * abs(c["Ke"])) for tm in delays]
         # Screened: 8-16 starts each to convergence were most of a diagnosis's time (a
         # precision-pilot run: 48 of its 107 searches, 3.9 of 6.1 s).
@@ -321,15 +345,23 @@ def _vestibular_tests(null: _Null, original_fit: tuple, forms, alternatives, km0
         # Exchange of optima: the original searched again from the expanded optimum's core
         # parameters, so that LR measures what Km adds, not a better local optimum the
         # expanded search happened to find for the shared parameters.
-        rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], *data, w)
-        if rss_o2 < rss_o:
-            rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
+        if form == UNEQUALISED:
+            rss_n2, p_n2, _ = _fit(original, base, core, lo[keep], hi[keep], [[p_e[n_] for n_ in core]], *data, w)
+            if rss_n2 < unequalised[0]:
+                unequalised = [rss_n2, p_n2]
+        else:
+            rss_o2, p_o2, sol_o2 = _fit(original, base, free, lo, hi, [[p_e[n_] for n_ in free]], *data, w)
+            if rss_o2 < rss_o:
+                rss_o, p_o, sol_o = rss_o2, p_o2, sol_o2
         fits.append((extra, rss_e, p_e, (base_e, free_e, lo_e, hi_e), sol_e, form))
     tests = []
     for extra, rss_e, p_e, problem, sol_e, form in fits:
-        rss_e = min(rss_e, rss_o)   # nested at Km = 0: the original's optimum is admissible
-        q, dof_e = len(extra), n_res - len(free) - len(extra)
-        lr, p = _nested_f(rss_o, rss_e, q, dof_e)   # Km alone is on its bound: p halved
+        rss_null = unequalised[0] if form == UNEQUALISED else rss_o
+        rss_e = min(rss_e, rss_null)   # nested at Km = 0: the null's optimum is admissible
+        q, dof_e = len(extra), n_res - len(free) - len(extra) + (form == UNEQUALISED)
+        lr, p = _nested_f(rss_null, rss_e, q, dof_e)   # Km alone is on its bound: p halved
+        if form == UNEQUALISED and rss_e > rss_o:
+            lr, p = 0.0, 1.0   # the lag explains the record better than the cab's lead
         tests.append(_Alternative(p, lr, rss_e, p_e, extra, problem, sol_e, dof_e, form))
     return tests, core, (rss_o, p_o, sol_o)
 
@@ -364,7 +396,7 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
     # the test sees their sum, and a free delay there cost a fifth of the named motion
     # runs of disturbance-only tasks for no gain.
     alternatives = (["Km"], ["Km", "tau_m"]) if ld.both else (["Km"],)
-    forms = VESTIBULAR_FORMS if ld.both and k == 2 else VESTIBULAR_FORMS[:1]
+    forms = FORMS_BY_ORDER[k] if ld.both else VESTIBULAR_FORMS[:1]
     dof = n_res - len(free) - len(alternatives[-1])
     if dof < 1:
         return {"available": False, "n_lines": int(lines.size),

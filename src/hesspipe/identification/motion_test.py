@@ -37,9 +37,11 @@ delay is the test's, not the paper's model's: human vestibular responses lag by
 tasks of the generator drawn with tau_m = 0.15 s (development seeds 100-111), and the
 delayed alternative alone named 9 of 16 JSBSim-flown motion pilots (whose path has no
 delay) against 10 of 16 with Km alone or with both (benchmarks/bench_fly_pilot.py).
-With both line sets in Hess's order k = 2 each of these two is also fitted in the
-multimodal pilot models' form, the vestibular path outside Hess's proprioceptive loop
-(:data:`VESTIBULAR_FORMS`). The test's p is the smallest of the alternatives' each divided
+With both line sets each of these two is also fitted in a second form
+(:data:`FORMS_BY_ORDER`): in Hess's order k = 2 the multimodal pilot models', the vestibular
+path outside Hess's proprioceptive loop; in order 1 Hess's without the visual lag, nested in
+the original fitted without it and admitted only where it fits as well as the original with
+it (:data:`UNEQUALISED`). The test's p is the smallest of the alternatives' each divided
 by its share of the level (Bonferroni; equal shares within a form, :data:`FORM_SHARES`
 between the forms).
 With one line set only Km in Hess's form is tested. Both models are fitted by bounded least
@@ -91,8 +93,10 @@ from ._motion_fits import (  # noqa: F401
     EXPANDED_KEEP,
     FEEDFORWARD,
     FORM_SHARES,
+    FORMS_BY_ORDER,
     MIN_VISUAL_DELAY,
     TAU_M_MAX,
+    UNEQUALISED,
     VESTIBULAR_FORMS,
     VISUAL_EQUALISER,
     _either_order,
@@ -127,9 +131,10 @@ cohort's median-pilot test, whose p is at least 0.5 when its median pilot's is
 (:func:`hesspipe.pilots.verdict.median_pilot_p`)."""
 
 ALTERNATIVES_IN_WORDS = ("nested F tests of Km alone, p = 0.5 P(F > f) for Km >= 0, and with target and "
-                         "disturbance lines also with a vestibular delay and, in Hess's order 2, with the "
-                         "vestibular path outside the proprioceptive loop (the multimodal form), weighted "
-                         "Bonferroni over them (FORM_SHARES)")
+                         "disturbance lines also with a vestibular delay and in a second form (in Hess's "
+                         "order 2 the vestibular path outside the proprioceptive loop, the multimodal form; "
+                         "in order 1 without the visual lag, the unequalised form), weighted Bonferroni over "
+                         "them (FORM_SHARES)")
 """The test's alternatives in words, as diagnose's criterion and pilots' method state them."""
 
 EITHER_FEEDFORWARD = 0.2
