@@ -58,7 +58,7 @@ sensation beside the visual drive inside the proprioceptive loop, whose lead the
 vestibular path too; "multimodal": the multimodal pilot models' (Zaal et al. 2009), each
 channel with its own equalisation, summed at the neuromuscular system
 (:data:`~hesspipe.identification._line_fit.MULTIMODAL`); "unequalised": Hess's form without
-the visual lag (:data:`UNEQUALISED`). A laboratory's persons of that
+the visual lag (:data:`UNEQUALISED`). A laboratory's persons of the multimodal
 form (yaw, double integrator, visual lead 0.7-1.8 s cut by a fifth to a half with motion,
 Zaal's canals on the cab's rate; an independent reviewer's 1 kHz simulator) were named on
 14 of 24 motion runs in Hess's form alone, where a fit of their own structure found 21.
@@ -233,7 +233,7 @@ def _null_fit(ld: LineData, plants, start: Mapping[str, float], k: int, display:
         starts.append([*x_start[:at], 0.0, *x_start[at + 1:]])
     data = (cab, ld.s, ld.E, ld.Y, ld.U, ld.groups, yc_inv)
 
-    if quick:
+    if quick:   # only scored (its fits without the equaliser stand in, unused)
         rss_q, p_q, sol_q = _fit(original, base, free, lo, hi, starts, *data, ld.w, keep=1)
         return _Null(k, base, free, lo, hi, starts, eq, data, yc_inv, rss_q, p_q, sol_q, sol_q, rss_q, p_q)
     # An unweighted first fit serves as one more start (it no longer sets the weights).
