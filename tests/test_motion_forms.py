@@ -21,6 +21,7 @@ from hesspipe.identification.motion_test import (
     ALPHA,
     FORM_SHARES,
     FORMS_BY_ORDER,
+    PRECISION,
     VESTIBULAR_FORMS,
     _either_order,
 )
@@ -101,16 +102,26 @@ def test_the_multimodal_form_keeps_the_vestibular_path_outside_the_proprioceptiv
 
 
 @pytest.mark.parametrize("seed", [1, 2])
-def test_a_multimodal_persons_motion_is_found_in_the_multimodal_form(tmp_path, seed):
+def test_a_multimodal_persons_motion_is_found_in_the_precision_structure(tmp_path, seed):
+    # Order 2 fits McRuer's precision structure too (PRECISION: no proprioceptive loop, the lead
+    # a core parameter), the person's own, and keeps it: its expanded model scores better.
     plants = _plants(tmp_path)
     start = PilotModel().defaults(k=2, gain=1.0 / KC)
     r, _ = _either_order(_lines(0.35, seed), plants, start, k=2, max_delay=None, display="compensatory")
-    alts = r["alternatives"]
+    assert r["structure"] == PRECISION and r["k"] == 2
+    assert r["parameters_original"]["K1"] == 0.0 and r["parameters_original"]["TL_v"] > 0.5
+    assert set(r["alternatives"]) == {"Km", "Km+tau_m"}           # one form: nothing else shapes the lead
+    assert r["p_value"] == pytest.approx(min(1.0, 2 * min(r["alternatives"].values())))
+    hess = r["hess"]                                               # Hess's result rides along
+    assert hess["structure"] == "hess" and "hess" not in hess
+    # Without it Hess's multimodal form names the person, whose own structure is surer still.
+    alts = hess["alternatives"]
     assert set(alts) == {"Km", "Km+tau_m", "multimodal Km", "multimodal Km+tau_m"}
-    assert r["p_value"] == pytest.approx(_weighted_bonferroni(alts))
-    assert r["p_value"] < ALPHA and r["vestibular_form"] == "multimodal"
+    assert hess["p_value"] == pytest.approx(_weighted_bonferroni(alts))
+    assert hess["p_value"] < ALPHA and hess["vestibular_form"] == "multimodal"
     # Hess's form, the path led by the loop's lead, fits it far worse (p 100 times larger or more).
     assert min(alts["multimodal Km"], alts["multimodal Km+tau_m"]) < 1e-2 * min(alts["Km"], alts["Km+tau_m"])
+    assert r["p_value"] < 1e-3 * hess["p_value"]
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])

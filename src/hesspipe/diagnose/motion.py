@@ -416,7 +416,10 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
                        runs=1 + len(repeat_runs) if pool else 1,
                        Km_per_Ke=float(t.get("Km_per_Ke", math.nan)), path_check=t.get("path_check"),
                        vestibular_form=t["vestibular_form"])
-    pars, se, bound = _df_delay(t, mv.named)
+    # The pilot's own dynamics and delay in Hess's structure, the model diagnose goes on with
+    # (the test's, or where it kept the precision structure the Hess result it carries).
+    pilot = t.get("hess", t)
+    pars, se, bound = _df_delay(pilot, mv.named)
     if baseline_run is None:
         delay = delay_bound_test(pars["tau0"], se, bound, cfg.alpha)
         own = cfg.max_pilot_delay
@@ -434,9 +437,10 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
                                 f"describing function to read the pilot's delay from "
                                 f"({tb.get('reason', 'motion test unavailable')})")
         # In the order the run's test kept; the baseline's fit starts it only if it kept the same.
-        order = int(t.get("k", k))
-        base_start = tb["parameters_original"] if int(tb.get("k", k)) == order else t["parameters_original"]
-        joint = paired_delay([run, *repeat_runs], bases, plants, (t["parameters_original"], base_start),
+        tb = tb.get("hess", tb)
+        order = int(pilot.get("k", k))
+        base_start = tb["parameters_original"] if int(tb.get("k", k)) == order else pilot["parameters_original"]
+        joint = paired_delay([run, *repeat_runs], bases, plants, (pilot["parameters_original"], base_start),
                              k=order)
         delay = paired_delay_test(joint, cfg.retest_delay_sd, cfg.alpha)
         delay["baseline_run"] = ", ".join(b.source or b.id for b in bases)
@@ -447,7 +451,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
     remnant = {"named": bool(share >= cfg.remnant_share), "share": share,
                "threshold": cfg.remnant_share, "band_hz": list(cfg.band_hz),
                "criterion": "share of the control power between the multisine lines"}
-    return DFEvidence(mv, delay, dyn, remnant, int(t.get("k", 0))), ""
+    return DFEvidence(mv, delay, dyn, remnant, int(pilot.get("k", 0))), ""
 
 
 def motion_step(ev: DFEvidence, problem, current, cfg):

@@ -43,7 +43,9 @@ path outside Hess's proprioceptive loop; in order 1 Hess's without the visual la
 the original fitted without it and admitted only where it fits as well as the original with
 it (:data:`UNEQUALISED`). The test's p is the smallest of the alternatives' each divided
 by its share of the level (Bonferroni; equal shares within a form, :data:`FORM_SHARES`
-between the forms).
+between the forms). In order 2 the whole test is also made in McRuer's precision structure
+(:data:`PRECISION`, no proprioceptive loop), and the structure whose expanded model scores
+better is kept, as the order is.
 With one line set only Km in Hess's form is tested. Both models are fitted by bounded least
 squares (Ke, K1, 1/T1, tau0, wn, zn, and 1/T2 for k = 2; K2 is held because
 only K1 K2 is identifiable; and a visual lag or lead a human adds that Hess's
@@ -95,6 +97,7 @@ from ._motion_fits import (  # noqa: F401
     FORM_SHARES,
     FORMS_BY_ORDER,
     MIN_VISUAL_DELAY,
+    PRECISION,
     TAU_M_MAX,
     UNEQUALISED,
     VESTIBULAR_FORMS,
@@ -134,7 +137,8 @@ ALTERNATIVES_IN_WORDS = ("nested F tests of Km alone, p = 0.5 P(F > f) for Km >=
                          "disturbance lines also with a vestibular delay and in a second form (in Hess's "
                          "order 2 the vestibular path outside the proprioceptive loop, the multimodal form; "
                          "in order 1 without the visual lag, the unequalised form), weighted Bonferroni over "
-                         "them (FORM_SHARES)")
+                         "them (FORM_SHARES); in order 2 also in McRuer's precision structure, the structure "
+                         "whose expanded model scores better kept")
 """The test's alternatives in words, as diagnose's criterion and pilots' method state them."""
 
 EITHER_FEEDFORWARD = 0.2
@@ -232,7 +236,11 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         :data:`PATH_VARIANTS`' order), ``better``, the one of them with the smallest p or None,
         and ``level``); ``k`` (Hess's order the test was made in: `k`, or with both line sets
         the other where its expanded model scores better, RSS + ln(residuals) per parameter)
-        and ``dof_expanded`` (the residual degrees of freedom of the alternative kept).
+        and ``dof_expanded`` (the residual degrees of freedom of the alternative kept);
+        ``structure`` ("hess" or :data:`PRECISION`, the pilot structure the test was made in)
+        and, where it is the precision structure, ``hess`` (Hess's result in the same order,
+        this dict's keys without ``hess``: the pilot's own dynamics in Hess's model; ``Km``,
+        ``Km_per_Ke``, ``Km_se``, ``parameters_estimate`` and the intervals are Hess's then).
     """
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
@@ -276,7 +284,10 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
 
 def _feedforward_p(comp: dict, purs: dict) -> float:
     # The nested F test of the pursuit display's feedforward (its two parameters) between
-    # the two expanded fits, each with its own vestibular path.
+    # the two expanded fits, each with its own vestibular path; nested only within one
+    # pilot structure, so where the two displays kept different ones, between Hess's.
+    if comp.get("structure") != purs.get("structure"):
+        comp, purs = comp.get("hess", comp), purs.get("hess", purs)
     return _nested_f(comp["rss_expanded"], purs["rss_expanded"], len(FEEDFORWARD), purs["dof_expanded"])[1]
 
 
