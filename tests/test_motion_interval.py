@@ -22,7 +22,7 @@ from hesspipe.core.formats import read_plants, read_run
 from hesspipe.core.seeds import derive_seed
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.identification.criteria import choose_k
-from hesspipe.identification.motion_test import FORM_SHARES, UNEQUALISED, motion_test
+from hesspipe.identification.motion_test import FORM_SHARES, UNEQUALISED, hess_result, motion_test
 from hesspipe.pilot.hess import table1
 from hesspipe.pilots.verdict import cohort_verdict, verdict_lines
 
@@ -100,7 +100,7 @@ def test_the_estimate_is_not_pulled_down_by_the_remnant(tmp_path):
         plants = read_plants(folder / "plants.json")
         k = choose_k(plants)[0]
         out = motion_test(run, plants, table1(k), k=k)
-        pe = out.get("hess", out)["parameters_expanded"]   # Hess's test fit, the estimate's model
+        pe = hess_result(out)["parameters_expanded"]   # Hess's test fit, the estimate's model
         test_fit.append(math.log(pe["Km"] / abs(pe["Ke"]) / truth))
         estimate.append(math.log(out["Km_per_Ke"] / truth))
     assert max(test_fit) < -0.1                      # every draw low by more than 10 %

@@ -19,7 +19,7 @@ from hesspipe.core.seeds import derive_seed
 from hesspipe.diagnose.settings import DiagnoseConfig
 from hesspipe.humanlike import draw_trial, simulate_trial, write_trial
 from hesspipe.humanlike.forcing import SPARSE_LAYOUT
-from hesspipe.identification.motion_test import EITHER_EXACT, EITHER_FEEDFORWARD, motion_test
+from hesspipe.identification.motion_test import EITHER_EXACT, EITHER_FEEDFORWARD, hess_result, motion_test
 from hesspipe.pilot.hess import table1
 
 
@@ -41,7 +41,7 @@ def test_pursuit_feedforward_is_not_read_as_motion(tmp_path):
     assert set(purs["feedforward"]) == {"Kff", "T_ff"} and purs["feedforward"]["Kff"] > 0
     # Two more parameters than the compensatory fits, in one pilot structure (Hess's: each
     # display may keep the precision structure in order 2).
-    assert purs.get("hess", purs)["degrees_of_freedom"] == comp.get("hess", comp)["degrees_of_freedom"] - 2
+    assert hess_result(purs)["degrees_of_freedom"] == hess_result(comp)["degrees_of_freedom"] - 2
 
 
 def test_pursuit_test_still_names_motion(tmp_path):
@@ -136,7 +136,7 @@ def test_diagnose_goes_on_with_hess_dynamics_where_the_precision_structure_is_ke
 
     def precision_kept(*args, **kwargs):
         t = real(*args, **kwargs)
-        seen["hess"] = t.get("hess", t)
+        seen["hess"] = hess_result(t)
         other = {n: {**t[n], "wn": 99.0, "tau0": 0.59} for n in ("parameters_original", "parameters_expanded")}
         return {**t, **other, "structure": "precision", "hess": seen["hess"]}
 

@@ -37,7 +37,14 @@ import scipy.stats
 from ..core.errors import HesspipeError
 from ..core.paper import FITNESS_BAND_HZ
 from ..identification.lines import SEPARABLE, forcing_sets
-from ..identification.motion_test import ALTERNATIVES_IN_WORDS, PATH_ADVICE, forcing_lines, safe_motion_test, windowed
+from ..identification.motion_test import (
+    ALTERNATIVES_IN_WORDS,
+    PATH_ADVICE,
+    forcing_lines,
+    hess_result,
+    safe_motion_test,
+    windowed,
+)
 from ..identification.paired_delay import paired_delay
 from .results import Step
 
@@ -418,7 +425,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
                        vestibular_form=t["vestibular_form"])
     # The pilot's own dynamics and delay in Hess's structure, the model diagnose goes on with
     # (the test's, or where it kept the precision structure the Hess result it carries).
-    pilot = t.get("hess", t)
+    pilot = hess_result(t)
     pars, se, bound = _df_delay(pilot, mv.named)
     if baseline_run is None:
         delay = delay_bound_test(pars["tau0"], se, bound, cfg.alpha)
@@ -437,7 +444,7 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
                                 f"describing function to read the pilot's delay from "
                                 f"({tb.get('reason', 'motion test unavailable')})")
         # In the order the run's test kept; the baseline's fit starts it only if it kept the same.
-        tb = tb.get("hess", tb)
+        tb = hess_result(tb)
         order = int(pilot.get("k", k))
         base_start = tb["parameters_original"] if int(tb.get("k", k)) == order else pilot["parameters_original"]
         joint = paired_delay([run, *repeat_runs], bases, plants, (pilot["parameters_original"], base_start),

@@ -187,9 +187,9 @@ class _Alternative(NamedTuple):
 
 @dataclass(frozen=True)
 class _Null:
-    # The original (no-motion) model fitted to the lines for one of Hess's orders and one of
-    # Hess's and PRECISION: its search problem (base, free, bounds, starts, the equaliser's name) and its
-    # optimum.
+    # The original (no-motion) model fitted to the lines for one of Hess's orders, in Hess's
+    # structure or PRECISION: its search problem (base, free, bounds, starts, the equaliser's
+    # name) and its optimum.
     k: int
     base: dict
     free: list

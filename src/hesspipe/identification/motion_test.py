@@ -239,7 +239,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         and ``dof_expanded`` (the residual degrees of freedom of the alternative kept);
         ``structure`` ("hess" or :data:`PRECISION`, the pilot structure the test was made in)
         and, where it is the precision structure, ``hess`` (Hess's result in the same order,
-        this dict's keys without ``hess``: the pilot's own dynamics in Hess's model; ``Km``,
+        this dict's keys without ``hess``, :func:`hess_result`: the pilot's own dynamics in Hess's model; ``Km``,
         ``Km_per_Ke``, ``Km_se``, ``parameters_estimate`` and the intervals are Hess's then).
     """
     if display not in DISPLAYS:
@@ -282,12 +282,29 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
     return {**_with_interval(*comp, interval), **out, **forcing}
 
 
+def hess_result(result: dict) -> dict:
+    """The motion test's result in Hess's structure.
+
+    Parameters
+    ----------
+    result : dict
+        :func:`motion_test`'s result.
+
+    Returns
+    -------
+    dict
+        `result` itself, or where the test kept the precision structure (:data:`PRECISION`)
+        the Hess result it carries under ``hess``: the pilot's own dynamics in Hess's model.
+    """
+    return result.get("hess", result)
+
+
 def _feedforward_p(comp: dict, purs: dict) -> float:
     # The nested F test of the pursuit display's feedforward (its two parameters) between
     # the two expanded fits, each with its own vestibular path; nested only within one
     # pilot structure, so where the two displays kept different ones, between Hess's.
     if comp.get("structure") != purs.get("structure"):
-        comp, purs = comp.get("hess", comp), purs.get("hess", purs)
+        comp, purs = hess_result(comp), hess_result(purs)
     return _nested_f(comp["rss_expanded"], purs["rss_expanded"], len(FEEDFORWARD), purs["dof_expanded"])[1]
 
 
