@@ -62,7 +62,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     try:
         return _score(args)
-    except (HesspipeError, OSError, ValueError) as exc:   # a wrong folder, element or condition
+    except (HesspipeError, OSError, json.JSONDecodeError) as exc:   # a wrong folder, element or condition
         print(f"bench_labs: error: {exc}", file=sys.stderr)
         return 1
 
