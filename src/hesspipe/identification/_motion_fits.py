@@ -228,16 +228,18 @@ def _null_fit(ld: LineData, plants, start: Mapping[str, float], k: int, display:
     sign = 1.0 if base["Ke"] >= 0 else -1.0
     big = 1e3 * max(abs(base["Ke"]), 1.0)
     bounds = {"Ke": (0.0, big) if sign > 0 else (-big, 0.0)}
+    # The delay and the neuromuscular mode, bounded alike in both structures.
+    core = {"tau0": (MIN_VISUAL_DELAY, 0.6), "wn": (1.0, 60.0), "zn": (0.02, 2.0)}
     if structure == PRECISION:
         lead, _, lead_hi = VISUAL_EQUALISER[2]
         # Without proprioception the loop's gain is Ke itself, not Ke / (1 + K1 K2).
         base["Ke"], base["K1"], base[lead] = base["Ke"] / (1.0 + base["K1"] * base["K2"]), 0.0, 0.0
         eq, eq_start, eq_hi = VISUAL_EQUALISER[1]
-        bounds.update({"tau0": (MIN_VISUAL_DELAY, 0.6), "wn": (1.0, 60.0), "zn": (0.02, 2.0), lead: (0.0, lead_hi)})
+        bounds.update({**core, lead: (0.0, lead_hi)})
     else:
         eq, eq_start, eq_hi = VISUAL_EQUALISER[2 if k == 2 else 1]
-        bounds.update({"K1": (1e-3, 100.0), "1/T1": (1e-4, 10.0), "tau0": (MIN_VISUAL_DELAY, 0.6),
-                       "wn": (1.0, 60.0), "zn": (0.02, 2.0), **({"1/T2": (1e-3, 20.0)} if k == 2 else {})})
+        bounds.update({"K1": (1e-3, 100.0), "1/T1": (1e-4, 10.0), **core,
+                       **({"1/T2": (1e-3, 20.0)} if k == 2 else {})})
     base[eq] = 0.0
     bounds[eq] = (0.0, eq_hi)
     free = list(bounds)
