@@ -9,6 +9,7 @@ refits it with the path's likely mistakes and says which names motion.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 
 import pytest
@@ -119,3 +120,28 @@ def test_a_cohort_flown_with_a_negated_path_is_told_to_check_it(tmp_path):
     static = cohort(tmp_path / "s", (), False)
     assert static["answer"] == "no" and static["path_check"] is not None and static["path_check"]["named"] == []
     assert not any("CHECK motion_path" in line for line in verdict_lines(static))
+
+
+def test_only_the_reported_test_gets_its_path_check_and_km_estimate(twins, monkeypatch):
+    # Display "either" fits the test for each display and pilot structure; the path check and
+    # the Km estimate are made once, for the test reported (made for each, they were a fifth
+    # of a laboratory's diagnosis time).
+    import hesspipe.identification._motion_fits as fits
+
+    calls = collections.Counter()
+
+    def counted(name, f):
+        def wrapper(*args, **kwargs):
+            calls[name] += 1
+            return f(*args, **kwargs)
+        return wrapper
+
+    for name in ("_one_display", "_path_check", "km_estimate"):
+        monkeypatch.setattr(fits, name, counted(name, getattr(fits, name)))
+    _, (run0, plants) = twins
+    # Order 2: Hess's structure and the precision one are both fitted.
+    t = motion_test(run0, plants, {}, k=2, path_check=ALPHA, display="either")
+    assert calls["_one_display"] >= 2, calls
+    assert calls["_path_check"] == 1 and calls["km_estimate"] == 1, calls
+    assert t["p_value"] >= ALPHA and t["path_check"]["better"] is None
+    assert t["Km"] == t["parameters_estimate"]["Km"]

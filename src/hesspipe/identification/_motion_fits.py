@@ -302,7 +302,7 @@ def _has_target(ld: LineData) -> bool:
 
 
 def _either_order(ld: LineData, plants, start: Mapping[str, float], *, k: int, max_delay: float | None,
-                  display: str, path_check: float | None = None) -> tuple[dict, Callable[[float], dict] | None]:
+                  display: str, path_check: float | None = None) -> tuple[dict, _Late | None]:
     # :func:`_one_display` in Hess's rule's order `k`, and with both line sets in the other
     # order too where its original model alone scores better than the rule's, with the
     # vestibular path and without (a quick search screens first); kept is the order whose expanded
@@ -321,9 +321,9 @@ def _either_order(ld: LineData, plants, start: Mapping[str, float], *, k: int, m
         return _one_display(ld, plants, start, k=k, **kw)
     target, n_res = _has_target(ld), _residuals(ld)
     null = _null_fit(ld, plants, start, k, display, target)
-    result, profile = _one_display(ld, plants, start, k=k, null=null, **kw)
+    result, late = _one_display(ld, plants, start, k=k, null=null, **kw)
     if not result.get("available"):
-        return result, profile
+        return result, late
 
     def expanded_score(r: dict) -> float:   # the alternative the test kept, its parameters
         return _score(r["rss_expanded"], n_res - r["dof_expanded"], n_res)
@@ -335,9 +335,9 @@ def _either_order(ld: LineData, plants, start: Mapping[str, float], *, k: int, m
         other = _one_display(ld, plants, start, k=3 - k,
                              null=_null_fit(ld, plants, start, 3 - k, display, target), **kw)
         if other[0].get("available") and expanded_score(other[0]) < expanded_score(result):
-            result, profile = other
+            result, late = other
     if result["k"] != 2:
-        return result, profile
+        return result, late
     # In order 2 the precision structure (PRECISION) too, the same way. Where it is kept, its
     # test stands and Hess's result rides along ("hess"): diagnose reads the pilot's own
     # dynamics from it, and how much motion stays the paper's model's Km/|Ke| (in the
@@ -346,9 +346,8 @@ def _either_order(ld: LineData, plants, start: Mapping[str, float], *, k: int, m
     precision = _one_display(ld, plants, start, k=2,
                              null=_null_fit(ld, plants, start, 2, display, target, structure=PRECISION), **kw)
     if precision[0].get("available") and expanded_score(precision[0]) < expanded_score(result):
-        estimate = {key: result[key] for key in ("Km", "Km_per_Ke", "Km_se", "parameters_estimate")}
-        return {**precision[0], **estimate, "hess": result}, profile
-    return result, profile
+        return {**precision[0], "hess": result}, _Late(late.estimate, precision[1].check)
+    return result, late
 
 
 def _vestibular_tests(null: _Null, original_fit: tuple, forms, alternatives, km0: float, n_res: int,
@@ -413,14 +412,39 @@ def _vestibular_tests(null: _Null, original_fit: tuple, forms, alternatives, km0
     return tests, core, (rss_o, p_o, sol_o)
 
 
+class _Late(NamedTuple):
+    # What only the test that motion_test reports needs, left to :func:`finish` (with display
+    # "either" and order 2 up to six tests are fitted, one reported): `estimate()` gives
+    # Hess's Km estimate and its profile function (:func:`._km_estimate.km_estimate`),
+    # `check()` the motion path's check (:func:`._path_check._path_check`, None where not asked).
+    estimate: Callable[[], tuple[dict, Callable[[float], dict]]]
+    check: Callable[[], dict | None]
+
+
+def finish(result: dict, late: _Late | None, interval: float | None) -> dict:
+    """The reported test's result completed: the Km estimate (``Km``, ``Km_per_Ke``, ``Km_se``,
+    ``parameters_estimate``), with `interval` its profile intervals (else None), and the
+    motion path's check (``path_check``). Where the precision structure was kept, the Hess
+    result riding along (``hess``) gets the same estimate (it is Hess's) and no path check.
+    A result that is not available is returned as it is."""
+    if not result.get("available"):
+        return result
+    estimate, profile = late.estimate()
+    km = {"Km": estimate["Km"], "Km_per_Ke": estimate["Km_per_Ke"], "Km_se": estimate["Km_se"],
+          "parameters_estimate": estimate["parameters"]}
+    ci = profile(interval) if interval is not None else {"Km_interval": None, "Km_per_Ke_interval": None}
+    out = {**result, **km, "path_check": late.check(), **ci, "interval_level": interval}
+    if "hess" in out:
+        out["hess"] = {**out["hess"], **km, "path_check": None}
+    return out
+
+
 def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, max_delay: float | None,
                  display: str, path_check: float | None = None,
-                 null: _Null | None = None) -> tuple[dict, Callable[[float], dict] | None]:
+                 null: _Null | None = None) -> tuple[dict, _Late | None]:
     # :func:`.motion_test.motion_test` for one display ("compensatory" or "pursuit") and Hess order `k`
-    # on the lines `ld` (`null`: the original's fit for it, when already made), without the
-    # profile intervals: returned is the result and the function that computes those of Km
-    # and Km/|Ke| at a level (a dict of the two result keys; None where the test is not
-    # available), so that with display "either" only the reported test pays for its profiles.
+    # on the lines `ld` (`null`: the original's fit for it, when already made), without what
+    # only the reported test needs (:class:`_Late`, None where the test is not available).
     lines = ld.lines
     n_res = _residuals(ld)
     if ld.reason:
@@ -475,13 +499,17 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             expanded, base_e, free_e, lo_e, hi_e, [],
             [[p_e[n_] for n_ in free_e], [p_o[n_] for n_ in core] + [0.0] * len(extra)],
             max_delay, rss_e, dof_e, data, ld.w)
-    checked = None
-    if path_check is not None and p_value >= path_check:
-        checked = _path_check(plants, tests[0].problem, core, km0, rss_o, p_o, base, n_res, data, ld.w,
-                              path_check, EXPANDED_KEEP)
-    # How much (Km, Km/|Ke|, their intervals): the estimate's own fit (_km_estimate).
-    estimate, profile = km_estimate(expanded, *hess.problem, hess.params, p_o, (eq, lo[-1], hi[-1]),
-                                    n_res - len(hess.problem[1]), 1e-3 * km0, data, ld)
+
+    def check() -> dict | None:
+        if path_check is None or p_value < path_check:
+            return None
+        return _path_check(plants, tests[0].problem, core, km0, rss_o, p_o, base, n_res, data, ld.w,
+                           path_check, EXPANDED_KEEP)
+
+    def estimate() -> tuple[dict, Callable[[float], dict]]:
+        # How much (Km, Km/|Ke|, their intervals): the estimate's own fit (_km_estimate).
+        return km_estimate(expanded, *hess.problem, hess.params, p_o, (eq, lo[-1], hi[-1]),
+                           n_res - len(hess.problem[1]), 1e-3 * km0, data, ld)
 
     return {"available": True, "n_lines": int(lines.size), "window_samples": ld.window_samples,
             "parameters_original": {n_: float(v) for n_, v in p_o.items()},
@@ -490,14 +518,12 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "standard_errors_expanded": _standard_errors(sol_e, free_e, rss_e, dof_e),
             "rss_original": rss_o,
             "rss_expanded": rss_e, "lr": lr, "p_value": p_value,
-            "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0, "Km": estimate["Km"],
-            "Km_per_Ke": estimate["Km_per_Ke"], "parameters_estimate": estimate["parameters"],
+            "gain": 1.0 - rss_e / rss_o if rss_o > 0 else 0.0,
             "tau_m": float(p_e.get("tau_m", 0.0)),
-            "Km_se": estimate["Km_se"],
             "significant": bool(p_value < ALPHA),
             "alternatives": {t.name: t.p for t in tests},
             "vestibular_form": form,
             "delay_bound": delay_bound, "delay_bound_expanded": delay_bound_expanded,
-            "display": display, "target_lines": target, "path_check": checked, "structure": null.structure,
+            "display": display, "target_lines": target, "structure": null.structure,
             "feedforward": None if yc_inv is None else {n_: float(p_e[n_]) for n_ in FEEDFORWARD},
-            "degrees_of_freedom": dof, "dof_expanded": dof_e, "k": k}, profile
+            "degrees_of_freedom": dof, "dof_expanded": dof_e, "k": k}, _Late(estimate, check)

@@ -103,6 +103,7 @@ from ._motion_fits import (  # noqa: F401
     VESTIBULAR_FORMS,
     VISUAL_EQUALISER,
     _either_order,
+    finish,
 )
 from ._path_check import PATH_ADVICE, PATH_VARIANTS  # noqa: F401
 
@@ -239,8 +240,11 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         and ``dof_expanded`` (the residual degrees of freedom of the alternative kept);
         ``structure`` ("hess" or :data:`PRECISION`, the pilot structure the test was made in)
         and, where it is the precision structure, ``hess`` (Hess's result in the same order,
-        this dict's keys without ``hess``, :func:`hess_result`: the pilot's own dynamics in Hess's model; ``Km``,
+        this dict's keys without ``hess`` and the intervals, its ``path_check`` None,
+        :func:`hess_result`: the pilot's own dynamics in Hess's model; ``Km``,
         ``Km_per_Ke``, ``Km_se``, ``parameters_estimate`` and the intervals are Hess's then).
+        Of the up to six tests fitted (display "either", order 2) only the reported one
+        gets its Km estimate, intervals and path check (:func:`._motion_fits.finish`).
     """
     if display not in DISPLAYS:
         raise HesspipeError(f"display: expected one of {', '.join(DISPLAYS)}, got {display!r}")
@@ -258,7 +262,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         path_check = None
     kw = dict(k=k, max_delay=max_delay, path_check=path_check)
     if display != "either":
-        return {**_with_interval(*_either_order(ld, plants, start, display=display, **kw), interval), **forcing}
+        return {**finish(*_either_order(ld, plants, start, display=display, **kw), interval), **forcing}
     # An intersection-union test (Berger 1982): significant only if significant with the
     # display's feedforward and without it. Under "no motion" with either display the
     # matching test rejects with probability <= alpha, so the pair does too, whichever
@@ -279,7 +283,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
             out["feedforward_p"] = _feedforward_p(comp[0], purs[0])
             if out["feedforward_p"] < EITHER_FEEDFORWARD and purs[0]["p_value"] >= comp[0]["p_value"]:
                 comp = purs
-    return {**_with_interval(*comp, interval), **out, **forcing}
+    return {**finish(*comp, interval), **out, **forcing}
 
 
 def hess_result(result: dict) -> dict:
@@ -306,15 +310,6 @@ def _feedforward_p(comp: dict, purs: dict) -> float:
     if comp.get("structure") != purs.get("structure"):
         comp, purs = hess_result(comp), hess_result(purs)
     return _nested_f(comp["rss_expanded"], purs["rss_expanded"], len(FEEDFORWARD), purs["dof_expanded"])[1]
-
-
-def _with_interval(result: dict, profile, interval: float | None) -> dict:
-    # The profile intervals of Km and Km/|Ke| (None unless asked and available) added to a
-    # test's result.
-    if not result.get("available"):
-        return result
-    ci = profile(interval) if interval is not None else {"Km_interval": None, "Km_per_Ke_interval": None}
-    return {**result, **ci, "interval_level": interval}
 
 
 def safe_motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
