@@ -7,7 +7,7 @@ import pytest
 from hesspipe.core.errors import HesspipeError
 from hesspipe.core.formats import Plants
 from hesspipe.identification.spectra import psd
-from hesspipe.pilot.blocks import from_tf
+from hesspipe.pilot.blocks import ZERO, from_tf, gain
 from hesspipe.pilot.crossover import crossover, gain_scale
 from hesspipe.pilot.effects import CANALS, EFFECTS, PLATFORM, WASHOUT, get_effect
 from hesspipe.pilot.hess import PARAMETERS, PilotModel, model_from_name, table1
@@ -191,3 +191,13 @@ def test_reference_input_and_bad_plants():
         simulate("original", {}, bad, np.zeros(N), DT)
     # An integrating control plant (K/s) is fine.
     assert simulate("original", {}, Plants(ct.tf([1], [1, 0]), pl.Yd), broadband(), DT).stable
+
+
+def test_a_loops_blocks_are_replaced_by_name_and_nothing_else_changes():
+    loop = PilotModel().loop(PilotModel().complete({}, 1))
+    new = loop.replace(noise=gain(2.0))
+    assert new.noise == gain(2.0) and loop.noise == ZERO            # a new loop; the old one kept
+    assert all(getattr(new, f) is getattr(loop, f) for f in ("visual", "vestibular", "neuromuscular",
+                                                             "proprioceptive", "plant", "sensation"))
+    with pytest.raises(TypeError, match="no block nois"):
+        loop.replace(nois=ZERO)

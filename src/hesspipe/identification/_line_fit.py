@@ -37,9 +37,15 @@ def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None
     # `response`, also the pilot's response to -y (e = -y, r = 0: the remnant's bins).
     loop = with_motion_path(model.loop(params), cab)
     nm = loop.neuromuscular.response(s, cache)
-    ves = loop.vestibular.response(s, cache) * np.exp(-s * params.get("tau_m", 0.0))
-    vis = loop.visual.response(s, cache) * (1.0 + s * params.get("TL_v", 0.0)) \
-        / (1.0 + s * params.get("TI_v", 0.0))
+    # A factor left out where it is exactly 1 (no vestibular delay, no equaliser): the same
+    # numbers, and these were a fifth of the fits' model evaluations.
+    ves = loop.vestibular.response(s, cache)
+    tau_m, lead, lag = params.get("tau_m", 0.0), params.get("TL_v", 0.0), params.get("TI_v", 0.0)
+    if tau_m:
+        ves = ves * np.exp(-s * tau_m)
+    vis = loop.visual.response(s, cache)
+    if lead or lag:
+        vis = vis * (1.0 + s * lead) / (1.0 + s * lag)
     drive = vis * E
     if yc_inv is not None:
         drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("tau0", 0.0)) \

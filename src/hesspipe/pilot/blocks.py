@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields
 from typing import Iterable
 
 import numpy as np
@@ -183,8 +183,12 @@ def _shape(t: Term, s, cache) -> np.ndarray:
     key = (t.num, t.den, t.delay)
     val = None if cache is None else cache.get(key)
     if val is None:
-        val = np.polyval(t.num, s) / np.polyval(t.den, s) if (t.num, t.den) != ((1.0,), (1.0,)) \
-            else np.ones(np.shape(s), dtype=complex)
+        # A unit polynomial is not evaluated: dividing by 1 + 0j, or 1 + 0j by the other,
+        # gives the same numbers (and a fit's fresh shapes are mostly a mode over 1).
+        if t.den == (1.0,):
+            val = np.polyval(t.num, s) if t.num != (1.0,) else np.ones(np.shape(s), dtype=complex)
+        else:
+            val = (1.0 if t.num == (1.0,) else np.polyval(t.num, s)) / np.polyval(t.den, s)
         if t.delay:
             val = val * np.exp(-s * t.delay)
         if cache is not None:
@@ -311,7 +315,14 @@ class Loop:
         **changes : Block
             New blocks by attribute name (``noise=ZERO`` ...).
         """
-        return replace(self, **changes)
+        unknown = changes.keys() - _LOOP_FIELDS
+        if unknown:
+            raise TypeError(f"Loop has no block {', '.join(sorted(unknown))}")
+        # The frozen instance's fields copied without dataclasses.replace's __init__, which
+        # was a tenth of a describing-function fit's model evaluation (two per call).
+        new = object.__new__(Loop)
+        new.__dict__.update(self.__dict__, **changes)
+        return new
 
     def pilot_open_loop(self, s, yc, cache=None) -> np.ndarray:
         """Open loop broken at the displayed error, ``L = Y_pilot Yc``, at `s`.
@@ -443,6 +454,9 @@ class Loop:
         qh = _pmul(q, h)
         return _padd(_padd(_pmul(_pmul(b, d), qh), _pmul(_pmul(a, c), qh)),
                      _pmul(_pmul(a, p), _pmul(d, g)))
+
+
+_LOOP_FIELDS = frozenset(f.name for f in fields(Loop))
 
 
 def _key(t: Term):

@@ -318,7 +318,9 @@ def core_loop(p: Mapping[str, float]) -> Loop:
     # such keeps a cancelled pole at s = 0 out of the stability test.
     num, den = ((1.0, 0.0), (1.0, a1)) if a1 != 0 else ((1.0,), (1.0,))
     if int(p["k"]) == 2:
-        den = tuple(np.convolve(den, (1.0, float(p["1/T2"]))).tolist())
+        # Times (s + 1/T2), written out (np.convolve was a sixth of a fit's model evaluation).
+        a2 = float(p["1/T2"])
+        den = (1.0, a1 + a2, a1 * a2) if a1 != 0 else (1.0, a2)
     pf = Block((Term(num, den, 0.0, float(p["K1"]) * float(p["K2"])),))
     visual = Block((Term((1.0,), (1.0,), float(p["tau0"]), float(p["Ke"])),))
     return Loop(visual=visual, vestibular=Block(), neuromuscular=nm, proprioceptive=pf)
