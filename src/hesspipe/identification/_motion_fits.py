@@ -422,11 +422,25 @@ class _Late(NamedTuple):
 
 
 def finish(result: dict, late: _Late | None, interval: float | None) -> dict:
-    """The reported test's result completed: the Km estimate (``Km``, ``Km_per_Ke``, ``Km_se``,
-    ``parameters_estimate``), with `interval` its profile intervals (else None), and the
-    motion path's check (``path_check``). Where the precision structure was kept, the Hess
-    result riding along (``hess``) gets the same estimate (it is Hess's) and no path check.
-    A result that is not available is returned as it is."""
+    """The reported test's result completed with what only it needs.
+
+    Parameters
+    ----------
+    result : dict
+        The reported test's result from one display's fits (``available`` False: returned as it is).
+    late : _Late or None
+        Its deferred Km estimate and motion-path check (None only where not available).
+    interval : float or None
+        Profile-interval level for Km and Km/|Ke| (e.g. 0.95); None gives no intervals.
+
+    Returns
+    -------
+    dict
+        `result` with the Km estimate (``Km``, ``Km_per_Ke`` (1), ``Km_se``,
+        ``parameters_estimate``), ``Km_interval``/``Km_per_Ke_interval``, ``interval_level`` and
+        the motion path's check (``path_check``). Where the precision structure was kept, the Hess
+        result riding along (``hess``) gets the same estimate (it is Hess's) and no path check.
+    """
     if not result.get("available"):
         return result
     estimate, profile = late.estimate()
