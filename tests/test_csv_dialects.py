@@ -178,6 +178,10 @@ def test_a_name_written_twice_is_refused_and_its_columns_mapped_by_position(tmp_
 @pytest.mark.parametrize("lines", [
     # A header naming more columns than the rows hold values: the last, mapped, has none.
     ["time disturbance control reference output"] + [f"{0.02 * k:.2f} 0.1 0.2 0.3" for k in range(300)],
+    # The same with separators: the header's last name is left out for having no values (a
+    # LabVIEW 'Comment'); the role it names was then "missing; found columns: time, ...".
+    ["time,disturbance,output,control"] + [f"{0.02 * k:.2f},0.1,0.2" for k in range(300)],
+    ["time;disturbance;output;control"] + [f"{0.02 * k:.2f};0,1;0,2" for k in range(300)],
     # No row holding both a time and a control.
     ["time,disturbance,output,control"] + [f"{0.02 * k:.2f},0.1,0.2," if k % 2 == 0 else ",0.1,0.2,0.3"
                                            for k in range(300)],
@@ -191,6 +195,15 @@ def test_a_column_without_a_value_is_refused_not_interpolated(tmp_path, lines):
         with pytest.raises(HesspipeError, match=r"bad.txt: column '(output|control)': no number in any data row"
                                                 r"( that has a time)?; expected a value in each row"):
             read_run(path, resample=resample)
+
+
+def test_a_name_over_no_values_is_listed_with_the_columns_found(tmp_path):
+    # Another column missing as well: both told in one message, the empty one among those found.
+    path = tmp_path / "short.csv"
+    path.write_text("time,error,control\n" + "".join(f"{0.02 * k:.2f},0.1\n" for k in range(300)))
+    with pytest.raises(HesspipeError, match=r"short.csv: column 'output' missing; found columns: time, error, "
+                                            r"control \(no number in any data row\)"):
+        read_run(path)
 
 
 def test_empty_optional_column_is_absent_but_a_gap_is_an_error(tmp_path):

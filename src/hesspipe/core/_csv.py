@@ -263,11 +263,12 @@ def _split_unit(header: str) -> tuple[str, str | None]:
     return m.group("name").strip(), (m.group("u1") if m.group("u1") is not None else m.group("u2")).strip()
 
 
-def _prepare(text: str, notes: list, *, separator_said: bool = True) -> tuple[str, str, str, bool]:
-    """(text, delimiter, decimal, positional) for pandas: metadata lines above the header
-    turned into comments, a units row merged into the header's names, a header of positions
-    (``1`` to ``k``; `positional` True) given to a file without one; what was done appended
-    to `notes` (the separator too when `separator_said`)."""
+def _prepare(text: str, notes: list, *, separator_said: bool = True) -> tuple[str, str, str, bool, str | None]:
+    """(text, delimiter, decimal, positional, left_out) for pandas: metadata lines above the
+    header turned into comments, a units row merged into the header's names, a header of
+    positions (``1`` to ``k``; `positional` True) given to a file without one, the header's
+    last name left out where no data row has a value under it (`left_out`, else None); what
+    was done appended to `notes` (the separator too when `separator_said`)."""
     # A line of whitespace (LabVIEW writes a tab) is blank to pandas only when empty.
     lines = [ln if ln.strip() else "" for ln in text.splitlines()]
     content = [i for i, ln in enumerate(lines) if _is_content(ln)]
@@ -293,6 +294,7 @@ def _prepare(text: str, notes: list, *, separator_said: bool = True) -> tuple[st
         notes.append({"\t": "tab-separated", ";": "semicolon-separated"}.get(sep, "whitespace-separated")
                      + (" with decimal commas" if decimal == "," else ""))
     rows = [i for i, ln in enumerate(lines) if _is_content(ln)]
+    left_out = None
     if sep != r"\s+" and len(rows) > 1:
         # A last name over no values (LabVIEW's "Comment"): pandas took the data for a row
         # short of a value, and the file for one with more values than names.
@@ -301,7 +303,8 @@ def _prepare(text: str, notes: list, *, separator_said: bool = True) -> tuple[st
         if head[-1].strip() and len(head) == widths[len(widths) // 2] + 1 == widths[-1] + 1:
             lines[rows[0]] = sep.join(head[:-1])
             text = "\n".join(lines)
-            notes.append(f"left out the header's last name {head[-1].strip()!r}: no data row has a value under it")
+            left_out = head[-1].strip()
+            notes.append(f"left out the header's last name {left_out!r}: no data row has a value under it")
     positional = False
     first = rows[0] if rows else None
     cells = None if first is None else [c for c in (lines[first].split() if sep == r"\s+"
@@ -321,7 +324,7 @@ def _prepare(text: str, notes: list, *, separator_said: bool = True) -> tuple[st
             notes.append(f"no header row: columns named by position, 1 to {len(cells)}")
         lines.insert(first, (" " if sep == r"\s+" else sep).join(names))
         text = "\n".join(lines)
-    return text, sep, decimal, positional
+    return text, sep, decimal, positional, left_out
 
 
 def unwrap_turns(values: np.ndarray) -> tuple[np.ndarray, float | None, int]:

@@ -141,6 +141,9 @@ class Frame:
         The headers as written where the file names two columns alike (pandas reads the
         second ``Yaw`` as ``Yaw.1``): a role matching them is refused, and each of them is
         mapped by its position, ``1`` to ``k``, instead; None otherwise.
+    left_out : str or None
+        The header's last name, left out of :attr:`df` because no data row has a value
+        under it (LabVIEW's ``Comment``); None otherwise.
     """
 
     path: Path
@@ -153,6 +156,7 @@ class Frame:
     positional: bool = False
     item: str = "variable"
     as_written: tuple | None = None
+    left_out: str | None = None
 
     @property
     def headers(self) -> list[str]:
@@ -195,7 +199,7 @@ def read_frame(path: str | Path, what: str = "a CSV") -> Frame:
 def _text_frame(path: Path, text: str, notes: list, separator_said: bool = True) -> Frame:
     """The :class:`Frame` of a table's text (a text file's, or a workbook sheet's)."""
     # A workbook's tabs are ours: not said (separator_said False).
-    text, sep, decimal, positional = _prepare(text, notes, separator_said=separator_said)
+    text, sep, decimal, positional, left_out = _prepare(text, notes, separator_said=separator_said)
     comments = tuple(line.lstrip()[1:].strip() for line in text.splitlines()
                      if line.lstrip().startswith("#"))
     engine = "python" if sep == r"\s+" else "c"
@@ -236,7 +240,8 @@ def _text_frame(path: Path, text: str, notes: list, separator_said: bool = True)
         return pd.read_csv(_io.StringIO(text), comment="#", skipinitialspace=True, sep=sep, index_col=False,
                            usecols=[col], dtype=str, engine=engine)[col].to_numpy()
 
-    return Frame(path, df, comments, tuple(notes), decimal, written, None, positional, as_written=as_written)
+    return Frame(path, df, comments, tuple(notes), decimal, written, None, positional, as_written=as_written,
+                 left_out=left_out)
 
 
 def _sheets_frame(names: list[str], frames: list[Frame]) -> Frame:
@@ -313,6 +318,13 @@ def read_table(path: str | Path | Frame, names: Mapping[str, str], *, optional=(
     return _by_role(frame, names, optional, hint, also or {}, gaps_hint if not gaps else None)
 
 
+def _no_number(path, column: str, every_row: bool) -> str:
+    """The message for a column without a number in any data row (``every_row`` False: in any
+    that has a time)."""
+    return (f"{path}: column '{column}': no number in any data row"
+            f"{'' if every_row else ' that has a time'}; expected a value in each row")
+
+
 def _missing(frame: Frame, missing: list[tuple[str, str]], hint: str | None, also: Mapping[str, str]) -> str:
     """:func:`_by_role`'s message for the required columns (role, name asked for) not found."""
     positional, others = frame.positional, frame.others
@@ -327,7 +339,8 @@ def _missing(frame: Frame, missing: list[tuple[str, str]], hint: str | None, als
         subject = f"{item} '{name}' missing" + (f" (role {role})" if role != name else "")
     else:
         subject = f"{item}s {', '.join(names[:-1])} and {names[-1]} missing"
-    headers = ", ".join(frame.headers)
+    headers = ", ".join(frame.headers) + ("" if frame.left_out is None else
+                                          f", {frame.left_out} (no number in any data row)")
     tail += _starred_hint(frame.headers, missing)
     if others is not None:
         left = f" (left out, another length: {', '.join(others[:6])})" if others else ""
@@ -423,6 +436,13 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
             if clock is not None:
                 data[role] = clock
                 notes.append(f"column '{col}' ({role}): clock times read as seconds from the first")
+    if frame.left_out is not None:
+        # A header naming more columns than the rows hold values: a column asked for may be
+        # the header's last, left out for having no values, not a name the file lacks.
+        empty = [m for m in missing if _find(path, [frame.left_out], *m, None, hint)[0] is not None]
+        if empty and len(empty) == len(missing):
+            raise HesspipeError(_no_number(path, frame.left_out, True))
+        missing = [m for m in missing if m not in empty]
     if missing:
         # Every missing column in one message: a file from another logger misses several,
         # and naming them one per attempt cost a user as many runs.
@@ -433,8 +453,7 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
         # Nothing to read, nor to interpolate from: a header naming more columns than the rows
         # hold values, not a missed frame. Cells of text are named below.
         if rows.any() and not np.isfinite(v[rows]).any() and _empty(df[used[role]].iloc[rows]).all():
-            raise HesspipeError(f"{path}: column '{used[role]}': no number in any data row"
-                                f"{'' if rows.all() else ' that has a time'}; expected a value in each row")
+            raise HesspipeError(_no_number(path, used[role], rows.all()))
     first, stop = _complete_rows(data)
     bad = {}
     for role, v in data.items():
