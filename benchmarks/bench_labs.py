@@ -16,6 +16,8 @@ Usage::
     python benchmarks/labs/lab8_simona_yaw.py 8080 /tmp/lab8
     python benchmarks/bench_labs.py lab8 /tmp/lab8 [--elements SI,DI] [--conditions motion,static]
         [--display either|compensatory|pursuit]
+    python benchmarks/labs/lab9_roll_hexapod.py 9090 /tmp/lab9
+    python benchmarks/bench_labs.py lab9 /tmp/lab9
 
 Set ``OPENBLAS_NUM_THREADS=1`` for one core's CPU time.
 """
@@ -37,10 +39,14 @@ sys.path.insert(0, str(Path(__file__).parent))
 from bench_diagnose_folder import read_folder, timed_diagnose  # noqa: E402  (the same reading and timing)
 
 LABS = {
-    # name: (plants file per element, --columns, person id in the file name)
-    "lab7": ("plants/yaw_{el}.json", "time=t,reference=ft,disturbance=fd,output=psi,control=u", r"^(S[0-9]+)_"),
+    # name: (plants file per element, --columns, person id in the file name, elements)
+    "lab7": ("plants/yaw_{el}.json", "time=t,reference=ft,disturbance=fd,output=psi,control=u", r"^(S[0-9]+)_",
+             "SI,DI"),
     "lab8": ("plants_{el}.json", "time=Time [s],reference=Target [deg],disturbance=Dist [deg],"
-             "output=Yaw [deg],control=Stick [deg]", r"^(P[0-9]+)_"),
+             "output=Yaw [deg],control=Stick [deg]", r"^(P[0-9]+)_", "SI,DI"),
+    # Written 2026-12-02 by a reviewer who did not read hesspipe; scored once as written.
+    "lab9": ("plants_{el}.json", "time=t,reference=ft,disturbance=fd,output=phi,control=u", r"^(R[0-9]+)_",
+             "ROLL"),
 }
 
 
@@ -55,7 +61,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("lab", choices=sorted(LABS))
     ap.add_argument("root", help="the folder the laboratory's generator wrote")
-    ap.add_argument("--elements", default="SI,DI")
+    ap.add_argument("--elements", help="comma-separated (default: the laboratory's, SI,DI or ROLL)")
     ap.add_argument("--conditions", default="motion,static")
     ap.add_argument("--display", default="either", help="DiagnoseConfig.display (the laboratories' is compensatory)")
     ap.add_argument("--seed", type=int, default=0)
@@ -68,14 +74,14 @@ def main(argv=None) -> int:
 
 
 def _score(args) -> int:
-    plants_name, columns, person = LABS[args.lab]
+    plants_name, columns, person, elements = LABS[args.lab]
     config = DiagnoseConfig(display=args.display)
     root = Path(args.root)
     truth = json.loads((root / "truth.json").read_text())
     print("SYNTHETIC DATA: an independent laboratory's generated files, diagnosed run by run")
     totals: dict[str, list[int]] = {}
     times: dict[str, list[float]] = {}
-    for el in args.elements.split(","):
+    for el in (args.elements or elements).split(","):
         plants = read_plants(root / plants_name.format(el=el))
         users = motion_users(args.lab, truth, el)
         for cond in args.conditions.split(","):
