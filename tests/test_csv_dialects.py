@@ -148,6 +148,20 @@ def test_mapped_column_keeps_its_unit(tmp_path):
     assert not run.reference.any()  # 'r' is not 'reference'
 
 
+def test_a_name_asked_with_its_unit_matches_whatever_the_spacing(tmp_path):
+    # A units row under the names gives 'p [deg/s]'; a user who read 'p' over '[deg/s]' asks
+    # for 'p[deg/s]' or 'p (deg/s)'. A different unit is another column.
+    path = tmp_path / "units.csv"
+    lines = _text(["t", "wind", "p", "stick", "r"], scale=(1000, 1, 180 / math.pi, 1, 1)).split("\n")
+    path.write_text("\n".join([lines[0], "[ms],[ft/s],[deg/s],[-],[-]"] + lines[1:]))
+    for output in ("p[deg/s]", "P (deg/s)", "p [ deg/s ]"):
+        run = read_run(path, columns=f"time=t[ms],disturbance=wind,output={output},control=stick")
+        np.testing.assert_allclose(run.output, _signals()[2], rtol=1e-6, atol=1e-9)
+        assert run.dt == pytest.approx(DT)
+    with pytest.raises(HesspipeError, match=r"column 'p\[rad/s\]' missing \(role output\); found columns: t \[ms\]"):
+        read_run(path, columns="time=t[ms],disturbance=wind,output=p[rad/s],control=stick")
+
+
 def test_two_headers_for_one_role_are_refused(tmp_path):
     path = tmp_path / "two.csv"
     path.write_text(_text(["time", "Output [rad/s]", "output (deg/s)", "control", "disturbance"]))

@@ -79,7 +79,9 @@ def _resolution(cells) -> np.ndarray:
 def _match(path, headers: list[str], role: str, name: str, as_written=None,
            hint: str | None = None) -> str | None:
     """The header of `role` (asked for as `name`): the exact name, else the one whose name,
-    ignoring case and a unit in brackets, is `name`; two such headers are an error. Where the
+    ignoring case and a unit in brackets, is `name`, or that is `name` but for case and
+    spacing (``Yaw[deg]`` asks for ``Yaw [deg]``, ``yaw (deg)`` too; not ``Yaw [rad]``);
+    two such headers are an error. Where the
     file names two columns alike (`as_written`, :attr:`Frame.as_written`) a name matching them
     is an error too, and each of them is mapped by its position instead, a number 1 to k
     (`hint`: the setting that maps columns, for the message)."""
@@ -87,7 +89,11 @@ def _match(path, headers: list[str], role: str, name: str, as_written=None,
         found = [name]
     else:
         want = name.strip().lower()
-        found = [h for h in headers if _split_unit(h)[0].lower() == want or h.strip().lower() == want]
+        # A name asked for with its unit: a logger's units row makes 'Yaw [deg]' of 'Yaw' over
+        # 'deg', and a user reading the file writes 'Yaw[deg]'.
+        asked = tuple((v or "").replace(" ", "").lower() for v in _split_unit(name))
+        found = [h for h in headers if _split_unit(h)[0].lower() == want or h.strip().lower() == want
+                 or (asked[1] and tuple((v or "").replace(" ", "").lower() for v in _split_unit(h)) == asked)]
     if len(found) > 1:
         raise HesspipeError(f"{path}: columns {', '.join(repr(h) for h in found)} all read as "
                             f"'{name}' (role {role}); expected one")
