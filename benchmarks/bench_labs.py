@@ -18,6 +18,8 @@ Usage::
         [--display either|compensatory|pursuit]
     python benchmarks/labs/lab9_roll_hexapod.py 9090 /tmp/lab9
     python benchmarks/bench_labs.py lab9 /tmp/lab9
+    python benchmarks/labs/lab10_yaw_cab.py 1010 /tmp/lab10
+    python benchmarks/bench_labs.py lab10 /tmp/lab10
 
 Set ``OPENBLAS_NUM_THREADS=1`` for one core's CPU time.
 """
@@ -47,6 +49,9 @@ LABS = {
     # Written 2026-12-02 by a reviewer who did not read hesspipe; scored once as written.
     "lab9": ("plants_{el}.json", "time=t,reference=ft,disturbance=fd,output=phi,control=u", r"^(R[0-9]+)_",
              "ROLL"),
+    # Written 2026-12-02 by another reviewer from the issue's own words; scored once as written.
+    "lab10": ("plants_{el}.json", "time=Time[s],reference=TargetYaw[deg],disturbance=DistInput[deg],"
+              "output=YawAngle[deg],control=StickDefl[deg]", r"^(Y[0-9]+)_", "SI,DI"),
 }
 
 
