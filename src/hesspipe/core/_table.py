@@ -89,11 +89,15 @@ def _match(path, headers: list[str], role: str, name: str, as_written=None,
         found = [name]
     else:
         want = name.strip().lower()
+
+        def bare(text: str) -> tuple[str, str]:   # (name, unit) without case or spaces
+            return tuple((v or "").replace(" ", "").lower() for v in _split_unit(text))
+
         # A name asked for with its unit: a logger's units row makes 'Yaw [deg]' of 'Yaw' over
         # 'deg', and a user reading the file writes 'Yaw[deg]'.
-        asked = tuple((v or "").replace(" ", "").lower() for v in _split_unit(name))
+        asked = bare(name)
         found = [h for h in headers if _split_unit(h)[0].lower() == want or h.strip().lower() == want
-                 or (asked[1] and tuple((v or "").replace(" ", "").lower() for v in _split_unit(h)) == asked)]
+                 or (asked[1] and bare(h) == asked)]
     if len(found) > 1:
         raise HesspipeError(f"{path}: columns {', '.join(repr(h) for h in found)} all read as "
                             f"'{name}' (role {role}); expected one")
