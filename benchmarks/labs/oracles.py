@@ -1,4 +1,4 @@
-"""Oracles of the motion test on lab7's and lab8's files: how many motion runs any test could name (SYNTHETIC).
+"""Oracles of the motion test on lab7's, lab8's and lab10's files: how many motion runs any test could name (SYNTHETIC).
 
 Uses the laboratory's truth.json and its own model (numpy and scipy only, no hesspipe), on the
 describing-function lines (equation error U - Hv E + Km G Y, G the canals x neuromuscular x
@@ -24,6 +24,7 @@ Usage::
 
     python benchmarks/labs/oracles.py lab8 /tmp/lab8
     python benchmarks/labs/oracles.py lab7 /tmp/lab7
+    python benchmarks/labs/oracles.py lab10 /tmp/lab10
 """
 import csv
 import json
@@ -46,6 +47,13 @@ LABS = {
                  cols=("u", "psi", "ft"), sep=",",
                  canal=lambda s: s * (0.11 * s + 1) / (5.9 * s + 1),
                  path=lambda s: s * 0.7 * s**2 / (s**2 + 0.7 * s + 0.25) * np.exp(-0.05 * s)),
+    # lab10's files carry a units row under the header (skipped); its canal has no 5 ms pole
+    "lab10": dict(start=8.08, n=8192, fs=100, lines=[3, 7, 13, 23, 37, 53, 79, 109, 149, 211,
+                                                    5, 11, 17, 29, 43, 61, 89, 127, 173, 233],
+                  cols=("StickDefl", "YawAngle", "TargetYaw"), sep=";", units_row=True,
+                  canal=lambda s: 5.9 * s * (0.11 * s + 1) / (5.9 * s + 1),
+                  path=lambda s: s * 0.8 * s**2 / (s**2 + 0.56 * s + 0.16) * 1600 / (s**2 + 56 * s + 1600)
+                  * np.exp(-0.03 * s)),
 }
 
 
@@ -58,7 +66,9 @@ def lines(lab):
 def read(path, lab):
     rows = [r for r in csv.reader(open(path, encoding="utf-8-sig"), delimiter=lab["sep"])
             if r and not r[0].startswith("#")]
-    d = np.array([[float(x.replace(",", ".")) if lab["sep"] == ";" else float(x) for x in r] for r in rows[1:]])
+    body = rows[2:] if lab.get("units_row") else rows[1:]
+    d = np.array([[float(x.replace(",", ".")) if lab["sep"] == ";" else float(x) for x in r if x.strip()]
+                  for r in body])
     i0 = int(round(lab["start"] * lab["fs"]))
     return {k: d[i0:i0 + lab["n"], i] for i, k in enumerate(rows[0])}
 
@@ -128,6 +138,14 @@ def structural(U, Y, E, s, p, sig, lab):
 
 def runs(name, truth):
     """(element, condition, uses motion, file, parameters in lab8's names, person) of every run."""
+    if name == "lab10":
+        for person, v in truth["persons"].items():
+            for r in v["runs"]:
+                c = v[r["condition"]]   # the neuromuscular mode is the person's, per condition
+                yield v["element"], r["condition"], v["uses_motion"], r["file"], dict(
+                    Kv=r["Kv"], TL=r["TL"], tv=r["tau_v"], wnm=c["omega_nms"], znm=c["zeta_nms"],
+                    tm=r["tau_m"] or 0.1, Km=r["Km"]), person
+        return
     if name == "lab8":
         for person, v in truth["persons"].items():
             for key, r in v["runs"].items():
