@@ -16,7 +16,7 @@ power at its six nearest unforced bins (the oracle knows it; a real test estimat
 - "measured-F": the measured test with the chi-square's known scale replaced by the scale of
   the alternative's own residual, an F test of 2 and 2n - 7 degrees of freedom, as
   hesspipe's test makes it: weights of six bins each have a noisy scale, and a chi-square
-  on them is liberal (lab10's double-integrator static runs: 2 of 21 at 0.01).
+  on them is liberal (lab10's double-integrator static runs: 2 of 24 at 0.01).
 
 Prints per element, condition and motion use how many runs have p < 0.01; then, per element
 and condition, the cohort verdict the structural oracle would give by hesspipe's rule (each
