@@ -162,6 +162,27 @@ def test_a_name_asked_with_its_unit_matches_whatever_the_spacing(tmp_path):
         read_run(path, columns="time=t[ms],disturbance=wind,output=p[rad/s],control=stick")
 
 
+@pytest.mark.parametrize("name, scale", [("time_ms", 1000), ("t_msec", 1000), ("Time ms", 1000), ("time_s", 1),
+                                         ("t_sec", 1)])
+def test_a_time_named_with_its_unit_is_read_in_it(tmp_path, name, scale):
+    # Loggers name the unit after an underscore ('time_ms'); read as seconds, milliseconds at
+    # 50 Hz were refused as a 20 s interval.
+    path = tmp_path / "suffix.tsv"
+    path.write_text(_text([name, "wind", "p_deg", "stick", "r"], "\t", scale=(scale, 1, 1, 1, 1)))
+    run = read_run(path, columns=f"time={name},disturbance=wind,output=p_deg,control=stick")
+    assert run.dt == pytest.approx(DT)
+    np.testing.assert_allclose(run.output, _signals()[2], rtol=1e-6, atol=1e-9)   # an angle's suffix is a name
+
+
+def test_a_time_suffix_is_only_a_unit_at_the_end_of_a_name(tmp_path):
+    # 'times' and 'ms_count' name no unit: milliseconds under them are refused with the remedy.
+    for name in ("times", "ms_count"):
+        path = tmp_path / f"{name}.csv"
+        path.write_text(_text([name, "disturbance", "output", "control", "reference"], scale=(1000, 1, 1, 1, 1)))
+        with pytest.raises(HesspipeError, match=rf"column '{name}': sample interval 20 s .*looks like milliseconds"):
+            read_run(path, columns=f"time={name}")
+
+
 def test_two_headers_for_one_role_are_refused(tmp_path):
     path = tmp_path / "two.csv"
     path.write_text(_text(["time", "Output [rad/s]", "output (deg/s)", "control", "disturbance"]))

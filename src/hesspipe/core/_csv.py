@@ -29,7 +29,7 @@ _FT = 0.3048  # m per ft
 _ANGLES = {"rad": 1.0, "rad/s": 1.0, "rad/s2": 1.0, "rad/s^2": 1.0,
            "deg": _DEG, "deg/s": _DEG, "deg/s2": _DEG, "deg/s^2": _DEG, "°": _DEG, "°/s": _DEG}
 UNIT_FACTORS: dict[str, dict[str, float]] = {
-    "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3},
+    "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3, "msec": 1e-3},
     "output": dict(_ANGLES),
     "reference": dict(_ANGLES),
     "error": dict(_ANGLES),
@@ -261,6 +261,34 @@ def _split_unit(header: str) -> tuple[str, str | None]:
     if not m:
         return header.strip(), None
     return m.group("name").strip(), (m.group("u1") if m.group("u1") is not None else m.group("u2")).strip()
+
+
+_TIME_SUFFIX = re.compile(r"[_ ](?P<unit>ms|msec|s|sec)$", re.IGNORECASE)
+
+
+def written_unit(header: str, role: str) -> str | None:
+    """The unit a column's header states: in brackets or parentheses (``Time [ms]``), and for
+    the time also as the name's last word after an underscore or a space (``time_ms``,
+    ``t_s``), as loggers name it; None where the header states none.
+
+    Parameters
+    ----------
+    header : str
+        The column's name as written.
+    role : str
+        Its role (time, output, ...). Only the time's suffix is read: milliseconds read as
+        seconds spoil the record, where an angle named ``yaw_deg`` is read as written, in the
+        plants' units, as it always was.
+
+    Returns
+    -------
+    str or None
+    """
+    unit = _split_unit(header)[1]
+    if unit is None and role == "time":
+        m = _TIME_SUFFIX.search(header.strip())
+        unit = m.group("unit") if m else None
+    return unit
 
 
 def _prepare(text: str, notes: list, *, separator_said: bool = True) -> tuple[str, str, str, bool, str | None]:

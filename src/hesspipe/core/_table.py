@@ -20,7 +20,17 @@ from typing import Mapping
 import numpy as np
 import pandas as pd
 
-from ._csv import _DIMENSIONLESS, _TIME_OF_DAY, UNIT_FACTORS, _long_row, _prepare, _split_unit, decode, target_unit
+from ._csv import (
+    _DIMENSIONLESS,
+    _TIME_OF_DAY,
+    UNIT_FACTORS,
+    _long_row,
+    _prepare,
+    _split_unit,
+    decode,
+    target_unit,
+    written_unit,
+)
 from ._excel import EXCEL_SUFFIXES, excel_sheets
 from ._h5 import h5_frame
 from ._mat import mat_frame
@@ -503,7 +513,7 @@ def _by_role(frame: Frame, names, optional, hint, also: Mapping[str, str], refus
             values = -values
             notes.append(f"column '{col}' ({role}): sign flipped, as mapped")
         # pandas' name of a second 'Yaw [deg]', 'Yaw [deg].1', hides the unit written over it.
-        unit = _split_unit(col if frame.as_written is None else frame.as_written[headers.index(col)])[1]
+        unit = written_unit(col if frame.as_written is None else frame.as_written[headers.index(col)], role)
         if unit:
             factor = UNIT_FACTORS.get(role, {}).get(unit.lower().replace(" ", ""))
             if factor is None and unit.lower() not in _DIMENSIONLESS:
