@@ -20,6 +20,8 @@ Usage::
     python benchmarks/bench_labs.py lab9 /tmp/lab9
     python benchmarks/labs/lab10_yaw_cab.py 1010 /tmp/lab10
     python benchmarks/bench_labs.py lab10 /tmp/lab10
+    python benchmarks/labs/lab11_yaw_pursuit.py 1111 /tmp/lab11
+    python benchmarks/bench_labs.py lab11 /tmp/lab11
 
 Set ``OPENBLAS_NUM_THREADS=1`` for one core's CPU time.
 """
@@ -52,6 +54,9 @@ LABS = {
     # Written 2026-12-02 by another reviewer from the issue's own words; scored once as written.
     "lab10": ("plants_{el}.json", "time=Time[s],reference=TargetYaw[deg],disturbance=DistInput[deg],"
               "output=YawAngle[deg],control=StickDefl[deg]", r"^(Y[0-9]+)_", "SI,DI"),
+    # Written 2026-12-02 by a third reviewer from the issue's words, read as a pursuit display; scored once.
+    "lab11": ("plants_{el}.json", "time=time_ms,reference=target_deg,disturbance=disturbance_deg,output=yaw_deg,"
+              "control=stick_deg", r"^(Q[0-9]+)_", "SI,DI"),
 }
 
 
