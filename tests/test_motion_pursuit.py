@@ -38,10 +38,10 @@ def test_pursuit_feedforward_is_not_read_as_motion(tmp_path):
     purs = motion_test(run, plants, table1(2), k=2, display="pursuit")
     assert comp["p_value"] < 0.01 and comp["feedforward"] is None
     assert purs["p_value"] > 0.05
-    assert set(purs["feedforward"]) == {"Kff", "T_ff"} and purs["feedforward"]["Kff"] > 0
-    # Two more parameters than the compensatory fits, in one pilot structure (Hess's: each
-    # display may keep the precision structure in order 2).
-    assert hess_result(purs)["degrees_of_freedom"] == hess_result(comp)["degrees_of_freedom"] - 2
+    assert set(purs["feedforward"]) == {"Kff", "T_ff", "tau_ff"} and purs["feedforward"]["Kff"] > 0
+    # Three more parameters than the compensatory fits (gain, lag and its own delay), in one
+    # pilot structure (Hess's: each display may keep the precision structure in order 2).
+    assert hess_result(purs)["degrees_of_freedom"] == hess_result(comp)["degrees_of_freedom"] - 3
 
 
 def test_pursuit_test_still_names_motion(tmp_path):

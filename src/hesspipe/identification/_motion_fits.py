@@ -39,17 +39,23 @@ EXPANDED_KEEP = 3
 the delay two delays); each runs ``_lsq.SCREEN_NFEV`` residual evaluations and the best this
 many go on to convergence (``_lsq.best_least_squares``'s screen)."""
 
-FEEDFORWARD = {"Kff": (2.0, 0.0, 20.0), "T_ff": (0.15, 0.05, 0.5)}
+FEEDFORWARD = {"Kff": (2.0, 0.0, 20.0), "T_ff": (0.15, 0.05, 0.5), "tau_ff": (0.15, 0.0, 0.5)}
 """A pursuit display's feedforward nuisance, name: (start, lower, upper): the path
-``Kff Yc^-1 e^(-tau0 s) / (1 + T_ff s)^2`` from the target through the neuromuscular system
+``Kff Yc^-1 e^(-tau_ff s) / (1 + T_ff s)^2`` from the target through the neuromuscular system
 (Wasicko et al. 1966; Drop et al. 2013: a smoothed inverse of the controlled element, gain
-0.5-1, time constant 0.1-0.3 s, the visual delay). Kff's bound is wide because the Hess
+0.5-1, time constant 0.1-0.3 s, and a delay of its own, shorter than the error path's: the
+target is seen ahead of the error it makes). Kff's bound is wide because the Hess
 loop's proprioceptive return difference divides the path. On the independent generator's
 pursuit pilots (feedforward 0.7 of the inverse, double integrator, yaw angle, seeds 0-19)
 diagnose with the compensatory test named motion on 5 of 20 no-motion runs and 15 of 20
 motion runs, with this one on 0 of 20 and 12 of 20 (benchmarks/bench_diagnose.py
 --feedforward 0.7 [--display pursuit]); on compensatory pilots it costs nothing there (18/19
-and 0/20 either way, seeds 0-9)."""
+and 0/20 either way, seeds 0-9). The delay was the visual delay tau0 until an independent
+laboratory's pursuit pilots (benchmarks/labs lab11: feedforward delays 0.08-0.25 s, visual
+0.24-0.33 s on the double integrator) showed the vestibular path taking up the phase a
+feedforward on the visual delay missed: motion named on 17 of 30 double-integrator static
+runs (display "either"); the generator's pursuit pilots share hesspipe's old assumption,
+their feedforward delayed by the visual delay."""
 
 VESTIBULAR_FORMS = ("hess", "multimodal", "unequalised")
 """The forms of the test's vestibular alternatives; with both line sets each order fits two
