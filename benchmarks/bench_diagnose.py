@@ -217,6 +217,8 @@ def main(argv=None) -> int:
     ap.add_argument("--feedforward", type=float, default=None, metavar="KFF",
                     help="a pursuit display: the generator's precision pilots add a feedforward path on "
                          "the target, KFF times the controlled element's inverse (tasks with a target)")
+    ap.add_argument("--ff-delay", type=float, default=None, metavar="S",
+                    help="the feedforward's own delay, s (with --feedforward; default: the visual delay)")
     ap.add_argument("--known-delay", type=float, default=None, metavar="MARGIN",
                     help="tell diagnose the pilot's own visual delay: max_pilot_delay = the generator "
                          "pilot's true delay + MARGIN s (hesspipe diagnose --max-pilot-delay)")
@@ -237,6 +239,8 @@ def main(argv=None) -> int:
         draw["remnant_at"] = args.remnant_at
     if args.feedforward is not None:
         draw["feedforward"] = args.feedforward
+    if args.ff_delay is not None:
+        draw["ff_delay"] = args.ff_delay
     if args.layout == "sparse":
         draw.update(SPARSE_LAYOUT)
     if args.motion_path:

@@ -413,6 +413,36 @@ def test_pursuit_feedforward():
             draw_trial("1/s", 5, **{**kw, **bad})
 
 
+def test_pursuit_feedforward_with_its_own_delay():
+    # Option `ff_delay`: the feedforward F of test_pursuit_feedforward delayed by ff_delay, not
+    # by the visual delay (0.3 s here): U/R's phase at the target lines follows e^(-ff_delay s).
+    pilot = {"structure": "precision", "tau": 0.3, "wn": 12.0, "zn": 0.3, "TL": 0.0,
+             "TI": 0.0, "Kp": 2.0}
+    kw = dict(task="tracking", pilot_params=pilot, remnant_share=0.0, feedforward=1.0, **SHORT)
+    assert "ff_delay" not in draw_trial("1/s", 5, **kw).options     # stored only when given
+    for ff_delay in (0.05, 0.0):    # 0: no buffer
+        tr = simulate_trial(draw_trial("1/s", 5, ff_delay=ff_delay, **kw))
+        assert tr.spec.options["ff_delay"] == ff_delay
+        assert tr.truth["pilot"]["tau_ff_realised"] == pytest.approx(ff_delay, abs=1e-12)
+        k = tr.spec.target.k
+        s = 1j * 2 * np.pi * k / SHORT["T_m"]
+        nm = 144.0 / (s * s + 2 * 0.3 * 12.0 * s + 144.0)
+        h = 2.0 * nm * np.exp(-0.3 * s)
+        ur = np.fft.fft(tr.control)[k] / np.fft.fft(tr.reference)[k]
+
+        def model(tau_ff):
+            return (h + s * nm / (1 + 0.2 * s) ** 2 * np.exp(-tau_ff * s)) / (1 + h / s)
+
+        assert np.max(np.abs(ur / model(ff_delay) - 1)) < 0.05
+        assert np.max(np.abs(np.degrees(np.angle(ur / model(0.3))))) > 20.0   # not the visual delay's
+    for bad, what in [(dict(feedforward=0.0), r"ff_delay: expected a feedforward to delay .* got ff_delay=0.05"),
+                      (dict(ff_delay=1.5), r"ff_delay: expected a delay in \[0, 1\] s, got 1.5"),
+                      (dict(ff_delay=-0.1), r"ff_delay: expected a delay in \[0, 1\] s"),
+                      (dict(ff_delay=True), r"ff_delay: expected a delay in \[0, 1\] s, got True")]:
+        with pytest.raises(HesspipeError, match=what):
+            draw_trial("1/s", 5, **{**kw, "ff_delay": 0.05, **bad})
+
+
 def test_indifference_threshold():
     # A pilot without equalisation on 1/s and no remnant, as test_gain_drift: what the dead
     # zone does is all there is off the lines.

@@ -22,7 +22,7 @@ OPTIONS = dict(fs=60.0, T_m=45.0, run_in=None, fade=5.0, fine_ratio=20, n_lines=
                output="rate", disturbance=None, gain=1.0, d_rms=None, r_rms=None,
                remnant_at="control", tau_m=0.0, motion_path=None, name=None, style=None,
                pilot_params=None, gain_drift=0.0, drift_tc=10.0, line_bins=None, feedforward=0.0,
-               threshold=0.0, logged_run_in=0.0, logged_run_out=0.0)
+               ff_delay=None, threshold=0.0, logged_run_in=0.0, logged_run_out=0.0)
 
 
 def _check_line_bins(bins, n_log: int):

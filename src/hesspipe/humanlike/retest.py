@@ -26,7 +26,7 @@ RETEST = dict(tau_sd=(0.005, 0.015), gain_cv=(0.05, 0.15), wn_cv=(0.02, 0.08))
 retest from these ranges."""
 
 _OPTIONS = ("fs", "T_m", "fade", "fine_ratio", "n_lines", "output", "tau_m", "gain_drift", "drift_tc",
-            "line_bins", "feedforward", "threshold")
+            "line_bins", "feedforward", "ff_delay", "threshold")
 
 
 def retest(spec: TrialSpec, seed: int, *, effects=None, name: str | None = None) -> TrialSpec:

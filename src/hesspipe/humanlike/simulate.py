@@ -55,9 +55,12 @@ class Wiring:
     threshold : float or None
         Indifference threshold on the perceived error, output units: a dead zone of this
         half-width before the visual path (errors inside it draw no response); None: none.
+    ff_delay_steps : int or None
+        Delay of the target into block ``ffnm``, fine steps (0: none); None: the visual
+        delay's buffer, shared with the error.
 
     A precision pilot on a pursuit display has block ``ffnm`` too: the feedforward path on
-    the target, delayed like the error.
+    the target, delayed by ``ff_delay_steps``.
     """
 
     h: float
@@ -72,6 +75,7 @@ class Wiring:
     disturbance: str = "input"
     gain_drift: bool = False
     threshold: float | None = None
+    ff_delay_steps: int | None = None
 
 
 def delay_steps(tau: float, h: float, holds: int) -> int:
@@ -127,6 +131,7 @@ def _source(wr: Wiring) -> str:
     body.append(f"delta = {_output(pilot_block, b[pilot_block], ['0.0'])}")
     vestibular = not hess and b.get("vnm") is not None
     feedforward = not hess and b.get("ffnm") is not None
+    own_ff = feedforward and wr.ff_delay_steps is not None
     if feedforward:
         # Strictly proper like the vestibular block: its state alone gives its output.
         body.append(f"delta = delta + ({_output('ffnm', b['ffnm'], ['0.0'])})")
@@ -147,8 +152,13 @@ def _source(wr: Wiring) -> str:
     body.append("e = rk - y")
     body.append("ep = e + n" if wr.remnant_at == "error" else "ep = e")
     body += ["ed = buf[bi]", "buf[bi] = ep"]
-    if feedforward:
+    if feedforward and not own_ff:
         body += ["rd = rbuf[bi]", "rbuf[bi] = rk"]
+    elif own_ff and wr.ff_delay_steps:
+        # Its own index: a human's feedforward is often delayed less than the error path.
+        body += ["rd = rbuf[fi]", "rbuf[fi] = rk", "fi += 1", f"if fi == {wr.ff_delay_steps}: fi = 0"]
+    elif own_ff:
+        body.append("rd = rk")
     body += ["bi += 1", f"if bi == {wr.delay_steps}: bi = 0"]
     if wr.threshold is not None:
         t = _lit(wr.threshold)
@@ -189,7 +199,9 @@ def _source(wr: Wiring) -> str:
     lines += ["    " + s for s in init]
     lines += ["    rlp = 0.0", f"    buf = [0.0]*{wr.delay_steps}", "    bi = 0"]
     if feedforward:
-        lines.append(f"    rbuf = [0.0]*{wr.delay_steps}")
+        lines.append(f"    rbuf = [0.0]*{wr.delay_steps if not own_ff else max(wr.ff_delay_steps, 1)}")
+    if own_ff:
+        lines.append("    fi = 0")
     lines += [
               f"    mbuf = [0.0]*{max(wr.motion_delay_steps, 1)}", "    mi = 0",
               "    ys = [0.0]*N", "    us = [0.0]*N", "    acts = [0.0]*N", "    for k in range(N):"]

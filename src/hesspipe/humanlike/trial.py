@@ -24,7 +24,7 @@ from ._options import EFFECT_REMNANT, EFFECTS, OPTIONS, RANGES, _checked_options
 from .lti import discretise, freqresp, ss_from_tf, tf, zoh
 from .plants import Plant, make_plant
 from .simulate import Wiring, compile_loop, delay_steps
-from .truth import build_truth, outer_holds
+from .truth import build_truth, ff_delay_steps, outer_holds
 from .writer import draw_style
 
 
@@ -195,7 +195,11 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
         takes the first set), ``feedforward`` (0: a compensatory display; else a pursuit
         display's feedforward gain on the target, a share of the controlled element's
         inverse, :func:`~.pilots.feedforward_nm_tf`; precision pilots with a target only;
-        the truth's describing function and crossover leave it out), ``threshold`` (0: none;
+        the truth's describing function and crossover leave it out), ``ff_delay`` (s, None:
+        the visual delay; else the feedforward's own delay in [0, 1] s, whole fine steps, only
+        with ``feedforward``: humans' feedforward is often delayed less than their error path,
+        0.05-0.25 s, Drop et al. 2013; the truth's pilot states the realised one as
+        ``tau_ff_realised``, with ``Kff`` and ``T_ff``), ``threshold`` (0: none;
         else an indifference threshold on the perceived error, a dead zone whose half-width
         is this share, in [0, 1), of the displayed error's RMS in the same loop without it:
         McRuer and Jex's indifference threshold, one of the remnant's nonlinear sources; the
@@ -321,6 +325,14 @@ def draw_trial(plant, seed: int, *, task: str = "disturbance", pilot: str = "pre
             raise HesspipeError("feedforward: a pursuit path needs a precision pilot and a target "
                                 "(task 'tracking' or 'both')")
         options["feedforward"] = float(kff)
+    ffd = opts["ff_delay"]
+    if ffd is not None:   # only when given, as the feedforward
+        if isinstance(ffd, bool) or not isinstance(ffd, (int, float)) or not 0.0 <= ffd <= 1.0:
+            raise HesspipeError(f"ff_delay: expected a delay in [0, 1] s, got {ffd!r}")
+        if not kff:
+            raise HesspipeError(f"ff_delay: expected a feedforward to delay (option feedforward > 0), "
+                                f"got ff_delay={ffd!r} and feedforward={kff!r}")
+        options["ff_delay"] = float(ffd)
     thr = opts["threshold"]
     if thr:   # only when asked, as the feedforward
         if isinstance(thr, bool) or not isinstance(thr, (int, float)) or not 0.0 < thr < 1.0:
@@ -377,7 +389,8 @@ def _wiring(spec: TrialSpec, h: float, rate_limit: float | None,
                   motion_delay_steps=int(round(p.get("tau_m", 0.0) / h)),
                   remnant_at=spec.remnant["at"], rate_limit=rate_limit,
                   disturbance=spec.plant.disturbance,
-                  gain_drift=spec.options.get("gain_drift", 0.0) > 0.0, threshold=threshold)
+                  gain_drift=spec.options.get("gain_drift", 0.0) > 0.0, threshold=threshold,
+                  ff_delay_steps=ff_delay_steps(spec, h))
 
 
 def gain_factor(spec: TrialSpec, t: np.ndarray) -> np.ndarray:

@@ -38,6 +38,18 @@ def outer_holds(spec) -> int:
     return 2 + (1 if spec.actuator["tau"] > 0 else 0)
 
 
+def ff_delay_steps(spec, h: float) -> int | None:
+    """Fine steps of the pursuit feedforward's own delay, ``round(ff_delay / h)``; None when
+    the trial has no ``ff_delay`` (the feedforward then shares the visual delay's buffer).
+
+    Parameters
+    ----------
+    spec : TrialSpec
+    h : float
+        Fine step, s.
+    """
+    return int(round(spec.options["ff_delay"] / h)) if "ff_delay" in spec.options else None
+
 
 def _points(w, h) -> dict:
     h = np.asarray(h, dtype=complex)
@@ -152,6 +164,14 @@ def build_truth(spec, sim: dict) -> dict:
     pilot_out["tau_realised"] = p["tau"]
     if p["structure"] == "hess":
         pilot_out["K1K2"] = p["K1"] * p["K2"]
+    if spec.options.get("feedforward"):
+        # The feedforward is not a drawn pilot parameter: stated here so a fit of it can be
+        # scored. Its delay is its buffer's, steps x h, as tau_m (the half-step hold at the
+        # block's input left out).
+        steps = ff_delay_steps(spec, h)
+        if steps is None:
+            steps = delay_steps(spec.pilot["tau"], h, outer_holds(spec))
+        pilot_out.update(Kff=spec.options["feedforward"], T_ff=pilots.FF_LAG_S, tau_ff_realised=steps * h)
     plant = spec.plant
     return {
         "synthetic": True,
