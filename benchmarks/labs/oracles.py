@@ -1,4 +1,4 @@
-"""Oracles of the motion test on lab7's, lab8's and lab10's files: how many motion runs any test could name (SYNTHETIC).
+"""Oracles of the motion test on lab7's, lab8's, lab10's and lab11's files: how many motion runs any test could name (SYNTHETIC).
 
 Uses the laboratory's truth.json and its own model (numpy and scipy only, no hesspipe), on the
 describing-function lines (equation error U - Hv E + Km G Y, G the canals x neuromuscular x
@@ -17,6 +17,16 @@ power at its six nearest unforced bins (the oracle knows it; a real test estimat
   the alternative's own residual, an F test of 2 and 2n - 7 degrees of freedom, as
   hesspipe's test makes it: weights of six bins each have a noisy scale, and a chi-square
   on them is liberal (lab10's double-integrator static runs: 2 of 24 at 0.01).
+- "true-F": the structural test (true remnant weights) with the F test's scale: the lab's
+  own model with ideal weights and an honest scale. On a pursuit display the measured
+  weights weigh the target lines down (H at a target line holds the feedforward, which the
+  neighbours' E lacks), which there raises "measured-F" above this.
+
+lab11's display is pursuit: its persons add a feedforward on the target, ``Hn Kf Hc^-1
+(Tf s + 1)^-n e^(-tau_f s) R`` (Drop et al.), which every test above subtracts too, its three
+parameters free in the structural tests; its single-integrator persons have no visual lead,
+so there the lab's own structure fixes TL at 0 (with it free, a lead on E = R - Y and a
+smaller feedforward mimic a canal path on Y almost exactly).
 
 Prints per element, condition and motion use how many runs have p < 0.01; then, per element
 and condition, the cohort verdict the structural oracle would give by hesspipe's rule (each
@@ -29,6 +39,7 @@ Usage::
     python benchmarks/labs/oracles.py lab8 /tmp/lab8
     python benchmarks/labs/oracles.py lab7 /tmp/lab7
     python benchmarks/labs/oracles.py lab10 /tmp/lab10
+    python benchmarks/labs/oracles.py lab11 /tmp/lab11
 """
 import csv
 import json
@@ -58,6 +69,13 @@ LABS = {
                   canal=lambda s: 5.9 * s * (0.11 * s + 1) / (5.9 * s + 1),
                   path=lambda s: s * 0.8 * s**2 / (s**2 + 0.56 * s + 0.16) * 1600 / (s**2 + 56 * s + 1600)
                   * np.exp(-0.03 * s)),
+    # lab11: tab-separated with '%' metadata lines; pursuit (feedforward on the target)
+    "lab11": dict(start=15.0, n=9600, fs=120, lines=[3, 7, 13, 23, 37, 59, 89, 131, 181, 223,
+                                                    5, 11, 17, 29, 47, 71, 109, 157, 199, 241],
+                  cols=("stick_deg", "yaw_deg", "target_deg"), sep="\t", pursuit=True,
+                  canal=lambda s: 5.9 * s * (0.11 * s + 1) / ((5.9 * s + 1) * (0.005 * s + 1)),
+                  path=lambda s: s * 0.7 * s**2 / (s**2 + 0.7 * s + 0.25) * 1225 / (s**2 + 49 * s + 1225)
+                  * np.exp(-0.03 * s)),
 }
 
 
@@ -69,7 +87,7 @@ def lines(lab):
 
 def read(path, lab):
     rows = [r for r in csv.reader(open(path, encoding="utf-8-sig"), delimiter=lab["sep"])
-            if r and not r[0].startswith("#")]
+            if r and not r[0].startswith(("#", "%"))]
     body = rows[2:] if lab.get("units_row") else rows[1:]
     d = np.array([[float(x.replace(",", ".")) if lab["sep"] == ";" else float(x) for x in r if x.strip()]
                   for r in body])
@@ -78,8 +96,9 @@ def read(path, lab):
 
 
 def spectra(x, lab):
+    """U, Y, E and R (the target's) of the window."""
     u, y, r = lab["cols"]
-    return np.fft.rfft(x[u]), np.fft.rfft(x[y]), np.fft.rfft(x[r] - x[y])
+    return np.fft.rfft(x[u]), np.fft.rfft(x[y]), np.fft.rfft(x[r] - x[y]), np.fft.rfft(x[r])
 
 
 def visual(s, Kv, TL, tv, wn, zn):
@@ -91,9 +110,17 @@ def vestibular(s, Hn, tm, lab):
     return lab["canal"](s) * Hn * np.exp(-s * tm) * lab["path"](s)
 
 
-def weights(U, Y, E, s, p, Km, lab):
+def feedforward(s, Hn, Kf, tf, Tf, p):
+    """A pursuit person's path from the target: ``Hn Kf Hc^-1 (Tf s + 1)^-n e^(-tf s)``."""
+    n = p["order"]
+    return Hn * Kf / p["Kc"] * s**n / (Tf * s + 1) ** n * np.exp(-s * tf)
+
+
+def weights(U, Y, E, R, s, p, Km, lab):
     Hv, Hn = visual(s, p["Kv"], p["TL"], p["tv"], p["wnm"], p["znm"])
     noise = U - Hv * E + Km * vestibular(s, Hn, p["tm"], lab) * Y
+    if lab.get("pursuit"):
+        noise = noise - feedforward(s, Hn, p["Kf"], p["tf"], p["Tf"], p) * R
     return np.array([np.mean(np.abs(noise[nb]) ** 2) for _, nb in neighbours(lab)])
 
 
@@ -110,29 +137,40 @@ def neighbours(lab):
             for L in bins]
 
 
-def known(U, Y, E, s, p, sig, lab):
+def known(U, Y, E, R, s, p, sig, lab):
     Hv, Hn = visual(s, p["Kv"], p["TL"], p["tv"], p["wnm"], p["znm"])
     bins = lines(lab)[0]
-    a, g = (U - Hv * E)[bins], (vestibular(s, Hn, p["tm"], lab) * Y)[bins]
+    a = U - Hv * E - (feedforward(s, Hn, p["Kf"], p["tf"], p["Tf"], p) * R if lab.get("pursuit") else 0)
+    a, g = a[bins], (vestibular(s, Hn, p["tm"], lab) * Y)[bins]
     k = max(0.0, -np.sum((np.conj(g) * a).real / sig) / np.sum(np.abs(g) ** 2 / sig))
     d = 2 * (np.sum(np.abs(a) ** 2 / sig) - np.sum(np.abs(a + k * g) ** 2 / sig))
     return 0.5 * stats.chi2.sf(d, 1) if d > 0 else 1.0
 
 
-def structural(U, Y, E, s, p, sig, lab, f_test=False):
+def structural(U, Y, E, R, s, p, sig, lab, f_test=False):
     bins = lines(lab)[0]
-    sl, Ul, Yl, El, w = s[bins], U[bins], Y[bins], E[bins], 1 / np.sqrt(sig)
+    sl, Ul, Yl, El, Rl, w = s[bins], U[bins], Y[bins], E[bins], R[bins], 1 / np.sqrt(sig)
+    lead, nf = p.get("lead", True), 3 if lab.get("pursuit") else 0
+    nv = 5 if lead else 4
 
     def resid(q, h1):
-        Hv, Hn = visual(sl, *q[:5])
-        r = Ul - Hv * El + (q[5] * vestibular(sl, Hn, q[6], lab) * Yl if h1 else 0)
+        Hv, Hn = visual(sl, *(q[:5] if lead else (q[0], 0.0, *q[1:4])))
+        r = Ul - Hv * El
+        if nf:
+            r = r - feedforward(sl, Hn, *q[nv:nv + 3], p) * Rl
+        if h1:
+            r = r + q[nv + nf] * vestibular(sl, Hn, q[nv + nf + 1], lab) * Yl
         r = r * w
         return np.concatenate([r.real, r.imag])
 
-    lo, hi = [1e-3, 0, 0.05, 3, 0.05], [50, 5, 0.5, 30, 1.5]
-    fits0 = [least_squares(resid, np.clip(st, np.add(lo, 1e-6), np.subtract(hi, 1e-6)), bounds=(lo, hi), args=(False,))
-             for st in ([p["Kv"], p["TL"], 0.25, 10, 0.3], [p["Kv"] * 0.7, max(p["TL"], 0.5) * 0.5, 0.2, 8, 0.5],
-                        [p["Kv"] * 1.3, p["TL"] * 1.5 + 0.1, 0.3, 14, 0.2])]
+    keep = slice(None) if lead else [0, 2, 3, 4]
+    lo = list(np.array([1e-3, 0, 0.05, 3, 0.05])[keep]) + [0, 0, 0.01][:nf]
+    hi = list(np.array([50, 5, 0.5, 30, 1.5])[keep]) + [3, 0.5, 1.0][:nf]
+    ff = ([p["Kf"], p["tf"], p["Tf"]], [0.5, 0.15, 0.2], [0.8, 0.1, 0.1]) if nf else ([],) * 3
+    fits0 = [least_squares(resid, np.clip(list(np.array(st)[keep]) + f, np.add(lo, 1e-6), np.subtract(hi, 1e-6)),
+                           bounds=(lo, hi), args=(False,))
+             for st, f in zip(([p["Kv"], p["TL"], 0.25, 10, 0.3], [p["Kv"] * 0.7, max(p["TL"], 0.5) * 0.5, 0.2, 8, 0.5],
+                               [p["Kv"] * 1.3, p["TL"] * 1.5 + 0.1, 0.3, 14, 0.2]), ff)]
     f0 = min(fits0, key=lambda f: f.cost)
     f1 = min((least_squares(resid, np.concatenate([f0.x, [km * abs(f0.x[0]), tm]]),
                             bounds=(lo + [0, 0], hi + [50, 0.3]), args=(True,))
@@ -145,6 +183,15 @@ def structural(U, Y, E, s, p, sig, lab, f_test=False):
 
 def runs(name, truth):
     """(element, condition, uses motion, file, parameters in lab8's names, person) of every run."""
+    if name == "lab11":
+        for person, v in truth["persons"].items():
+            ce = truth["design"]["controlled_elements"][v["element"]]
+            for r in v["runs"]:
+                yield v["element"], r["condition"], v["uses_motion"], r["file"], dict(
+                    Kv=r["Kv_mean_window"], TL=r["TL_s"], tv=r["tau_v_s"], wnm=r["wn_nms_rad_s"],
+                    znm=r["zeta_nms"], tm=r["tau_m_s"], Km=r["Km"], Kf=r["Kf"], tf=r["tau_f_s"],
+                    Tf=r["Tf_s"], Kc=ce["Kc"], order=ce["order"], lead=r["TL_s"] > 0), person
+        return
     if name == "lab10":
         for person, v in truth["persons"].items():
             for r in v["runs"]:
@@ -182,15 +229,16 @@ def main(name, root):
     tally, persons = {}, {}
     for el, cond, user, file, p, person in runs(name, truth):
         cond = "motion" if cond.startswith("motion") else "static"
-        U, Y, E = spectra(read(f"{root}/{file}", lab), lab)
+        U, Y, E, R = spectra(read(f"{root}/{file}", lab), lab)
         s = 1j * np.arange(U.size) * w0
-        sig = weights(U, Y, E, s, p, p["Km"] if cond == "motion" else 0.0, lab)
+        sig = weights(U, Y, E, R, s, p, p["Km"] if cond == "motion" else 0.0, lab)
         mw = measured_weights(U, E, lab)
         for test_name, test, w, kw in (("known", known, sig, {}), ("structural", structural, sig, {}),
                                        ("measured", structural, mw, {}),
-                                       ("measured-F", structural, mw, {"f_test": True})):
+                                       ("measured-F", structural, mw, {"f_test": True}),
+                                       ("true-F", structural, sig, {"f_test": True})):
             t = tally.setdefault((test_name, el, cond, user), [0, 0])
-            p_run = test(U, Y, E, s, p, w, lab, **kw)
+            p_run = test(U, Y, E, R, s, p, w, lab, **kw)
             t[0] += p_run < 0.01
             t[1] += 1
             if test_name == "structural":
