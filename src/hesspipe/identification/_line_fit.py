@@ -48,7 +48,7 @@ def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None
         vis = vis * (1.0 + s * lead) / (1.0 + s * lag)
     drive = vis * E
     if yc_inv is not None:
-        drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("tau_ff", 0.0)) \
+        drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("ff_share", 1.0) * params["tau0"]) \
             / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
     rd = loop.return_difference(s, None, cache)
     # The vestibular term's share of the return difference: 1 / rd in Hess's form, 1 outside it.
