@@ -44,8 +44,8 @@ FEEDFORWARD = {"Kff": (2.0, 0.0, 20.0), "T_ff": (0.15, 0.05, 0.5), "ff_share": (
 ``Kff Yc^-1 e^(-tau_ff s) / (1 + T_ff s)^2``, ``tau_ff = ff_share tau0``, from the target
 through the neuromuscular system (Wasicko et al. 1966; Drop et al. 2013: a smoothed inverse
 of the controlled element, gain 0.5-1, time constant 0.1-0.3 s, and a delay of its own,
-at most the error path's: the target is seen ahead of the error it makes). Kff's bound is wide because the Hess
-loop's proprioceptive return difference divides the path. On the independent generator's
+at most the error path's: the target is seen ahead of the error it makes). Kff's bound is
+wide because the Hess loop's proprioceptive return difference divides the path. On the independent generator's
 pursuit pilots (feedforward 0.7 of the inverse, double integrator, yaw angle, seeds 0-19)
 diagnose with the compensatory test named motion on 5 of 20 no-motion runs and 15 of 20
 motion runs, with this one on 0 of 20 and 12 of 20 (benchmarks/bench_diagnose.py
