@@ -193,8 +193,9 @@ def test_a_known_pilot_delay_lets_one_record_name_the_simulators(tmp_path):
     # pilot 0.302 s, simulator 0.044 s more. Within a human's longest (0.40 s) one record
     # cannot tell them apart; told the pilot's own delay (+ 0.03 s), the command names it.
     # The generator's display is compensatory and is stated: with "either" (display unknown)
-    # the pursuit fit, whose feedforward has its own delay since the thirty-fifth revision,
-    # passes the display pretest (level 0.2) on this run and the delay's p is 0.014 (0.0025).
+    # the pursuit fit, whose feedforward has its own delay (at most the visual delay) since the
+    # thirty-fifth revision, passes the display pretest (level 0.2) on this run and the
+    # delay's p is 0.014 (0.0025).
     s = derive_seed(101, "bench-diagnose", "paper", "angle", "both", "extra_delay")
     spec = draw_trial("paper", s, task="both", pilot="hess", effects=("extra_delay",), output="angle",
                       disturbance="wind", fs=50.0, T_m=70.0, name="run")

@@ -25,6 +25,18 @@ the visual and vestibular channels each with their own equalisation, summed at t
 neuromuscular system). Only :mod:`.motion_test`'s alternatives set it."""
 
 
+def feedforward_delay(params) -> float:
+    """The pursuit feedforward's delay, s: ``ff_share`` (FEEDFORWARD; 1 where absent) times the
+    visual delay ``tau0``.
+
+    Parameters
+    ----------
+    params : mapping
+        A fit's pilot parameters (``tau0`` in s).
+    """
+    return params.get("ff_share", 1.0) * params["tau0"]
+
+
 def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None, *, response: bool = False):
     # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
     # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model),
@@ -48,7 +60,7 @@ def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None
         vis = vis * (1.0 + s * lead) / (1.0 + s * lag)
     drive = vis * E
     if yc_inv is not None:
-        drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * params.get("ff_share", 1.0) * params["tau0"]) \
+        drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * feedforward_delay(params)) \
             / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
     rd = loop.return_difference(s, None, cache)
     # The vestibular term's share of the return difference: 1 / rd in Hess's form, 1 outside it.

@@ -16,7 +16,7 @@ from ..pilot.crossover import gain_scale
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
 from ._km_estimate import km_estimate
-from ._line_fit import MULTIMODAL, _fit, _nested_f, _standard_errors, pilot_start
+from ._line_fit import MULTIMODAL, _fit, _nested_f, _standard_errors, feedforward_delay, pilot_start
 from ._path_check import _path_check
 from .lines import LineData
 
@@ -45,10 +45,10 @@ FEEDFORWARD = {"Kff": (2.0, 0.0, 20.0), "T_ff": (0.15, 0.05, 0.5), "ff_share": (
 through the neuromuscular system (Wasicko et al. 1966; Drop et al. 2013: a smoothed inverse
 of the controlled element, gain 0.5-1, time constant 0.1-0.3 s, and a delay of its own,
 at most the error path's: the target is seen ahead of the error it makes). Kff's bound is
-wide because the Hess loop's proprioceptive return difference divides the path. On the independent generator's
-pursuit pilots (feedforward 0.7 of the inverse, double integrator, yaw angle, seeds 0-19)
-diagnose with the compensatory test named motion on 5 of 20 no-motion runs and 15 of 20
-motion runs, with this one on 0 of 20 and 12 of 20 (benchmarks/bench_diagnose.py
+wide because the Hess loop's proprioceptive return difference divides the path. On the
+independent generator's pursuit pilots (feedforward 0.7 of the inverse, double integrator,
+yaw angle, seeds 0-19) diagnose with the compensatory test named motion on 5 of 20
+no-motion runs and 15 of 20 motion runs, with this one on 0 of 20 and 12 of 20 (benchmarks/bench_diagnose.py
 --feedforward 0.7 [--display pursuit]); on compensatory pilots it costs nothing there (18/19
 and 0/20 either way, seeds 0-9). The delay was the visual delay tau0 until an independent
 laboratory's pursuit pilots (benchmarks/labs lab11: feedforward delays 0.08-0.25 s, visual
@@ -555,5 +555,5 @@ def _one_display(ld: LineData, plants, start: Mapping[str, float], *, k: int, ma
             "delay_bound": delay_bound, "delay_bound_expanded": delay_bound_expanded,
             "display": display, "target_lines": target, "structure": null.structure,
             "feedforward": None if yc_inv is None else {"Kff": float(p_e["Kff"]), "T_ff": float(p_e["T_ff"]),
-                                                        "tau_ff": float(p_e["ff_share"] * p_e["tau0"])},
+                                                        "tau_ff": float(feedforward_delay(p_e))},
             "degrees_of_freedom": dof, "dof_expanded": dof_e, "k": k}, _Late(estimate, check)

@@ -145,8 +145,8 @@ ALTERNATIVES_IN_WORDS = ("nested F tests of Km alone, p = 0.5 P(F > f) for Km >=
 EITHER_FEEDFORWARD = 0.2
 """With display "either", the pursuit test's result counts only where its feedforward is
 needed beside the vestibular path: the nested F test of the two expanded fits (the
-feedforward's three parameters, Kff, T_ff and ff_share) gives p below this. Elsewhere the compensatory
-result stands. Without it the feedforward of the pursuit fits took part of a compensatory
+feedforward's three parameters, Kff, T_ff and ff_share) gives p below this. Elsewhere the
+compensatory result stands. Without it the feedforward of the pursuit fits took part of a compensatory
 pilot's vestibular path: on a laboratory's single-integrator motion users (SYNTHETIC), 13 of
 32 runs were named against 16 of 32 with the compensatory test alone. The generator's pursuit
 pilots still kept the pursuit result (57 of 58 runs), and their no-motion runs stayed unnamed.
@@ -224,8 +224,8 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         ``delay_bound`` and ``delay_bound_expanded`` (None without `max_delay`; else
         :func:`._motion_fits._delay_bound`'s test of that fit's delay against it), ``display``,
         ``target_lines`` (whether the record has a target's lines) and ``feedforward``
-        (the fitted ``Kff``, ``T_ff`` and ``tau_ff``, s, ``ff_share`` times tau0; None unless a pursuit display with target
-        lines); with display "either" also ``display_p`` (display → p-value; "pursuit"
+        (the fitted ``Kff``, ``T_ff`` and ``tau_ff``, s, ``ff_share`` times tau0; None unless a
+        pursuit display with target lines); with display "either" also ``display_p`` (display → p-value; "pursuit"
         only on records with target lines where the compensatory p is below
         :data:`EITHER_EXACT`) and ``feedforward_p`` (the pretest's p of the pursuit
         feedforward, :data:`EITHER_FEEDFORWARD`; None where the pursuit fits were not
