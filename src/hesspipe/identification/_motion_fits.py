@@ -39,15 +39,6 @@ EXPANDED_KEEP = 3
 the delay two delays); each runs ``_lsq.SCREEN_NFEV`` residual evaluations and the best this
 many go on to convergence (``_lsq.best_least_squares``'s screen)."""
 
-NULL_KEEP = 3
-"""The original model's searches in :func:`_null_fit` (unweighted, weighted, without the
-equaliser; 6-8 starts each) are screened as the alternatives' are (``_lsq.best_least_squares``):
-the best this many go on to convergence. Every start to convergence took 160-200 evaluations
-each, about half of a double-integrator run's least squares; screened, lab8's
-double-integrator motion runs gave the same p on 40 of 40 (CPU x 0.85) and the issue's
-benchmark the same names on 126 of 126 (median CPU x 0.91). A screen of 20 evaluations
-(``_lsq.SCREEN_NFEV``) on top lost one of those lab8 runs (p 0.0036 -> 0.016)."""
-
 FEEDFORWARD = {"Kff": (2.0, 0.0, 20.0), "T_ff": (0.15, 0.05, 0.5), "ff_share": (0.7, 0.0, 1.0)}
 """A pursuit display's feedforward nuisance, name: (start, lower, upper): the path
 ``Kff Yc^-1 e^(-tau_ff s) / (1 + T_ff s)^2``, ``tau_ff = ff_share tau0``, from the target
@@ -297,14 +288,13 @@ def _null_fit(ld: LineData, plants, start: Mapping[str, float], k: int, display:
         return _Null(k, base, free, lo, hi, starts, eq, data, yc_inv, rss_q, p_q, sol_q, sol_q, rss_q, p_q,
                      structure)
     # An unweighted first fit serves as one more start (it no longer sets the weights).
-    _, p0, _ = _fit(original, base, free, lo, hi, starts, *data, np.ones(ld.lines.size), keep=NULL_KEEP)
-    rss_o, p_o, sol_o = _fit(original, base, free, lo, hi, [[p0[n_] for n_ in free]] + starts, *data, ld.w,
-                             keep=NULL_KEEP)
+    _, p0, _ = _fit(original, base, free, lo, hi, starts, *data, np.ones(ld.lines.size))
+    rss_o, p_o, sol_o = _fit(original, base, free, lo, hi, [[p0[n_] for n_ in free]] + starts, *data, ld.w)
     # The original without the equaliser as well: its search sometimes ends below the one
     # with it (a lag that stopped on its bound of 0 elsewhere), and its optimum is a start.
     n_core = len(free) - 1
     rss_n, p_n, sol_n = _fit(original, base, free[:n_core], lo[:n_core], hi[:n_core],
-                       [x[:n_core] for x in [[p_o[n_] for n_ in free]] + starts], *data, ld.w, keep=NULL_KEEP)
+                       [x[:n_core] for x in [[p_o[n_] for n_ in free]] + starts], *data, ld.w)
     # Both optima are origins of the full search, with the lead at its start as well: with the
     # lead held at the original's optimum in the vestibular fits (below), F hangs on which of
     # two near-equal optima (lead or none) the search found; missing the better one raised F
