@@ -74,3 +74,37 @@ def test_tolerance_stops_sooner_with_the_rss_as_scipys_default_finds_it():
     ref = optimize.least_squares(default, x0, bounds=(lo, hi), x_scale="jac", max_nfev=400)
     assert rss == pytest.approx(float(np.sum(ref.fun ** 2)), abs=1e-3)
     assert len(n_ours) < len(n_default)
+
+
+def test_the_forward_difference_is_scipys_default_bit_for_bit():
+    # The searches' own Jacobian (_ForwardDifference) must give the numbers of scipy's
+    # jac="2-point", steps turned at the bounds included, so that a search ends where it did.
+    from scipy import optimize
+    from scipy.optimize._numdiff import approx_derivative
+
+    from hesspipe.identification._lsq import _ForwardDifference
+
+    lo, hi = np.array([-6.0, -6.0]), np.array([6.0, 6.0])
+    for x in ([0.0, 0.0], [6.0 - 1e-9, -3.0], [-6.0 + 1e-12, 5.5], [-2.5, 6.0 - 1e-10], [1e-300, -1e-7]):
+        x = np.array(x)
+        fd = _ForwardDifference(_wavy, lo, hi)
+        ours = fd.jac(x)
+        ref = approx_derivative(_wavy, x, method="2-point", f0=_wavy(x), bounds=(lo, hi))
+        assert np.array_equal(ours, ref)
+        fd.fun(x)
+        assert np.array_equal(fd.jac(x), ref)
+    # A narrow box, where neither side fits the step: the distance to the farther bound.
+    nlo, nhi = np.array([1.0, -1e-9]), np.array([1.0 + 1e-9, 1e-9])
+    x = np.array([1.0 + 3e-10, 0.0])
+    fd = _ForwardDifference(_wavy, nlo, nhi)
+    ref = approx_derivative(_wavy, x, method="2-point", f0=_wavy(x), bounds=(nlo, nhi))
+    assert np.array_equal(fd.jac(x), ref)
+    # Whole searches, screened (30 evaluations) and to convergence, end at the same point.
+    from hesspipe.identification._lsq import TOLERANCE, _solve
+
+    for x0 in ([-5.0, 5.0], [0.3, -4.0], [2.0, 2.0]):
+        for nfev in (SCREEN_NFEV, 400):
+            ours = _solve(_wavy, np.array(x0), lo, hi, nfev)[1]
+            ref = optimize.least_squares(_wavy, x0, bounds=(lo, hi), x_scale="jac", max_nfev=nfev,
+                                         ftol=TOLERANCE, xtol=TOLERANCE, gtol=TOLERANCE)
+            assert np.array_equal(ours.x, ref.x) and ours.nfev == ref.nfev and ours.njev == ref.njev

@@ -37,6 +37,33 @@ def feedforward_delay(params) -> float:
     return params.get("ff_share", 1.0) * params["tau0"]
 
 
+_MEMO = "_line_fit.loop_responses"
+"""The key :func:`_loop_responses` keeps its memo under in a fit's `cache` (Block.response's
+own keys are tuples of polynomials)."""
+
+
+def _loop_responses(params, model, cab, s, cache):
+    # (NM, vestibular, visual, 1 + NM PF) at s, memoised in `cache` for one set of the loop's
+    # own parameters: a Jacobian's base point, which its columns (one parameter away) leave
+    # in place. A column that moves only the test's own parameters (tau_m, the equaliser, the
+    # feedforward) then reuses the base point's arrays: the same numbers without the loop's
+    # construction, which is about half of an evaluation.
+    if cache is None:
+        loop = with_motion_path(model.loop(params), cab)
+        return (loop.neuromuscular.response(s), loop.vestibular.response(s), loop.visual.response(s),
+                loop.return_difference(s, None))
+    key = (model, cab, *(params[n] for n in model.parameter_names()))
+    memo = cache.get(_MEMO)
+    if memo is not None and memo[0] == key:
+        return memo[1]
+    loop = with_motion_path(model.loop(params), cab)
+    out = (loop.neuromuscular.response(s, cache), loop.vestibular.response(s, cache),
+           loop.visual.response(s, cache), loop.return_difference(s, None, cache))
+    if memo is None or sum(a != b for a, b in zip(key, memo[0])) != 1:
+        cache[_MEMO] = (key, out)
+    return out
+
+
 def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None, *, response: bool = False):
     # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
     # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model),
@@ -47,22 +74,18 @@ def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None
     # (1 + NM PF) - vestibular Y). `cache`: Block.response's shape cache for this `s` (a
     # fit's thousands of calls then evaluate the vestibular path's fixed shape once). With
     # `response`, also the pilot's response to -y (e = -y, r = 0: the remnant's bins).
-    loop = with_motion_path(model.loop(params), cab)
-    nm = loop.neuromuscular.response(s, cache)
+    nm, ves, vis, rd = _loop_responses(params, model, cab, s, cache)
     # A factor left out where it is exactly 1 (no vestibular delay, no equaliser): the same
     # numbers, and these were a fifth of the fits' model evaluations.
-    ves = loop.vestibular.response(s, cache)
     tau_m, lead, lag = params.get("tau_m", 0.0), params.get("TL_v", 0.0), params.get("TI_v", 0.0)
     if tau_m:
         ves = ves * np.exp(-s * tau_m)
-    vis = loop.visual.response(s, cache)
     if lead or lag:
         vis = vis * (1.0 + s * lead) / (1.0 + s * lag)
     drive = vis * E
     if yc_inv is not None:
         drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * feedforward_delay(params)) \
             / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
-    rd = loop.return_difference(s, None, cache)
     # The vestibular term's share of the return difference: 1 / rd in Hess's form, 1 outside it.
     ves_rd = 1.0 if params.get(MULTIMODAL, 0.0) else 1.0 / rd
     u = nm * (drive / rd - ves * ves_rd * Y)
