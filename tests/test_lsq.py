@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from hesspipe.core.errors import HesspipeError
-from hesspipe.identification._lsq import SCREEN_NFEV, best_least_squares
+from hesspipe.identification._lsq import SCREEN_NFEV, TOLERANCE, _ForwardDifference, _solve, best_least_squares
 
 
 def _counted(resid):
@@ -82,8 +82,6 @@ def test_the_forward_difference_is_scipys_default_bit_for_bit():
     from scipy import optimize
     from scipy.optimize._numdiff import approx_derivative
 
-    from hesspipe.identification._lsq import _ForwardDifference
-
     lo, hi = np.array([-6.0, -6.0]), np.array([6.0, 6.0])
     for x in ([0.0, 0.0], [6.0 - 1e-9, -3.0], [-6.0 + 1e-12, 5.5], [-2.5, 6.0 - 1e-10], [1e-300, -1e-7]):
         x = np.array(x)
@@ -100,8 +98,6 @@ def test_the_forward_difference_is_scipys_default_bit_for_bit():
     ref = approx_derivative(_wavy, x, method="2-point", f0=_wavy(x), bounds=(nlo, nhi))
     assert np.array_equal(fd.jac(x), ref)
     # Whole searches, screened (30 evaluations) and to convergence, end at the same point.
-    from hesspipe.identification._lsq import TOLERANCE, _solve
-
     for x0 in ([-5.0, 5.0], [0.3, -4.0], [2.0, 2.0]):
         for nfev in (SCREEN_NFEV, 400):
             ours = _solve(_wavy, np.array(x0), lo, hi, nfev)[1]

@@ -48,18 +48,16 @@ def _loop_responses(params, model, cab, s, cache):
     # in place. A column that moves only the test's own parameters (tau_m, the equaliser, the
     # feedforward) then reuses the base point's arrays: the same numbers without the loop's
     # construction, which is about half of an evaluation.
-    if cache is None:
-        loop = with_motion_path(model.loop(params), cab)
-        return (loop.neuromuscular.response(s), loop.vestibular.response(s), loop.visual.response(s),
-                loop.return_difference(s, None))
-    key = (model, cab, *(params[n] for n in model.parameter_names()))
-    memo = cache.get(_MEMO)
-    if memo is not None and memo[0] == key:
-        return memo[1]
+    memo = key = None
+    if cache is not None:
+        key = (model, cab, *(params[n] for n in model.parameter_names()))
+        memo = cache.get(_MEMO)
+        if memo is not None and memo[0] == key:
+            return memo[1]
     loop = with_motion_path(model.loop(params), cab)
     out = (loop.neuromuscular.response(s, cache), loop.vestibular.response(s, cache),
            loop.visual.response(s, cache), loop.return_difference(s, None, cache))
-    if memo is None or sum(a != b for a, b in zip(key, memo[0])) != 1:
+    if cache is not None and (memo is None or sum(a != b for a, b in zip(key, memo[0])) != 1):
         cache[_MEMO] = (key, out)
     return out
 
