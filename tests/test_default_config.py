@@ -59,3 +59,31 @@ def test_user_file_merges_over_defaults(tmp_path):
     assert source == str(user) and config["seed"] == 7 and config["pilots"]["n"] == 3
     assert config["pilots"]["data"] == str(tmp_path / "runs")  # relative to the file
     assert config["flight"]["aircraft"] == "737"  # untouched defaults stay
+
+
+def test_the_built_in_cohort_is_judged_on_its_own_display(tmp_path):
+    # The defaults leave `display` unset: the cohort the pilots stage makes (its pilots see the
+    # error) is judged compensatory, a user's data or a chosen run on the settings' default
+    # ("either", display not known), and a display the user sets is kept.
+    from types import SimpleNamespace
+
+    from hesspipe.core.choices import DEFAULT_DISPLAY
+    from hesspipe.diagnose.settings import DiagnoseConfig
+    from hesspipe.pilots.compare import PilotsConfig
+    from hesspipe.pipeline.stages import BUILT_IN_DISPLAY, _built_in_display
+
+    assert BUILT_IN_DISPLAY == "compensatory" != DEFAULT_DISPLAY
+
+    def judged(user: str) -> tuple[str, str]:
+        mine = tmp_path / "mine.toml"
+        mine.write_text(user)
+        config, _ = load_config(mine)
+        ctx = SimpleNamespace(config=config)
+        return (_built_in_display(ctx, "pilots", PilotsConfig()).display,
+                _built_in_display(ctx, "diagnose", DiagnoseConfig()).display)
+
+    assert "display" not in load_config()[0]["pilots"]
+    assert judged("") == (BUILT_IN_DISPLAY, BUILT_IN_DISPLAY)
+    assert judged('[pilots]\ndata = "runs"\n') == (DEFAULT_DISPLAY, DEFAULT_DISPLAY)
+    assert judged('[diagnose]\nrun = "one.csv"\n') == (BUILT_IN_DISPLAY, DEFAULT_DISPLAY)
+    assert judged('[pilots]\ndisplay = "either"\n') == (DEFAULT_DISPLAY, BUILT_IN_DISPLAY)

@@ -354,6 +354,27 @@ def pilots_inputs(section: dict, config: dict) -> list:
     return runs + ([Path(plants)] if isinstance(plants, str) and plants else [])
 
 
+BUILT_IN_DISPLAY = "compensatory"
+"""The display of the pilots stage's built-in cohort (JSBSim-flown or frequency-domain): its
+model pilots see the error e = r - y and nothing else. Where the stage makes the cohort and the
+table does not set ``display``, the pilots and diagnose stages judge it on this display, not on
+the default ``either`` meant for recordings whose display is not known: the pursuit fits would
+only look for a feedforward the pilots were not built with (they were half of ``hesspipe
+run``'s CPU)."""
+
+
+def _built_in_display(ctx, table: str, config):
+    # `config` (a stage's frozen settings) on BUILT_IN_DISPLAY where the pilots stage makes the
+    # cohort (no [pilots] data), the run judged is the cohort's (no [diagnose] run) and the
+    # stage's table leaves the display unset.
+    from dataclasses import replace
+
+    own = ctx.config.get(table, {})
+    if ctx.config.get("pilots", {}).get("data") or (table == "diagnose" and own.get("run")) or "display" in own:
+        return config
+    return replace(config, display=BUILT_IN_DISPLAY)
+
+
 def _study_plants(ctx):
     """The plants the pilots' runs are identified and diagnosed with: ``[pilots] plants``
     (a data folder's own task), else the plants stage's."""
@@ -384,7 +405,7 @@ def pilots(ctx) -> None:
     from ..pilots.compare import PilotsConfig, run_study
     from ..viz.compare import draw_comparison
 
-    config = PilotsConfig.from_table(ctx.section, ctx.source)
+    config = _built_in_display(ctx, "pilots", PilotsConfig.from_table(ctx.section, ctx.source))
     plants_ = _study_plants(ctx)
     if not config.data and config.simulator == "jsbsim":
         from ..pilots.flown import fly_pipeline_cohort
@@ -457,7 +478,7 @@ def diagnose(ctx) -> None:
     from ..viz.diagnose import plot_diagnosis
 
     table, (_, model) = _split(ctx.section, "run", "model")
-    config = DiagnoseConfig.from_table(table, ctx.source)
+    config = _built_in_display(ctx, "diagnose", DiagnoseConfig.from_table(table, ctx.source))
     pilots_cfg = ctx.config.get("pilots", {})  # the runs' format settings ([pilots] columns, resample)
     path, source = _diagnose_run(ctx)
     try:
