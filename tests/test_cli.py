@@ -71,6 +71,20 @@ def test_cli_import_stays_light():
     assert out.strip() == "[]"
 
 
+def test_an_up_to_date_runs_data_listing_stays_light(tmp_path):
+    # An up-to-date `hesspipe run` computes the stages' input fingerprints and nothing else;
+    # listing a data folder's runs for the pilots stage's must not load the readers (it was
+    # 4 s of a 4.4 s re-run when it imported hesspipe.pilots.compare).
+    (tmp_path / "s1_run.csv").write_text("time,disturbance,output,control\n0,0,0,0\n")
+    (tmp_path / "notes.md").write_text("not a run\n")
+    code = ("import sys; from hesspipe.pipeline.stages import pilots_inputs;"
+            f"runs = pilots_inputs({{'data': {str(tmp_path)!r}, 'plants': ''}}, {{}});"
+            "heavy = {'jsbsim', 'control', 'matplotlib', 'pandas', 'scipy'};"
+            "print([p.name for p in runs], sorted(heavy & set(sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "['s1_run.csv'] []"
+
+
 def test_forcing_choices_are_the_librarys_forcings():
     from hesspipe.cli._options import FORCING_CHOICES
     from hesspipe.flight.target import FORCINGS

@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from ._columns import OPTIONAL_COLUMNS, RUN_COLUMNS, columns_for_condition, parse_columns  # noqa: F401
+from ._listing import RUN_SUFFIXES, TEXT_SUFFIXES  # noqa: F401  (the format's API)
 from ._long import KEY_COLUMNS, row_groups
 from ._plants import Plants, as_plants, plants_coefficients, read_plants, write_plants  # noqa: F401  (the format's API)
 from ._quality import quality_notes
@@ -59,15 +60,6 @@ from .errors import HesspipeError
 from .io import write_text
 from .paper import WELCH_SEGMENT
 from .provenance import says_synthetic
-
-#: File endings of measured runs when a folder is a set of pilots (tab-separated files and
-#: LabVIEW's measurement files are the same table, MATLAB files and NumPy archives its columns
-#: as variables, a workbook's first sheet of numbers, LabVIEW's TDMS files channels, HDF5
-#: files datasets;
-#: :func:`read_run` reads each).
-RUN_SUFFIXES = (".csv", ".tsv", ".lvm", ".mat", ".npz", ".xlsx", ".xlsm", ".tdms", ".h5", ".hdf5")
-#: A folder's run files where it has none of RUN_SUFFIXES (exporters' other text tables).
-TEXT_SUFFIXES = (".txt", ".dat")
 
 #: Largest magnitude of a signal whose power spectrum is finite in float64 with room to spare.
 MAX_MAGNITUDE = 1e100

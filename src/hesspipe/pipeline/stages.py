@@ -346,7 +346,9 @@ def pilots_inputs(section: dict, config: dict) -> list:
         ``.DS_Store`` or an output folder beside them) and ``Path(plants)``; empty for the
         synthetic cohort (``data`` unset).
     """
-    from ..pilots.compare import list_runs
+    # The light listing, not hesspipe.pilots.compare: an up-to-date run computes this
+    # fingerprint and nothing else, and the readers' imports were most of its 4 s.
+    from ..core._listing import list_runs
 
     data, plants = (section.get(k) for k in ("data", "plants"))
     runs = list_runs(data) if isinstance(data, str) and data and Path(data).exists() else (
