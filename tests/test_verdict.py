@@ -205,6 +205,13 @@ def test_report_carries_the_verdict_at_the_top(tmp_path):
     md = build_report({"pilots": tmp_path / "pilots"}, tmp_path, config_file="x.toml", seed=0)
     head = md.split("## ")[0]
     assert "Does the pilot need motion?" in head and "1 of 1 pilots" in head
+    assert "Display assumed" not in head                  # not recorded: not claimed
+    # The display the test assumed, said beside its method.
+    (tmp_path / "pilots" / "comparison.json").write_text(json.dumps(
+        {"motion_verdict": v, "synthetic": True, "pilots": [], "failures": [],
+         "settings": {"display": "compensatory"}}))
+    md = build_report({"pilots": tmp_path / "pilots"}, tmp_path, config_file="x.toml", seed=0)
+    assert "Display assumed: compensatory (the pilots saw only the error)." in md.split("## ")[0]
 
 
 def test_undetermined_verdict_on_the_papers_task_says_how_to_answer(tmp_path):

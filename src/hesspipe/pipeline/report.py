@@ -273,6 +273,12 @@ def _diagnose(folder: Path, root: Path) -> list[str]:
     return out
 
 
+_DISPLAYS = {"compensatory": "the pilots saw only the error",
+             "pursuit": "target and output apart: a feedforward on the target fitted in every model",
+             "either": "not known: both fitted, the pursuit result kept where its feedforward is needed"}
+"""What each display the motion test assumed means, for the report's method line."""
+
+
 def _answer(folder: Path) -> list[str]:
     """The compare-pilots motion verdict (hesspipe.pilots.verdict), for the top of the report."""
     comp = _load(folder / "comparison.json")
@@ -289,7 +295,9 @@ def _answer(folder: Path) -> list[str]:
                 "wind and roll-rate target "
                 "multisines on interleaved lines, from which the describing-function test can "
                 "answer (the default; README, \"The synthetic cohort's forcing\").", ""]
-    return out + [f"Method: {v['method']}.", ""]
+    display = (comp.get("settings") or {}).get("display")
+    said = f" Display assumed: {display} ({_DISPLAYS.get(display, display)})." if display else ""
+    return out + [f"Method: {v['method']}.{said}", ""]
 
 
 def _caution(pilots: Path, diagnose: Path | None) -> list[str]:
