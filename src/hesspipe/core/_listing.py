@@ -58,7 +58,7 @@ def list_runs(paths_or_dir: str | Path | Iterable[str | Path]) -> list[Path]:
         if not path.exists():
             raise HesspipeError(f"{path}: not found; expected a folder of run files or a run file (CSV, MAT, XLSX)")
         return [path]
-    if not isinstance(paths_or_dir, Iterable):   # a Run among them: not iterable
+    if not isinstance(paths_or_dir, Iterable):   # a Run given alone lands here: it is not iterable
         raise HesspipeError(f"paths_or_dir: expected a folder, run files or Runs, got {type(paths_or_dir).__name__}")
     given = list(paths_or_dir)
     odd = next((p for p in given if not isinstance(p, (str, Path))), None)

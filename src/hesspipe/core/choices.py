@@ -14,7 +14,14 @@ DEFAULT_CRITERION = "df"
 OPTIMIZERS = ("apid", "scipy", "differential_evolution")
 """Optimizers of :func:`hesspipe.identification.fit.identify` (the paper's APID first)."""
 
-DISPLAYS = ("compensatory", "pursuit", "either")
+DISPLAY_MEANINGS = {
+    "compensatory": "the pilots saw only the error",
+    "pursuit": "target and output apart: a feedforward on the target fitted in every model",
+    "either": "not known: both fitted, the pursuit result kept where its feedforward is needed",
+}
+"""Each display in a few words, for reports that say which one a motion test assumed."""
+
+DISPLAYS = tuple(DISPLAY_MEANINGS)
 """What the pilot saw: the error alone (the paper's task), or the target and the output apart,
 where humans add a feedforward path on the target (the motion test's nuisance,
 :data:`hesspipe.identification.motion_test.FEEDFORWARD`), or not known: "either" names motion

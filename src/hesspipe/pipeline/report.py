@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 from typing import Mapping
 
+from ..core.choices import DISPLAY_MEANINGS
 from ..core.provenance import versions
 from ..pilot.crossover import FLAT_MARK_MEANING, flat_mark
 from ..pilot.hess import km_per_ke
@@ -273,12 +274,6 @@ def _diagnose(folder: Path, root: Path) -> list[str]:
     return out
 
 
-_DISPLAYS = {"compensatory": "the pilots saw only the error",
-             "pursuit": "target and output apart: a feedforward on the target fitted in every model",
-             "either": "not known: both fitted, the pursuit result kept where its feedforward is needed"}
-"""What each display the motion test assumed means, for the report's method line."""
-
-
 def _answer(folder: Path) -> list[str]:
     """The compare-pilots motion verdict (hesspipe.pilots.verdict), for the top of the report."""
     comp = _load(folder / "comparison.json")
@@ -296,7 +291,7 @@ def _answer(folder: Path) -> list[str]:
                 "multisines on interleaved lines, from which the describing-function test can "
                 "answer (the default; README, \"The synthetic cohort's forcing\").", ""]
     display = (comp.get("settings") or {}).get("display")
-    said = f" Display assumed: {display} ({_DISPLAYS.get(display, display)})." if display else ""
+    said = f" Display assumed: {display} ({DISPLAY_MEANINGS.get(display, display)})." if display else ""
     return out + [f"Method: {v['method']}.{said}", ""]
 
 
