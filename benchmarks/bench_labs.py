@@ -22,6 +22,8 @@ Usage::
     python benchmarks/bench_labs.py lab10 /tmp/lab10
     python benchmarks/labs/lab11_yaw_pursuit.py 1111 /tmp/lab11
     python benchmarks/bench_labs.py lab11 /tmp/lab11
+    python benchmarks/labs/lab12_yaw_mat.py 1212 /tmp/lab12
+    python benchmarks/bench_labs.py lab12 /tmp/lab12
 
 Set ``OPENBLAS_NUM_THREADS=1`` for one core's CPU time.
 """
@@ -57,6 +59,9 @@ LABS = {
     # Written 2026-12-02 by a third reviewer from the issue's words, read as a pursuit display; scored once.
     "lab11": ("plants_{el}.json", "time=time_ms,reference=target_deg,disturbance=disturbance_deg,output=yaw_deg,"
               "control=stick_deg", r"^(Q[0-9]+)_", "SI,DI"),
+    # Written 2026-12-03 by a fourth reviewer (MATLAB structs, a stick in volts); scored once as written.
+    "lab12": ("plants_{el}.json", "time=run.t,reference=run.psi_tgt,disturbance=run.fd,output=run.psi,"
+              "control=run.stick", r"^(P[0-9]+)_", "SI,DI"),
 }
 
 
@@ -64,6 +69,8 @@ def motion_users(lab: str, truth: dict, element: str) -> set[str]:
     """The persons the laboratory's truth says use the cab's motion in the motion condition."""
     if lab == "lab7":
         return {p for p, v in truth["elements"][element]["persons"].items() if v["uses_motion"]}
+    if lab == "lab12":
+        return {v["person"] for v in truth["persons"][element] if v["motion_user"]}
     return {p for p, v in truth["persons"].items() if v["element"] == element and v["uses_motion"]}
 
 

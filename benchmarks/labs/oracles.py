@@ -1,4 +1,4 @@
-"""Oracles of the motion test on lab7's, lab8's, lab10's and lab11's files: how many motion runs any test could name (SYNTHETIC).
+"""Oracles of the motion test on lab7's, lab8's, lab10's, lab11's and lab12's files: how many motion runs any test could name (SYNTHETIC).
 
 Uses the laboratory's truth.json and its own model (numpy and scipy only, no hesspipe), on the
 describing-function lines (equation error U - Hv E + Km G Y, G the canals x neuromuscular x
@@ -40,12 +40,14 @@ Usage::
     python benchmarks/labs/oracles.py lab7 /tmp/lab7
     python benchmarks/labs/oracles.py lab10 /tmp/lab10
     python benchmarks/labs/oracles.py lab11 /tmp/lab11
+    python benchmarks/labs/oracles.py lab12 /tmp/lab12
 """
 import csv
 import json
 import sys
 
 import numpy as np
+from scipy import io as sio
 from scipy import stats
 from scipy.optimize import least_squares
 
@@ -76,6 +78,13 @@ LABS = {
                   canal=lambda s: 5.9 * s * (0.11 * s + 1) / ((5.9 * s + 1) * (0.005 * s + 1)),
                   path=lambda s: s * 0.7 * s**2 / (s**2 + 0.7 * s + 0.25) * 1225 / (s**2 + 49 * s + 1225)
                   * np.exp(-0.03 * s)),
+    # lab12: MATLAB v5 files, one struct `run` of column vectors; the stick in volts
+    "lab12": dict(start=8.08, n=8192, fs=100, lines=[6, 13, 27, 41, 53, 73, 103, 139, 174, 229,
+                                                    5, 11, 23, 37, 51, 71, 101, 137, 171, 226],
+                  cols=("stick", "psi", "psi_tgt"), struct="run",
+                  canal=lambda s: 5.97 * s * (0.11 * s + 1) / ((5.97 * s + 1) * (0.005 * s + 1)),
+                  path=lambda s: s * 0.6 * s**2 / (s**2 + 0.7 * s + 0.25) * 625 / (s**2 + 35 * s + 625)
+                  * np.exp(-0.03 * s)),
 }
 
 
@@ -86,12 +95,15 @@ def lines(lab):
 
 
 def read(path, lab):
+    i0 = int(round(lab["start"] * lab["fs"]))
+    if lab.get("struct"):
+        st = sio.loadmat(path, squeeze_me=True, struct_as_record=False)[lab["struct"]]
+        return {k: np.asarray(getattr(st, k), float)[i0:i0 + lab["n"]] for k in lab["cols"]}
     rows = [r for r in csv.reader(open(path, encoding="utf-8-sig"), delimiter=lab["sep"])
             if r and not r[0].startswith(("#", "%"))]
     body = rows[2:] if lab.get("units_row") else rows[1:]
     d = np.array([[float(x.replace(",", ".")) if lab["sep"] == ";" else float(x) for x in r if x.strip()]
                   for r in body])
-    i0 = int(round(lab["start"] * lab["fs"]))
     return {k: d[i0:i0 + lab["n"], i] for i, k in enumerate(rows[0])}
 
 
@@ -191,6 +203,13 @@ def runs(name, truth):
                     Kv=r["Kv_mean_window"], TL=r["TL_s"], tv=r["tau_v_s"], wnm=r["wn_nms_rad_s"],
                     znm=r["zeta_nms"], tm=r["tau_m_s"], Km=r["Km"], Kf=r["Kf"], tf=r["tau_f_s"],
                     Tf=r["Tf_s"], Kc=ce["Kc"], order=ce["order"], lead=r["TL_s"] > 0), person
+        return
+    if name == "lab12":
+        for r in truth["runs"]:
+            q = r["params"]
+            yield r["element"], r["condition"], r["person_is_motion_user"], r["file"], dict(
+                Kv=q["Kv_V_per_deg"], TL=q["TL_s"], tv=q["tau_v_s"], wnm=q["w_nm_rad_s"], znm=q["zeta_nm"],
+                tm=q["tau_m_s"], Km=q["Km_V_per_degps"]), r["person"]
         return
     if name == "lab10":
         for person, v in truth["persons"].items():
