@@ -210,14 +210,19 @@ def zoh(A, B, h=H):
     return E[:n, :n], E[:n, n:]
 
 
+def second_order(A, i, wn, zn):
+    """states i, i+1 of A as a second-order mode (position, rate) of frequency wn, damping zn."""
+    A[i, i + 1] = 1
+    A[i + 1, i] = -wn ** 2
+    A[i + 1, i + 1] = -2 * zn * wn
+
+
 def block1(el, p, kmot):
     """states [x, xd, y, yd, w1, w2]; inputs [c, d]."""
     wn, zn, kc = p["wnm"], p["znm"], KC[el]
     A = np.zeros((6, 6))
     B = np.zeros((6, 2))
-    A[0, 1] = 1
-    A[1, 0] = -wn ** 2
-    A[1, 1] = -2 * zn * wn
+    second_order(A, 0, wn, zn)
     B[1, 0] = wn ** 2
     if el == "SI":
         A[2, 0] = kc
@@ -226,9 +231,7 @@ def block1(el, p, kmot):
         A[2, 3] = 1
         A[3, 0] = kc
         B[3, 1] = 1
-    A[4, 5] = 1
-    A[5, 4] = -WW ** 2
-    A[5, 5] = -2 * ZW * WW
+    second_order(A, 4, WW, ZW)
     A[5, 2] = kmot
     return zoh(A, B)
 
@@ -239,9 +242,7 @@ def block2():
                                   [SCC["tau1"] * SCC["tau2"], SCC["tau1"] + SCC["tau2"], 1])
     A = np.zeros((4, 4))
     B = np.zeros((4, 1))
-    A[0, 1] = 1
-    A[1, 0] = -WP ** 2
-    A[1, 1] = -2 * ZP * WP
+    second_order(A, 0, WP, ZP)
     B[1, 0] = WP ** 2
     A[2:, 2:] = Ah
     A[2:, 1] = Bh[:, 0]
