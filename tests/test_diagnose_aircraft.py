@@ -191,16 +191,23 @@ def _one_task_trial(tmp_path_factory, plant, effects, seed, **kw):
     return read_run(path), read_plants(folder / "plants.json")
 
 
-def test_strong_motion_feedback_is_named_first_by_the_one_motion_test(tmp_path_factory):
+@pytest.fixture(scope="module")
+def strong_motion(tmp_path_factory):
+    """(run, plants, diagnosis with the defaults): a strong vestibular path (Km = Ke) on
+    roll-rate tracking with target and disturbance; computed once: 2 tests read it."""
+    run, plants = _one_task_trial(tmp_path_factory, "roll", ("motion_feedback",), 911, task="both",
+                                  output="rate", km_ratio=1.0)
+    return run, plants, diagnose(run, plants)
+
+
+def test_strong_motion_feedback_is_named_first_by_the_one_motion_test(strong_motion):
     # A strong vestibular path (Km = Ke) on a tracking task with target and disturbance:
     # named first, and by the very test compare-pilots runs (same p-value).
     from hesspipe.identification.criteria import choose_k
     from hesspipe.identification.motion_test import motion_test
     from hesspipe.pilot.hess import PilotModel
 
-    run, plants = _one_task_trial(tmp_path_factory, "roll", ("motion_feedback",), 911, task="both",
-                                  output="rate", km_ratio=1.0)
-    d = diagnose(run, plants)
+    run, plants, d = strong_motion
     assert d.named_effects[:1] == ("motion_feedback",), d.named_effects
     k = choose_k(plants)[0]
     t = motion_test(run, plants, PilotModel().complete({}, k), k=k)
@@ -216,7 +223,7 @@ def test_baseline_gets_no_pilot_side_name(tmp_path_factory, plant, output, task)
     assert d.motion_verdict is not None and not d.motion_verdict["named"]
 
 
-def test_a_named_motion_path_tests_the_delay_of_its_own_fit(tmp_path_factory, monkeypatch):
+def test_a_named_motion_path_tests_the_delay_of_its_own_fit(strong_motion, monkeypatch):
     # With motion named the delay verdict is the likelihood-ratio test of the expanded fit's
     # own delay (motion_test's delay_bound_expanded). The z test it replaced set that fit's
     # delay against the original fit's standard error: on a lab's static roll run (an
@@ -226,9 +233,7 @@ def test_a_named_motion_path_tests_the_delay_of_its_own_fit(tmp_path_factory, mo
 
     import hesspipe.diagnose.motion as dm
 
-    run, plants = _one_task_trial(tmp_path_factory, "roll", ("motion_feedback",), 911, task="both",
-                                  output="rate", km_ratio=1.0)
-    d = diagnose(run, plants)
+    run, plants, d = strong_motion   # diagnosed before the patch below
     assert "motion_feedback" in d.named_effects and "extra_delay" not in d.named_effects
     assert d.delay_verdict["criterion"].startswith("likelihood-ratio")
     # The expanded fit's own bounded refit (it has Km; the original's has none): with the
@@ -318,7 +323,14 @@ def test_report_says_the_plants_match_once_the_initial_state_is_refitted(tmp_pat
     assert lines[i + 1].startswith("  -> plants reproduce the output: fit 9") and "initial state refitted" in lines[i + 1]
 
 
-def test_a_record_shorter_than_a_period_is_said_in_the_diagnosis(clean):
+@pytest.fixture(scope="module")
+def clean_remnant_only(clean):
+    # Computed once: 2 tests read it.
+    run, plants = clean
+    return diagnose(run, plants, config=DiagnoseConfig(candidates=("remnant",), max_effects=1))
+
+
+def test_a_record_shorter_than_a_period_is_said_in_the_diagnosis(clean, clean_remnant_only):
     # A logger stopped early: the lines leak, and only `frf` said so.
     run, plants = clean
     n = int(0.9 * len(run))
@@ -328,14 +340,13 @@ def test_a_record_shorter_than_a_period_is_said_in_the_diagnosis(clean):
     d = diagnose(short, plants, config=cfg)
     assert len(d.notes) == 1 and d.notes[0].startswith("no whole period of the forcing repeats")
     assert "Note: no whole period" in format_report(d) and d.to_dict()["notes"] == list(d.notes)
-    assert diagnose(run, plants, config=cfg).notes == ()
+    assert clean_remnant_only.notes == ()   # diagnose(run, plants, config=cfg): the whole record
 
 
-def test_report_says_how_small_a_residual_the_failed_residual_tests_are_about(clean):
+def test_report_says_how_small_a_residual_the_failed_residual_tests_are_about(clean_remnant_only):
     # A reviewer's hexapod runs fitted 99.8 %; the plant check's line read "independent of
     # disturbance: NO" before the next line said the plants match, and read as a failed check.
-    run, plants = clean
-    d = diagnose(run, plants, config=DiagnoseConfig(candidates=("remnant",), max_effects=1))
+    d = clean_remnant_only
     assert d.plant_finding["verdict"] == "match" and d.plant_check.fit_percent >= 90.0
     dependent = replace(d.plant_check.tests_disturbance, independence_p=1e-6)
     failed = replace(d, plant_check=replace(d.plant_check, tests_disturbance=dependent))

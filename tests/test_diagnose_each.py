@@ -24,9 +24,17 @@ def runs():
                     for effect, seed in ((None, 3), ("remnant", 4))]
 
 
-def test_each_run_is_diagnosed_as_alone_and_the_names_are_tallied(runs):
+@pytest.fixture(scope="module")
+def each_seed_5(runs):
+    # Computed once: 2 tests compare against it (diagnose alone, worker processes), each
+    # computing its own side afresh.
     plants, rs = runs
-    each = diagnose_each(rs, plants, seed=5)
+    return diagnose_each(rs, plants, seed=5)
+
+
+def test_each_run_is_diagnosed_as_alone_and_the_names_are_tallied(runs, each_seed_5):
+    plants, rs = runs
+    each = each_seed_5
     alone = [diagnose(r, plants, seed=5) for r in rs]
     assert [to_json(d.to_dict()) for d in each.diagnoses] == [to_json(d.to_dict()) for d in alone]
     names = [n for d in alone for n in d.named_effects]
@@ -86,11 +94,11 @@ def test_two_folders_are_tallied_apart_as_well_as_together(runs, tmp_path, capsy
     assert "SUMMARY: " in out and "SUMMARY of" not in out
 
 
-def test_runs_diagnosed_in_worker_processes_are_the_same(runs):
+def test_runs_diagnosed_in_worker_processes_are_the_same(runs, each_seed_5):
     from hesspipe.pilots.batch import run_batch
 
     plants, rs = runs
-    one = diagnose_each(rs, plants, seed=5)
+    one = each_seed_5   # in this process
     two = diagnose_each(rs, plants, seed=5, mapper=lambda f, items: run_batch(f, items, workers=2))
     assert [to_json(d.to_dict()) for d in two.diagnoses] == [to_json(d.to_dict()) for d in one.diagnoses]
     assert two.tally() == one.tally()

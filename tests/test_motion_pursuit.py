@@ -31,9 +31,30 @@ def _trial(folder, effects, seed, task="both", feedforward=0.7):
     return run, read_plants(folder / "plants.json")
 
 
-def test_pursuit_feedforward_is_not_read_as_motion(tmp_path):
+# Each trial in a folder of its own (`pilots` reads the whole folder), simulated once: the
+# tests read the run and its files and write only into their own tmp_path.
+@pytest.fixture(scope="module")
+def pursuit_9(tmp_path_factory):
+    """(folder, run, plants): seed 9's no-motion pursuit run; computed once: 4 tests read it."""
+    folder = tmp_path_factory.mktemp("pursuit_9")
+    return (folder, *_trial(folder, (), 9))
+
+
+@pytest.fixture(scope="module")
+def motion_4(tmp_path_factory):
+    """(run, plants): seed 4's pursuit run with motion; computed once: 2 tests read it."""
+    return _trial(tmp_path_factory.mktemp("motion_4"), ("motion_feedback",), 4)
+
+
+@pytest.fixture(scope="module")
+def no_target_9(tmp_path_factory):
+    """(run, plants): seed 9's disturbance-only run; computed once: 2 tests read it."""
+    return _trial(tmp_path_factory.mktemp("no_target_9"), (), 9, task="disturbance", feedforward=None)
+
+
+def test_pursuit_feedforward_is_not_read_as_motion(pursuit_9):
     # Seed 9: the compensatory test named motion at p = 0.0004 on this no-motion run.
-    run, plants = _trial(tmp_path, (), 9)
+    _, run, plants = pursuit_9
     comp = motion_test(run, plants, table1(2), k=2, display="compensatory")
     purs = motion_test(run, plants, table1(2), k=2, display="pursuit")
     assert comp["p_value"] < 0.01 and comp["feedforward"] is None
@@ -44,33 +65,32 @@ def test_pursuit_feedforward_is_not_read_as_motion(tmp_path):
     assert hess_result(purs)["degrees_of_freedom"] == hess_result(comp)["degrees_of_freedom"] - 3
 
 
-def test_pursuit_test_still_names_motion(tmp_path):
-    run, plants = _trial(tmp_path, ("motion_feedback",), 4)
+def test_pursuit_test_still_names_motion(motion_4):
+    run, plants = motion_4
     assert motion_test(run, plants, table1(2), k=2, display="pursuit")["p_value"] < 1e-6
 
 
-def test_without_a_target_the_display_changes_nothing(tmp_path):
-    run, plants = _trial(tmp_path, (), 9, task="disturbance", feedforward=None)
+def test_without_a_target_the_display_changes_nothing(no_target_9):
+    run, plants = no_target_9
     comp, purs = (motion_test(run, plants, table1(2), k=2, display=d) for d in ("compensatory", "pursuit"))
     assert purs["feedforward"] is None and purs["p_value"] == comp["p_value"]
 
 
-def test_display_is_checked_and_reaches_diagnose(tmp_path):
-    run, plants = _trial(tmp_path, (), 9)
+def test_display_is_checked_and_reaches_diagnose(pursuit_9, tmp_path):
+    folder, run, plants = pursuit_9
     with pytest.raises(HesspipeError, match="display"):
         motion_test(run, plants, table1(2), k=2, display="head-up")
     with pytest.raises(HesspipeError, match="display"):
         DiagnoseConfig(display="head-up")
     out = tmp_path / "d.json"
-    assert main(["diagnose", run.source, "--plants", str(tmp_path / "plants.json"), "--display", "pursuit",
+    assert main(["diagnose", run.source, "--plants", str(folder / "plants.json"), "--display", "pursuit",
                  "--json", str(out)]) == 0
     d = json.loads(out.read_text())
     assert "motion_feedback" not in d["named_effects"] and d["config"]["display"] == "pursuit"
 
 
-def test_compare_pilots_is_told_the_display(tmp_path):
-    folder = tmp_path / "runs"
-    run, _ = _trial(folder, (), 9)
+def test_compare_pilots_is_told_the_display(pursuit_9, tmp_path):
+    folder, _, _ = pursuit_9   # the folder holds this one trial alone
     out = tmp_path / "c.json"
     assert main(["pilots", str(folder), "--plants", str(folder / "plants.json"), "--display", "pursuit",
                  "--passes", "2", "--restarts", "1", "--json", str(out)]) == 0
@@ -80,16 +100,16 @@ def test_compare_pilots_is_told_the_display(tmp_path):
     assert t["display"] == "pursuit" and t["feedforward"]["Kff"] > 0 and t["p_value"] > 0.05
 
 
-def test_either_display_names_motion_only_when_both_tests_do(tmp_path):
+def test_either_display_names_motion_only_when_both_tests_do(pursuit_9, motion_4, no_target_9, tmp_path):
     # The no-motion pursuit run of seed 9: the compensatory test alone named it.
-    run, plants = _trial(tmp_path / "a", (), 9)
+    _, run, plants = pursuit_9
     t = motion_test(run, plants, table1(2), k=2, display="either")
     assert t["display"] == "either" and t["display_p"]["compensatory"] < 0.01
     assert t["p_value"] == t["display_p"]["pursuit"] > 0.05 and not t["significant"]
     assert t["feedforward"] is not None          # the reported fit is the pursuit one
     assert t["feedforward_p"] < EITHER_FEEDFORWARD  # because its feedforward is needed
     # A motion run is named under both.
-    run, plants = _trial(tmp_path / "b", ("motion_feedback",), 4)
+    run, plants = motion_4
     t = motion_test(run, plants, table1(2), k=2, display="either")
     assert t["significant"] and t["p_value"] == _either_p(t)
     # With target lines the pursuit test runs wherever the first p is below EITHER_EXACT.
@@ -99,7 +119,7 @@ def test_either_display_names_motion_only_when_both_tests_do(tmp_path):
         assert ("pursuit" in t["display_p"]) == (t["display_p"]["compensatory"] < EITHER_EXACT)
         assert t["p_value"] == _either_p(t)
     # Without a target's lines the pursuit fits are never made.
-    run, plants = _trial(tmp_path / "c", (), 9, task="disturbance", feedforward=None)
+    run, plants = no_target_9
     t = motion_test(run, plants, table1(2), k=2, display="either")
     assert not t["target_lines"] and set(t["display_p"]) == {"compensatory"} and t["feedforward_p"] is None
 

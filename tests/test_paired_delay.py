@@ -38,6 +38,14 @@ def _pair(folder, effect, seed, task="both"):
     return runs[0], runs[1], read_plants(folder / "plants.json"), spec.pilot["tau"] - base.pilot["tau"]
 
 
+@pytest.fixture(scope="module")
+def baseline_pair(tmp_path_factory):
+    """(folder, run, baseline run, plants, true delay difference s): seed 100's pair without an
+    extra delay; computed once: 3 tests read it (its files too; none writes into its folder)."""
+    folder = tmp_path_factory.mktemp("pair_none_100")
+    return (folder, *_pair(folder, "none", 100))
+
+
 def test_retest_keeps_the_pilot_and_the_aircraft_and_draws_a_new_run():
     spec = draw_trial("roll", 7, task="both", pilot="hess", effects=("actuator_lag", "extra_delay"),
                       fs=50.0, T_m=70.0)
@@ -70,19 +78,19 @@ def test_extra_delay_is_named_against_the_baseline_run_and_not_without_one(tmp_p
     assert abs(dv["difference_s"] - true_diff) < 0.03
 
 
-def test_a_baseline_pair_names_no_extra_delay_and_the_cli_reports_the_pair(tmp_path, capsys):
-    run, base, plants, true_diff = _pair(tmp_path, "none", 100)
+def test_a_baseline_pair_names_no_extra_delay_and_the_cli_reports_the_pair(baseline_pair, tmp_path, capsys):
+    folder, run, base, plants, true_diff = baseline_pair
     assert abs(true_diff) < 0.03                            # the pilot's scatter only
     out = tmp_path / "d.json"
-    assert main(["diagnose", str(run.source), "--plants", str(tmp_path / "plants.json"),
+    assert main(["diagnose", str(run.source), "--plants", str(folder / "plants.json"),
                  "--baseline-run", str(base.source), "--json", str(out)]) == 0
     assert "against the same pilot's baseline run" in capsys.readouterr().out
     dv = json.loads(out.read_text())["delay_verdict"]
     assert not dv["named"] and abs(dv["difference_s"] - true_diff) < 0.03
 
 
-def test_a_baseline_run_without_forcing_lines_is_an_error_naming_it(tmp_path):
-    run, base, plants, _ = _pair(tmp_path, "none", 100)
+def test_a_baseline_run_without_forcing_lines_is_an_error_naming_it(baseline_pair):
+    _, run, base, plants, _ = baseline_pair
     rng = np.random.default_rng(0)     # random forcing: no lines, no describing function
     noisy = replace(base, disturbance=rng.standard_normal(len(base)), reference=0.0 * base.reference)
     with pytest.raises(HesspipeError, match="baseline run"):
@@ -154,9 +162,9 @@ def test_the_runs_own_delays_set_a_floor_under_the_spread():
     assert observed_delay_variance({"run_delays_s": [0.3], "baseline_run_delays_s": [0.2]}) is None
 
 
-def test_a_record_given_twice_or_another_forcing_is_refused_by_name(tmp_path, capsys):
-    run, base, plants, _ = _pair(tmp_path, "none", 100)
-    assert main(["diagnose", str(run.source), "--plants", str(tmp_path / "plants.json"),
+def test_a_record_given_twice_or_another_forcing_is_refused_by_name(baseline_pair, capsys):
+    folder, run, base, plants, _ = baseline_pair
+    assert main(["diagnose", str(run.source), "--plants", str(folder / "plants.json"),
                  "--baseline-run", str(base.source), str(base.source)]) == 1
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "the same record as" in err and str(base.source) in err
