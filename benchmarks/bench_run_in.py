@@ -15,7 +15,8 @@ file goes through ``hesspipe diagnose`` as a user types it. Prints per condition
 the analysis window is exactly the measurement window, how often the names agree, motion
 named on either file, and the largest change of the motion test's F.
 
-    python benchmarks/bench_run_in.py [--persons 6] [--seed 7] [--run-in 8.08] [--run-out 0] [--plants SI,DI] [--out DIR]
+    python benchmarks/bench_run_in.py [--persons 6] [--seed 7] [--run-in 8.08] [--run-out 0] [--plants SI,DI]
+        [--conditions motion,static] [--out DIR]
 """
 
 from __future__ import annotations
@@ -60,15 +61,19 @@ def main(argv=None) -> int:
     ap.add_argument("--run-in", type=float, default=8.08, help="run-in, s, logged before the measurement")
     ap.add_argument("--run-out", type=float, default=0.0,
                     help="s logged after the measurement while the forcing fades out (0: none)")
+    ap.add_argument("--conditions", default="motion,static", help="the lab's conditions flown, comma-separated")
     ap.add_argument("--out", default=None, help="keep the files here (default: a temporary folder)")
     args = ap.parse_args(argv)
+    conditions = args.conditions.split(",")
+    if not set(conditions) <= {"motion", "static"}:
+        ap.error(f"--conditions: expected motion and/or static, got {args.conditions!r}")
     print(f"SYNTHETIC DATA: independent generator (hesspipe.humanlike), precision pilots, lab files; "
           f"{args.run_in:g} s of run-in logged before {B.TRIAL['T_m']:g} s of measurement"
           + (f", {args.run_out:g} s of fade-out after it" if args.run_out else ""))
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(args.out or tmp)
         for tag in args.plants.split(","):
-            for cond in ("motion", "static"):
+            for cond in conditions:
                 folder = root / f"{tag}_{cond}"
                 folder.mkdir(parents=True, exist_ok=True)
                 exact = same = 0

@@ -88,20 +88,19 @@ def test_no_interval_unless_asked(tmp_path):
 def test_the_estimate_is_not_pulled_down_by_the_remnant(tmp_path):
     """At 40 % remnant power the test's own expanded fit puts Km/|Ke| low on every remnant
     draw (0.80 of the truth on average, development probe); the estimate's
-    errors-in-variables weights and free equaliser bring it back near the truth."""
+    errors-in-variables weights and free equaliser bring it back near the truth. One draw
+    here; the study over draws is benchmarks/bench_km_remnant.py (three draws: the test fit
+    low by 10-20 % on each, the estimate's mean error under 1 %; docs/status.md)."""
     spec = draw_trial("paper", derive_seed(0, "kmcov", "paper", "angle", "both"), task="both", pilot="hess",
                       effects=("motion_feedback",), output="angle", name="t")
     truth = spec.pilot["Km"] / abs(spec.pilot["Ke"])
-    test_fit, estimate = [], []
-    for r in range(3):
-        remnant = {**spec.remnant, "share": 0.4, "noise_seed": int(derive_seed(r, "eiv"))}
-        folder = tmp_path / str(r)
-        run = read_run(write_trial(folder, simulate_trial(dataclasses.replace(spec, remnant=remnant))))
-        plants = read_plants(folder / "plants.json")
-        k = choose_k(plants)[0]
-        out = motion_test(run, plants, table1(k), k=k)
-        pe = hess_result(out)["parameters_expanded"]   # Hess's test fit, the estimate's model
-        test_fit.append(math.log(pe["Km"] / abs(pe["Ke"]) / truth))
-        estimate.append(math.log(out["Km_per_Ke"] / truth))
-    assert max(test_fit) < -0.1                      # every draw low by more than 10 %
-    assert abs(sum(estimate) / 3) < abs(sum(test_fit) / 3) / 2
+    remnant = {**spec.remnant, "share": 0.4, "noise_seed": int(derive_seed(0, "eiv"))}
+    run = read_run(write_trial(tmp_path, simulate_trial(dataclasses.replace(spec, remnant=remnant))))
+    plants = read_plants(tmp_path / "plants.json")
+    k = choose_k(plants)[0]
+    out = motion_test(run, plants, table1(k), k=k)
+    pe = hess_result(out)["parameters_expanded"]   # Hess's test fit, the estimate's model
+    test_fit = math.log(pe["Km"] / abs(pe["Ke"]) / truth)
+    estimate = math.log(out["Km_per_Ke"] / truth)
+    assert test_fit < -0.1                           # low by more than 10 %
+    assert abs(estimate) < abs(test_fit) / 2
