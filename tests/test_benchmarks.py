@@ -46,15 +46,19 @@ def test_flown_motion_limit_oracle_runs(capsys):
     assert float(summary.group(2)) > 0.0
 
 
-def test_km_remnant_benchmark_refuses_a_share_outside_0_1(capsys):
-    # The study itself (draws of one pilot's remnant) is minutes; its one-draw check is
-    # tests/test_motion_interval.py, on the same pilot and draw.
+def test_the_km_estimate_is_not_pulled_down_by_the_remnant(tmp_path, capsys):
+    """At 40 % remnant power the motion test's own expanded fit puts Km/|Ke| low; the
+    estimate's errors-in-variables weights and free equaliser bring it back near the truth.
+    One draw here, through bench_km_remnant's own functions; the study over draws is that
+    script (ten draws: the test fit low on 9, by more than 10 % on 8, 12 % on average; the
+    estimate's mean error 2 %; docs/status.md)."""
     m = _load("bench_km_remnant")
+    test_fit, estimate = m.log_errors(tmp_path, m.pilot(0), 0.4, 0)
+    assert test_fit < -0.1                           # low by more than 10 %
+    assert abs(estimate) < abs(test_fit) / 2
     with pytest.raises(SystemExit):
         m.main(["--share", "1.5"])
     assert "--share" in capsys.readouterr().err
-    spec = m.pilot(0)
-    assert spec.pilot["Km"] > 0 and spec.task == "both"   # the pilot with motion, target and disturbance
 
 
 def test_drift_sidebands_runs():

@@ -120,7 +120,7 @@ def test_roll_angle_target_motion_is_named_and_static_runs_are_not(tmp_path):
     # The first seed of a study, not a picked one: the generator's two-input forcing (an
     # output-equivalent disturbance) and its vestibular delay (0.15 s, the literature's
     # 0.1-0.2 s; the test fits its own tau_m). The study itself (six seeds each, 101 s of
-    # the suite until the forty-first revision) is a benchmark:
+    # the suite until 2026-12-03) is a benchmark:
     # bench_motion_calibration.py --cases roll:angle:both --tau-m 0.15 --seeds 6 --seed-start 200
     # names motion on 6 of 6 motion runs and 0 of 6 static ones (docs/status.md).
     assert _p_value(tmp_path, ("motion_feedback",), 200, tau_m=0.15) < 0.01
