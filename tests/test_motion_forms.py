@@ -101,34 +101,6 @@ def test_the_multimodal_form_keeps_the_vestibular_path_outside_the_proprioceptiv
                                _predict({**p, "Km": 0.0}, model, cab, s, E, Y), rtol=1e-12)
 
 
-def test_a_fits_memo_gives_the_numbers_of_a_fresh_evaluation(tmp_path, monkeypatch):
-    # _predict's cache keeps the loop of a Jacobian's base point while its columns move one
-    # parameter each: every column (the loop's own or the test's) must equal an evaluation
-    # without any cache, bit for bit, and a column of the test's own parameters must not
-    # rebuild the loop.
-    import hesspipe.identification._line_fit as lf
-
-    plants = _plants(tmp_path)
-    model = PilotModel(("motion_feedback",))
-    base = {**model.defaults(k=2), "Km": 0.7, "tau_m": 0.1, "K1": 4.0, "TL_v": 0.3, "TI_v": 0.05}
-    s = 1j * np.linspace(0.3, 12.0, 7)
-    E, Y = np.exp(1j * np.arange(7.0)), 0.3 * np.exp(-2j * np.arange(7.0))
-    cab, cache = motion_block(plants), {}
-    yc_inv = s ** 2 / KC
-    built = []
-    real = lf.with_motion_path
-    monkeypatch.setattr(lf, "with_motion_path", lambda *a: built.append(1) or real(*a))
-    for step in (0.0, 1e-3):
-        point = {k: v * (1 + step) if isinstance(v, float) and k != "k" else v for k, v in base.items()}
-        for name in (None, "Ke", "wn", "Km", "tau_m", "TL_v", "Ke", "TI_v"):
-            p = dict(point) if name is None else {**point, name: point[name] + 1.5e-8}
-            n = len(built)
-            got = _predict(p, model, cab, s, E, Y, yc_inv, cache)
-            if name in ("tau_m", "TL_v", "TI_v"):
-                assert len(built) == n, name
-            assert np.array_equal(got, _predict(p, model, cab, s, E, Y, yc_inv)), name
-
-
 @pytest.mark.parametrize("seed", [1, 2])
 def test_a_multimodal_persons_motion_is_found_in_the_precision_structure(tmp_path, seed):
     # Order 2 fits McRuer's precision structure too (PRECISION: no proprioceptive loop, the lead

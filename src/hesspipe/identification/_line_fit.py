@@ -13,7 +13,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 from scipy import stats
 
-from ..pilot.motion import with_motion_path
+from ._loop_at_lines import loop_rows
 from ._lsq import best_least_squares, held_covariance
 from .lines import LineData, remnant_variance
 
@@ -37,57 +37,58 @@ def feedforward_delay(params) -> float:
     return params.get("ff_share", 1.0) * params["tau0"]
 
 
-_MEMO = "_line_fit.loop_responses"
-"""The key :func:`_loop_responses` keeps its memo under in a fit's `cache` (Block.response's
-own keys are tuples of polynomials)."""
-
-
-def _loop_responses(params, model, cab, s, cache):
-    # (NM, vestibular, visual, 1 + NM PF) at s, memoised in `cache` for one set of the loop's
-    # own parameters: a Jacobian's base point, which its columns (one parameter away) leave
-    # in place. A column that moves only the test's own parameters (tau_m, the equaliser, the
-    # feedforward) then reuses the base point's arrays: the same numbers without the loop's
-    # construction, which is about half of an evaluation.
-    memo = key = None
-    if cache is not None:
-        key = (model, cab, *(params[n] for n in model.parameter_names()))
-        memo = cache.get(_MEMO)
-        if memo is not None and memo[0] == key:
-            return memo[1]
-    loop = with_motion_path(model.loop(params), cab)
-    out = (loop.neuromuscular.response(s, cache), loop.vestibular.response(s, cache),
-           loop.visual.response(s, cache), loop.return_difference(s, None, cache))
-    if cache is not None and (memo is None or sum(a != b for a, b in zip(key, memo[0])) != 1):
-        cache[_MEMO] = (key, out)
-    return out
-
-
 def _predict(params, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None, *, response: bool = False):
-    # The Hess loop at the lines: U (1 + NM PF) = NM (visual E - vestibular Y), the
-    # vestibular path delayed by the test's own tau_m (0 when absent: the paper's model),
-    # the visual path with the test's equaliser (VISUAL_EQUALISER; 0 when absent); on a
-    # pursuit display (yc_inv, the controlled element's inverse at s) also + NM FF R with
-    # R = E + Y (FEEDFORWARD). With MULTIMODAL set (the test's other vestibular form) the
-    # vestibular path reaches the muscle outside the proprioceptive loop: U = NM (visual E /
-    # (1 + NM PF) - vestibular Y). `cache`: Block.response's shape cache for this `s` (a
-    # fit's thousands of calls then evaluate the vestibular path's fixed shape once). With
-    # `response`, also the pilot's response to -y (e = -y, r = 0: the remnant's bins).
-    nm, ves, vis, rd = _loop_responses(params, model, cab, s, cache)
+    # One parameter set's prediction: :func:`_predict_rows` with one row.
+    out = _predict_rows([params], model, cab, s, E, Y, yc_inv, cache, response=response)
+    return (out[0][0], out[1][0]) if response else out[0]
+
+
+def _predict_rows(rows, model, cab, s, E, Y, yc_inv=None, cache: dict | None = None, *, response: bool = False):
+    # The Hess loop at the lines for each parameter set of `rows` (arrays: a row each):
+    # U (1 + NM PF) = NM (visual E - vestibular Y), the vestibular path delayed by the
+    # test's own tau_m (0 when absent: the paper's model), the visual path with the test's
+    # equaliser (VISUAL_EQUALISER; 0 when absent); on a pursuit display (yc_inv, the
+    # controlled element's inverse at s) also + NM FF R with R = E + Y (FEEDFORWARD). With
+    # MULTIMODAL set (the test's other vestibular form) the vestibular path reaches the
+    # muscle outside the proprioceptive loop: U = NM (visual E / (1 + NM PF) - vestibular
+    # Y). `cache`: the fit's cache for this `s` (loop_responses). With `response`, also the
+    # pilot's response to -y (e = -y, r = 0: the remnant's bins). Every operation is
+    # elementwise, row by row: a row's numbers are those of the row alone (a Jacobian's
+    # columns evaluated at once, _lsq._ForwardDifference).
+    nm, ves, vis, rd = loop_rows(rows, model, cab, s, cache)
+    names = _TEST_NAMES if yc_inv is None else _TEST_NAMES + _FEEDFORWARD_NAMES
+    tau_m, lead, lag, outside, *ff = np.array([[p.get(n, 0.0) for n in names] + (
+        [] if yc_inv is None else [feedforward_delay(p)]) for p in rows], dtype=float).T[:, :, None]
     # A factor left out where it is exactly 1 (no vestibular delay, no equaliser): the same
     # numbers, and these were a fifth of the fits' model evaluations.
-    tau_m, lead, lag = params.get("tau_m", 0.0), params.get("TL_v", 0.0), params.get("TI_v", 0.0)
-    if tau_m:
+    on = tau_m[:, 0] != 0
+    if on.all():
         ves = ves * np.exp(-s * tau_m)
-    if lead or lag:
+    elif on.any():
+        ves[on] = ves[on] * np.exp(-s * tau_m[on])
+    on = (lead[:, 0] != 0) | (lag[:, 0] != 0)
+    if on.all():
         vis = vis * (1.0 + s * lead) / (1.0 + s * lag)
+    elif on.any():
+        vis[on] = vis[on] * (1.0 + s * lead[on]) / (1.0 + s * lag[on])
     drive = vis * E
     if yc_inv is not None:
-        drive = drive + params.get("Kff", 0.0) * yc_inv * np.exp(-s * feedforward_delay(params)) \
-            / (1.0 + s * params.get("T_ff", 0.0)) ** 2 * (E + Y)
+        kff, t_ff, ff_delay = ff
+        drive = drive + kff * yc_inv * np.exp(-s * ff_delay) / (1.0 + s * t_ff) ** 2 * (E + Y)
     # The vestibular term's share of the return difference: 1 / rd in Hess's form, 1 outside it.
-    ves_rd = 1.0 if params.get(MULTIMODAL, 0.0) else 1.0 / rd
+    ves_rd = 1.0 / rd
+    on = outside[:, 0] != 0
+    if on.any():
+        ves_rd[on] = 1.0
     u = nm * (drive / rd - ves * ves_rd * Y)
     return (u, nm * (vis / rd + ves * ves_rd)) if response else u
+
+
+_TEST_NAMES = ("tau_m", "TL_v", "TI_v", MULTIMODAL)
+"""The test's own parameters that :func:`_predict_rows` reads (0 where absent)."""
+
+_FEEDFORWARD_NAMES = ("Kff", "T_ff")
+"""The pursuit feedforward's (with its delay, :func:`feedforward_delay`)."""
 
 
 def _nested_f(rss_restricted: float, rss_full: float, q: int, dof: int) -> tuple[float, float]:
@@ -111,42 +112,53 @@ def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U
     `tie` sets parameters from the others at every step (a profile along Km/Ke). `keep`:
     screen the starts, only that many best go on to convergence (``best_least_squares``). `w`: the
     lines' weights, or a function of the model's response to -y that gives them
-    (:func:`sml_weights`; a later run's own gain scales its response too).
+    (:func:`sml_weights`; a later run's own gain scales its response too). A Jacobian's
+    columns are evaluated together, row by row the numbers of one point alone
+    (:func:`_predict_rows`).
     """
     runs = [] if groups is None else [groups == g for g in np.unique(groups)[1:]]
     cache: dict = {}
     fixed = not callable(w)
 
-    def resid(x):
+    def point(x):
         p = dict(base)
         p.update(zip(free, x))
         if tie is not None:
             tie(p)
+        return p
+
+    def resid_rows(X):
+        # The residual vectors of the parameter vectors X (a row each), row by row as one
+        # vector alone would give them (_predict_rows).
+        rows = [point(x) for x in X]
         if fixed:
-            pred, ws = _predict(p, model, cab, s, E, Y, yc_inv, cache), w
+            pred, ws = _predict_rows(rows, model, cab, s, E, Y, yc_inv, cache), np.broadcast_to(w, (len(rows), np.size(w)))
         else:
-            pred, G = _predict(p, model, cab, s, E, Y, yc_inv, cache, response=True)
+            pred, G = _predict_rows(rows, model, cab, s, E, Y, yc_inv, cache, response=True)
             ws = w(G)
         for m in runs:
-            ww = ws[m] ** 2
-            den = float(np.sum(ww * np.abs(pred[m]) ** 2))
-            if den > 0:
-                gain = max(float(np.sum(ww * (np.conj(pred[m]) * U[m]).real)) / den, 0.0)
-                pred[m] = pred[m] * gain
-                if not fixed:
-                    G[m] = G[m] * gain
+            ww = ws[:, m] ** 2
+            pm = pred[:, m]
+            dens, nums = ww * np.abs(pm) ** 2, ww * (np.conj(pm) * U[m]).real
+            for i in range(len(rows)):
+                # Summed row by row: numpy sums a 2-D array's rows in another order.
+                den = float(np.sum(dens[i]))
+                if den > 0:
+                    gain = max(float(np.sum(nums[i])) / den, 0.0)
+                    pred[i, m] = pm[i] * gain
+                    if not fixed:
+                        G[i, m] = G[i, m] * gain
         if runs and not fixed:
             ws = w(G)
         r = (U - pred) * ws
-        return np.concatenate([r.real, r.imag])
+        return np.concatenate([r.real, r.imag], axis=1)
+
+    def resid(x):
+        return resid_rows([x])[0]
 
     rss, sol = best_least_squares(resid, starts, lo, hi, "motion test: no fit of the describing "
-                                  "function converged", keep=keep)
-    p = dict(base)
-    p.update(zip(free, sol.x))
-    if tie is not None:
-        tie(p)
-    return rss, p, sol
+                                  "function converged", keep=keep, resid_rows=resid_rows)
+    return rss, point(sol.x), sol
 
 
 def sml_weights(ld: LineData, reference: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:

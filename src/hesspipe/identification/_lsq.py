@@ -23,7 +23,7 @@ result shows (p-values on its 32 first runs equal to three digits, median 3.5 ->
 1e-5 moved one p from 0.008 to 0.003)."""
 
 
-def best_least_squares(resid, starts, lo, hi, failure: str, *, keep: int | None = None):
+def best_least_squares(resid, starts, lo, hi, failure: str, *, keep: int | None = None, resid_rows=None):
     """(rss, solution) of bounded least squares of `resid` from the best of `starts`.
 
     Parameters
@@ -51,14 +51,14 @@ def best_least_squares(resid, starts, lo, hi, failure: str, *, keep: int | None 
 
     starts = [inside(x0) for x0 in starts]
     if keep is not None and len(starts) > keep:
-        screened = sorted((r for r in (_solve(resid, x0, lo, hi, SCREEN_NFEV) for x0 in starts)
+        screened = sorted((r for r in (_solve(resid, x0, lo, hi, SCREEN_NFEV, resid_rows) for x0 in starts)
                            if r is not None), key=lambda r: r[0])
         # The kept go on from where the screen left them (one that converged there stops
         # again within a few evaluations).
         starts = [inside(sol.x) for _, sol in screened[:keep]]
     best = None
     for x0 in starts:
-        r = _solve(resid, x0, lo, hi, 400)
+        r = _solve(resid, x0, lo, hi, 400, resid_rows)
         if r is not None and (best is None or r[0] < best[0]):
             best = r
     if best is None:
@@ -79,11 +79,13 @@ class _ForwardDifference:
     bounds and fits on the other side, else the distance to the farther bound; the step is
     read back as (x + h) - x; the Jacobian at x reuses the residual the search just computed
     there. Equal bit for bit to scipy 1.17's (tests/test_lsq.py), so a search follows the
-    same path to the same optimum.
+    same path to the same optimum. With `resid_rows` the columns' points are evaluated in one
+    call, a row each (the same numbers: tests/test_loop_at_lines.py).
     """
 
-    def __init__(self, resid, lo, hi):
+    def __init__(self, resid, lo, hi, resid_rows=None):
         self._resid, self._lo, self._hi = resid, np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        self._rows = resid_rows
         self._last = None
 
     def fun(self, x):
@@ -103,6 +105,11 @@ class _ForwardDifference:
         h[outside & fits] *= -1
         up, down = (above >= below) & ~fits, (above < below) & ~fits
         h[up], h[down] = above[up], -below[down]
+        if self._rows is not None:
+            x1 = np.tile(x0, (x0.size, 1))
+            idx = np.arange(x0.size)
+            x1[idx, idx] = x0 + h
+            return ((np.atleast_2d(self._rows(x1)) - f0) / ((x0 + h) - x0)[:, None]).T
         jt = np.empty((x0.size, f0.size))
         for i in range(x0.size):
             x1 = x0.copy()
@@ -113,8 +120,8 @@ class _ForwardDifference:
         return jt.T
 
 
-def _solve(resid, x0, lo, hi, max_nfev: int):
-    fd = _ForwardDifference(resid, lo, hi)
+def _solve(resid, x0, lo, hi, max_nfev: int, resid_rows=None):
+    fd = _ForwardDifference(resid, lo, hi, resid_rows)
     try:
         sol = optimize.least_squares(fd.fun, x0, jac=fd.jac, bounds=(lo, hi), x_scale="jac",
                                      max_nfev=max_nfev, ftol=TOLERANCE, xtol=TOLERANCE, gtol=TOLERANCE)
