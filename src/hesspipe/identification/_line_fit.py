@@ -51,7 +51,7 @@ def _predict_rows(rows, model, cab, s, E, Y, yc_inv=None, cache: dict | None = N
     # controlled element's inverse at s) also + NM FF R with R = E + Y (FEEDFORWARD). With
     # MULTIMODAL set (the test's other vestibular form) the vestibular path reaches the
     # muscle outside the proprioceptive loop: U = NM (visual E / (1 + NM PF) - vestibular
-    # Y). `cache`: the fit's cache for this `s` (loop_responses). With `response`, also the
+    # Y). `cache`: the fit's cache for this `s` (loop_rows). With `response`, also the
     # pilot's response to -y (e = -y, r = 0: the remnant's bins). Every operation is
     # elementwise, row by row: a row's numbers are those of the row alone (a Jacobian's
     # columns evaluated at once, _lsq._ForwardDifference).
