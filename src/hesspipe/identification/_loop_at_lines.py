@@ -83,8 +83,8 @@ def _direct(rows, motion, cab, s, kept):
     # core_loop's blocks (hesspipe.pilot.hess) and the motion effect's term, a row of
     # parameters each, with the operations Block.response and _shape make: numpy's polyval's
     # Horner steps, and a gain or a delay applied. Where a block leaves a factor out (a gain
-    # of exactly 1, no delay) or takes another form (1/T1 = 0; Km = 0 keeps the paper's path
-    # behind another motion path), or the rows differ in order, None: the blocks' way.
+    # of exactly 1, no delay) or takes another form (1/T1 = 0), or the rows differ in order,
+    # None: the blocks' way.
     names = _NAMES if motion else _NAMES[:-1]
     wn, zn, a1, a2, k1, k2, ke, tau0, k, *km = np.array([[p[n] for n in names] for p in rows], dtype=float).T[:, :, None]
     w2, gain = wn * wn, k1 * k2
@@ -93,7 +93,7 @@ def _direct(rows, motion, cab, s, kept):
         km_gain = km if cab is None else km * cab.terms[0].gain
     special = (a1 == 0) | (tau0 == 0) | (w2 == 1.0) | (ke == 1.0) | (gain == 1.0) | (k != k[0, 0])
     if motion:
-        special |= (km_gain == 1.0) | ((km == 0) if cab is not None else False)
+        special |= km_gain == 1.0
     if special.any():
         return None
     nm = w2 * (1.0 / _polyval((1.0, 2.0 * zn * wn, w2), s))
@@ -102,6 +102,10 @@ def _direct(rows, motion, cab, s, kept):
     vis = ke * (_constant(kept, ("1",), lambda: np.ones(np.shape(s), dtype=complex)) * np.exp(-s * tau0))
     if motion:
         ves = km_gain * _constant(kept, ("path", cab), lambda: _path(cab, s))
+        zero = km[:, 0] == 0
+        if cab is not None and zero.any():
+            # with_motion_path leaves a zero sensation (Km = 0) on the paper's path.
+            ves[zero] = km[zero] * _constant(kept, ("path", None), lambda: _path(None, s))
     else:
         ves = np.zeros((len(rows), np.size(s)), dtype=complex)
     return nm, ves, vis, 1.0 + nm * pf

@@ -29,7 +29,7 @@ from ..core.formats import as_runs
 from ..core.paper import FITNESS_BAND_HZ
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
-from ._line_fit import _predict, pilot_start
+from ._line_fit import _predict_rows, pilot_start
 from ._lsq import best_least_squares, held_covariance
 from .lines import line_data
 
@@ -114,12 +114,17 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
 
     caches = [{} for _ in data]   # each run's shape cache, tied to its lines (_line_fit._predict)
 
-    def resid(x):
+    def resid_rows(X):
+        # The residual vectors of the parameter vectors X (a row each; a Jacobian's columns):
+        # each run's lines predicted for every row at once, row by row the numbers of one.
         out = []
         for i, (s, E, Y, U, w) in enumerate(data):
-            r = (U - _predict(params(x, i), model, cab, s, E, Y, cache=caches[i])) * w
+            r = (U - _predict_rows([params(x, i) for x in X], model, cab, s, E, Y, cache=caches[i])) * w
             out += [r.real, r.imag]
-        return np.concatenate(out)
+        return np.concatenate(out, axis=1)
+
+    def resid(x):
+        return resid_rows([x])[0]
 
     mid = 0.5 * (bases[0]["tau0"] + bases[1]["tau0"])
     # From each condition's dynamics, with each condition's own delay and with no
@@ -135,7 +140,7 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
                 x0[taus] = mid
             x_starts.append(x0)
     rss, sol = best_least_squares(resid, x_starts, lo, hi, "paired delay: no joint fit of the "
-                                  "describing functions converged")
+                                  "describing functions converged", resid_rows=resid_rows)
     dof = max(sol.fun.size - sol.x.size, 1)
     # The delays' curvature even where one ended on its bound: held there, its error was NaN
     # and the test counted it as none (with the box's floor at 0.1 s, three generator
