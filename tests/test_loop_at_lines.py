@@ -45,9 +45,9 @@ def test_the_direct_loop_is_the_blocks_loop_bit_for_bit(cab, k, effects):
     rows = la.loop_rows(points, model, CABS[cab], S, cache)
     for i, p in enumerate(points):
         want = la.block_responses(p, model, CABS[cab], S)
-        got = la.loop_responses(p, model, CABS[cab], S, cache)
+        got = la.loop_rows([p], model, CABS[cab], S, cache)
         for a, b, c, name in zip(got, want, rows, ("nm", "vestibular", "visual", "1 + NM PF")):
-            assert np.array_equal(a, b) and np.array_equal(c[i], b), (i, name)
+            assert np.array_equal(a[0], b) and np.array_equal(c[i], b), (i, name)
 
 
 def test_other_models_go_the_blocks_way():

@@ -132,12 +132,12 @@ def _fit(model, base: dict, free: Sequence[str], lo, hi, starts, cab, s, E, Y, U
         # vector alone would give them (_predict_rows).
         rows = [point(x) for x in X]
         if fixed:
-            pred, ws = _predict_rows(rows, model, cab, s, E, Y, yc_inv, cache), np.broadcast_to(w, (len(rows), np.size(w)))
+            pred, ws = _predict_rows(rows, model, cab, s, E, Y, yc_inv, cache), w
         else:
             pred, G = _predict_rows(rows, model, cab, s, E, Y, yc_inv, cache, response=True)
             ws = w(G)
         for m in runs:
-            ww = ws[:, m] ** 2
+            ww = ws[..., m] ** 2
             pm = pred[:, m]
             dens, nums = ww * np.abs(pm) ** 2, ww * (np.conj(pm) * U[m]).real
             for i in range(len(rows)):

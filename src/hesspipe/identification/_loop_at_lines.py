@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..pilot.blocks import tf
 from ..pilot.effects import CANALS, MOTION
 from ..pilot.motion import _product, with_motion_path
 
@@ -29,13 +30,15 @@ _CACHE = "_loop_at_lines"
 (Block.response's own keys are tuples of polynomials)."""
 
 
-def loop_responses(params, model, cab, s, cache=None):
-    """(NM, vestibular, visual, 1 + NM PF) at `s`: the pilot's blocks, complex.
+def loop_rows(rows, model, cab, s, cache=None):
+    """(NM, vestibular, visual, 1 + NM PF) at `s` for each parameter set of `rows`: the
+    pilot's blocks, complex arrays of ``(len(rows), len(s))``, row i the numbers of
+    ``rows[i]`` alone, bit for bit.
 
     Parameters
     ----------
-    params : mapping
-        Complete parameters of `model` (rad/s, s, gains).
+    rows : sequence of mapping
+        Complete parameter sets of `model` (rad/s, s, gains).
     model : hesspipe.pilot.hess.PilotModel
         The pilot model.
     cab : Block or None
@@ -51,20 +54,6 @@ def loop_responses(params, model, cab, s, cache=None):
         NM (command → control), vestibular (output → u_v, the motion path's and the
         sensation's), visual (error → command), and the proprioceptive return difference
         ``1 + NM PF``.
-    """
-    return tuple(a[0] for a in loop_rows([params], model, cab, s, cache))
-
-
-def loop_rows(rows, model, cab, s, cache=None):
-    """:func:`loop_responses` of each parameter set of `rows` at once: arrays of
-    ``(len(rows), len(s))``, row i equal bit for bit to ``loop_responses(rows[i], ...)``.
-
-    Parameters
-    ----------
-    rows : sequence of mapping
-        Complete parameter sets of `model`.
-    model, cab, s, cache
-        As :func:`loop_responses`.
     """
     motion = _DIRECT.get(model.effects)
     if motion is not None and (cab is None or len(cab.terms) == 1):
@@ -97,7 +86,7 @@ def _direct(rows, motion, cab, s, kept):
     if special.any():
         return None
     nm = w2 * (1.0 / _polyval((1.0, 2.0 * zn * wn, w2), s))
-    lead = _constant(kept, ("s",), lambda: _polyval((1.0, 0.0), s))
+    lead = _constant(kept, ("s",), lambda: np.polyval((1.0, 0.0), s))
     pf = gain * (lead / _polyval((1.0, a1 + a2, a1 * a2) if k[0, 0] == 2 else (1.0, a1), s))
     vis = ke * (_constant(kept, ("1",), lambda: np.ones(np.shape(s), dtype=complex)) * np.exp(-s * tau0))
     if motion:
@@ -112,14 +101,17 @@ def _direct(rows, motion, cab, s, kept):
 
 
 def block_responses(params, model, cab, s, cache=None):
-    """:func:`loop_responses` through the blocks: the loop built and evaluated term by term.
+    """One parameter set's :func:`loop_rows` through the blocks: the loop built and evaluated
+    term by term, each array of ``len(s)``.
 
     Any model; the reference the direct evaluation equals.
 
     Parameters
     ----------
-    params, model, cab, s
-        As :func:`loop_responses`.
+    params : mapping
+        Complete parameters of `model`.
+    model, cab, s
+        As :func:`loop_rows`.
     cache : dict, optional
         :meth:`Block.response`'s shape cache, tied to this `s`.
     """
@@ -129,14 +121,14 @@ def block_responses(params, model, cab, s, cache=None):
 
 
 def _path(cab, s):
-    # The vestibular path's shape: the paper's (MOTION) without a motion path, else the canals
-    # times it (with_motion_path's product, its delay).
+    # The vestibular path's shape, evaluated by Block.response: the paper's (MOTION) without a
+    # motion path, else the canals times it (with_motion_path's product, its delay).
     if cab is None:
-        return _shape(MOTION.terms[0].num, MOTION.terms[0].den, 0.0, s)
+        return MOTION.response(s)
     (c,) = cab.terms
     canals = CANALS.terms[0]
     num, den = _product(canals.num, canals.den, c.num, c.den)
-    return _shape(num, den, 0.0 + c.delay, s)
+    return tf(num, den, 0.0 + c.delay).response(s)
 
 
 def _constant(kept, key, evaluate):
@@ -153,13 +145,3 @@ def _polyval(coefficients, s):
     for c in coefficients:
         y = y * s + (np.float64(c) if isinstance(c, float) else c)
     return y
-
-
-def _shape(num, den, delay, s):
-    if den == (1.0,):
-        val = _polyval(num, s) if num != (1.0,) else np.ones(np.shape(s), dtype=complex)
-    else:
-        val = (1.0 if num == (1.0,) else _polyval(num, s)) / _polyval(den, s)
-    if delay:
-        val = val * np.exp(-s * delay)
-    return val

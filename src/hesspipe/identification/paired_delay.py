@@ -112,7 +112,7 @@ def paired_delay(run, baseline_run, plants, starts: tuple[Mapping[str, float], M
         p.update(zip(own, x[j:j + len(own)]))
         return p
 
-    caches = [{} for _ in data]   # each run's shape cache, tied to its lines (_line_fit._predict)
+    caches = [{} for _ in data]   # each run's cache, tied to its lines (_line_fit._predict_rows)
 
     def resid_rows(X):
         # The residual vectors of the parameter vectors X (a row each; a Jacobian's columns):
