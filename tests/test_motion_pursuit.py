@@ -52,6 +52,14 @@ def no_target_9(tmp_path_factory):
     return _trial(tmp_path_factory.mktemp("no_target_9"), (), 9, task="disturbance", feedforward=None)
 
 
+@pytest.fixture(scope="module")
+def either_9(pursuit_9):
+    """Seed 9's no-motion pursuit run tested with the display not stated, and its delay against
+    a human's longest as diagnose asks; computed once: 2 tests read it."""
+    _, run, plants = pursuit_9
+    return motion_test(run, plants, table1(2), k=2, display="either", max_delay=DiagnoseConfig().max_pilot_delay)
+
+
 def test_pursuit_feedforward_is_not_read_as_motion(pursuit_9):
     # Seed 9: the compensatory test named motion at p = 0.0004 on this no-motion run.
     _, run, plants = pursuit_9
@@ -100,10 +108,9 @@ def test_compare_pilots_is_told_the_display(pursuit_9, tmp_path):
     assert t["display"] == "pursuit" and t["feedforward"]["Kff"] > 0 and t["p_value"] > 0.05
 
 
-def test_either_display_names_motion_only_when_both_tests_do(pursuit_9, motion_4, no_target_9, tmp_path):
+def test_either_display_names_motion_only_when_both_tests_do(either_9, motion_4, no_target_9, tmp_path):
     # The no-motion pursuit run of seed 9: the compensatory test alone named it.
-    _, run, plants = pursuit_9
-    t = motion_test(run, plants, table1(2), k=2, display="either")
+    t = either_9
     assert t["display"] == "either" and t["display_p"]["compensatory"] < 0.01
     assert t["p_value"] == t["display_p"]["pursuit"] > 0.05 and not t["significant"]
     assert t["feedforward"] is not None          # the reported fit is the pursuit one
@@ -122,6 +129,43 @@ def test_either_display_names_motion_only_when_both_tests_do(pursuit_9, motion_4
     run, plants = no_target_9
     t = motion_test(run, plants, table1(2), k=2, display="either")
     assert not t["target_lines"] and set(t["display_p"]) == {"compensatory"} and t["feedforward_p"] is None
+
+
+def test_diagnose_carries_both_displays_tests_and_the_alternatives_into_its_report(pursuit_9, either_9,
+                                                                                   monkeypatch):
+    # With the display not stated the report gave one p; whether stating the display would
+    # change the verdict was not to be read from it. The diagnosis now carries each display's
+    # p, the feedforward's and the alternatives' raw p, and the report says which p is the test's.
+    from types import SimpleNamespace
+
+    import hesspipe.diagnose.motion as dm
+    from hesspipe.diagnose.report import _describing_function_lines
+    from hesspipe.identification.motion_test import ALPHA
+
+    _, run, plants = pursuit_9
+    monkeypatch.setattr(dm, "safe_motion_test", lambda *args, **kwargs: either_9)   # computed once
+    ev, why = dm.df_evidence(run, plants, table1(2), k=2, cfg=DiagnoseConfig())
+    mv = ev.motion.to_dict()
+    assert why == "" and mv["display_p"] == either_9["display_p"] and set(mv["display_p"]) == {"compensatory", "pursuit"}
+    assert mv["feedforward_p"] == either_9["feedforward_p"] < EITHER_FEEDFORWARD
+    alt = mv["alternatives"]
+    assert alt == either_9["alternatives"] and min(alt.values()) <= mv["p_value"]
+    json.dumps(mv)   # JSON-ready
+    d = SimpleNamespace(delay_verdict=None, remnant_verdict=None, motion_verdict=mv, config=DiagnoseConfig())
+    said = [line for line in _describing_function_lines(d) if "display not stated" in line]
+    comp, purs = mv["display_p"]["compensatory"], mv["display_p"]["pursuit"]
+    assert comp < ALPHA <= purs == mv["p_value"]   # the display decides this run's verdict
+    assert said == [f"  -> display not stated: compensatory test p={comp:.2g}, pursuit test p={purs:.2g}; the "
+                    f"pursuit fit's feedforward is needed (p={mv['feedforward_p']:.2g}), so the larger p is the "
+                    f"test's. Where the display is known, stating it makes the test that display's alone"]
+    # One display's test (stated, or no pursuit test run): no such line.
+    for dp in ({"compensatory": comp}, None):
+        d.motion_verdict = {**mv, "display_p": dp, "feedforward_p": None}
+        assert not any("display not stated" in line for line in _describing_function_lines(d))
+    # A pursuit test whose feedforward is not needed: the compensatory p is the test's.
+    d.motion_verdict = {**mv, "feedforward_p": 0.6}
+    assert any("feedforward is not needed (p=0.6), so the compensatory test's p is the test's" in line
+               for line in _describing_function_lines(d))
 
 
 def _either_p(t: dict) -> float:

@@ -96,6 +96,14 @@ class MotionVerdict:
     vestibular_form : str
         The form of the test's alternative that fitted best ("hess", "multimodal" or "unequalised",
         :data:`hesspipe.identification.motion_test.VESTIBULAR_FORMS`; "" without a test).
+    display_p, feedforward_p : dict or None, float or None
+        With the display not stated ("either"): each display's test p ("pursuit" only where
+        it was run) and the p of the pursuit fit's feedforward, which decides whether the
+        larger p is the test's (:func:`hesspipe.identification.motion_test.motion_test`).
+    alternatives : dict or None
+        Each pre-planned alternative of the test reported, name → its p before the
+        correction for their number (``p_value`` is the smallest of them over its share
+        of the level).
     """
 
     named: bool
@@ -114,6 +122,9 @@ class MotionVerdict:
     Km_per_Ke: float = float("nan")
     path_check: dict | None = None
     vestibular_form: str = ""
+    display_p: dict | None = None
+    feedforward_p: float | None = None
+    alternatives: dict | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready fields and the criterion that produced them."""
@@ -123,7 +134,8 @@ class MotionVerdict:
                 "runs": self.runs,
                 "alpha": self.alpha, "note": self.note, "forcing": self.forcing,
                 "separable": self.separable, "verdict": self.verdict, "path_check": self.path_check,
-                "vestibular_form": self.vestibular_form,
+                "vestibular_form": self.vestibular_form, "display_p": self.display_p,
+                "feedforward_p": self.feedforward_p, "alternatives": self.alternatives,
                 "criterion": "hesspipe.identification.motion_test.motion_test: F test of Km on the describing-function "
                              "lines (equation error, per-line remnant variance from the unforced "
                              f"neighbours): {ALTERNATIVES_IN_WORDS}"}
@@ -422,7 +434,8 @@ def df_evidence(run, plants, start, *, k: int, cfg, baseline_run=None,
                        verdict=motion_words(named, forcing, t["vestibular_form"]),
                        runs=1 + len(repeat_runs) if pool else 1,
                        Km_per_Ke=float(t.get("Km_per_Ke", math.nan)), path_check=t.get("path_check"),
-                       vestibular_form=t["vestibular_form"])
+                       vestibular_form=t["vestibular_form"], display_p=t.get("display_p"),
+                       feedforward_p=t.get("feedforward_p"), alternatives=t.get("alternatives"))
     # The pilot's own dynamics and delay in Hess's structure, the model diagnose goes on with
     # (the test's, or where it kept the precision structure the Hess result it carries).
     pilot = hess_result(t)

@@ -6,6 +6,7 @@ import math
 
 from ..core.errors import HesspipeError
 from ..core.provenance import SYNTHETIC_BANNER
+from ..identification.motion_test import EITHER_FEEDFORWARD
 from .fitting import _effect
 from .motion import path_words
 from .results import Diagnosis
@@ -121,10 +122,31 @@ def _describing_function_lines(d: Diagnosis) -> list[str]:
                    f"{'NAMED' if mv['named'] else 'not named'}")
         if mv.get("verdict"):
             out.append(f"  -> {mv['verdict']}")
+        said = _display_words(mv)
+        if said:
+            out.append(f"  -> {said}")
         said = path_words(mv.get("path_check"))
         if said:
             out.append(f"  -> CHECK motion_path: {said}")
     return out
+
+
+def _display_words(mv: dict) -> str:
+    # With the display not stated, both displays' p where both tests ran, and which is the
+    # test's: the report gave one p (the larger where the pursuit fit's feedforward is
+    # needed), and a reader of a compensatory laboratory's runs could not tell whether
+    # stating the display would have changed a verdict.
+    dp, ff = mv.get("display_p") or {}, mv.get("feedforward_p")
+    if dp.get("pursuit") is None or dp.get("compensatory") is None:
+        return ""
+    if ff is not None and ff < EITHER_FEEDFORWARD:
+        kept = f"the pursuit fit's feedforward is needed (p={ff:.2g}), so the larger p is the test's"
+    else:
+        kept = ("the pursuit fit's feedforward is not needed" + ("" if ff is None else f" (p={ff:.2g})")
+                + ", so the compensatory test's p is the test's")
+    return (f"display not stated: compensatory test p={dp['compensatory']:.2g}, pursuit test "
+            f"p={dp['pursuit']:.2g}; {kept}. Where the display is known, stating it makes the test "
+            f"that display's alone")
 
 
 def _disagreement_lines(d: Diagnosis) -> list[str]:
