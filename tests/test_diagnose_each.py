@@ -121,3 +121,27 @@ def test_a_failed_plant_check_and_a_flagged_motion_path_show_on_the_run_line(run
     assert line.endswith("[plant check fails: fit -159.0 %; CHECK motion_path: motion is named with it negated]")
     assert "plant check failed on 1 of 2 runs; CHECK motion_path flagged on 1 of 2 runs (a flag may be the " \
            "model's misfit, not a wrong path, and on a run whose cab did not move it is" in flagged.summary()
+
+
+def test_runs_the_unstated_display_kept_unnamed_are_counted_and_said(runs, each_seed_5):
+    # With the display not stated a run is named only if the tests with and without a pursuit
+    # display's feedforward both name it; a run the compensatory test alone names is left
+    # unnamed, and only its own report said so. The tally says it too.
+    import dataclasses
+
+    plants, rs = runs
+    d = each_seed_5.diagnoses[0]
+    mv = {**(d.motion_verdict or {}), "named": False, "alpha": 0.01, "p_value": 0.13}
+    decided = dataclasses.replace(d, motion_verdict={**mv, "display_p": {"compensatory": 0.004, "pursuit": 0.13}})
+    neither = dataclasses.replace(d, motion_verdict={**mv, "display_p": {"compensatory": 0.02, "pursuit": 0.13}})
+    stated = dataclasses.replace(d, motion_verdict={**mv, "display_p": None})
+    each = dataclasses.replace(each_seed_5, diagnoses=[decided, neither, stated])
+    lines = each.lines()
+    assert "(motion test p = 0.13; the compensatory test alone p = 0.004)" in lines[-4]
+    assert "compensatory test alone" not in lines[-3] + lines[-2]
+    assert ("; the display decided on 1 of 3 runs (the compensatory test alone names motion there, the test "
+            "with a pursuit display's feedforward does not: where the display is known, state it)") in each.summary()
+    # Named runs, and runs the compensatory test did not name, are not counted.
+    named = dataclasses.replace(d, motion_verdict={**decided.motion_verdict, "named": True})
+    assert "the display decided" not in dataclasses.replace(each_seed_5, diagnoses=[named, neither]).summary()
+    assert "the display decided" not in each_seed_5.summary()

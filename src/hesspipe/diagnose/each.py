@@ -87,6 +87,11 @@ class RunDiagnoses:
         # Not named is not "no" where the record has one forcing function (MotionVerdict.separable).
         undecided = sum(_cannot_tell(d) for d in self.diagnoses)
         out += f"; motion cannot be told on {undecided} of {n} runs (one forcing function)" if undecided else ""
+        # Not named only because the display was not stated: a hint the runs' own reports give.
+        decided = sum(_display_decided(d) is not None for d in self.diagnoses)
+        out += (f"; the display decided on {decided} of {n} runs (the compensatory test alone names motion "
+                f"there, the test with a pursuit display's feedforward does not: where the display is "
+                f"known, state it)") if decided else ""
         # A run whose describing function could not be tested is not a run without motion.
         untested = sum(bool(d.untested) for d in self.diagnoses)
         out += f"; motion not tested on {untested} of {n} runs (too few forcing lines)" if untested else ""
@@ -118,7 +123,10 @@ class RunDiagnoses:
         for d in self.diagnoses:
             motion = d.motion_verdict or {}
             p = motion.get("p_value")
-            tail = (f" (motion test p = {p:.2g}{'; cannot tell: one forcing function' if _cannot_tell(d) else ''})"
+            alone = _display_decided(d)
+            said = ("; cannot tell: one forcing function" if _cannot_tell(d) else
+                    "" if alone is None else f"; the compensatory test alone p = {alone:.2g}")
+            tail = (f" (motion test p = {p:.2g}{said})"
                     if isinstance(p, float) else
                     f" (motion not tested: {d.untested})" if d.untested else "")
             flags = _flags(d)
@@ -157,6 +165,17 @@ def _flags(d: Diagnosis) -> list[str]:
     if faults:
         out.append(f"data check: {', '.join(faults)}")
     return out
+
+
+def _display_decided(d: Diagnosis) -> float | None:
+    """The compensatory test's p where it alone would name motion and the display, not stated,
+    kept the run unnamed (the pursuit test's larger p is the test's,
+    :func:`hesspipe.identification.motion_test.motion_test`); else None."""
+    motion = d.motion_verdict or {}
+    comp = (motion.get("display_p") or {}).get("compensatory")
+    if motion.get("named") or comp is None or not comp < motion.get("alpha", float("nan")):
+        return None
+    return float(comp)
 
 
 def _cannot_tell(d: Diagnosis) -> bool:
