@@ -6,7 +6,7 @@ import math
 
 from ..core.errors import HesspipeError
 from ..core.provenance import SYNTHETIC_BANNER
-from ..identification.motion_test import EITHER_FEEDFORWARD
+from ..identification.motion_test import feedforward_needed
 from .fitting import _effect
 from .motion import path_words
 from .results import Diagnosis
@@ -133,13 +133,13 @@ def _describing_function_lines(d: Diagnosis) -> list[str]:
 
 def _display_words(mv: dict) -> str:
     # With the display not stated, both displays' p where both tests ran, and which is the
-    # test's: the report gave one p (the larger where the pursuit fit's feedforward is
-    # needed), and a reader of a compensatory laboratory's runs could not tell whether
-    # stating the display would have changed a verdict.
+    # test's (motion_test's own rule, feedforward_needed): the report gave one p, and a
+    # reader of a compensatory laboratory's runs could not tell whether stating the display
+    # would have changed a verdict.
     dp, ff = mv.get("display_p") or {}, mv.get("feedforward_p")
     if dp.get("pursuit") is None or dp.get("compensatory") is None:
         return ""
-    if ff is not None and ff < EITHER_FEEDFORWARD:
+    if feedforward_needed(ff):
         kept = f"the pursuit fit's feedforward is needed (p={ff:.2g}), so the larger p is the test's"
     else:
         kept = ("the pursuit fit's feedforward is not needed" + ("" if ff is None else f" (p={ff:.2g})")

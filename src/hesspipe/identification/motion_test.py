@@ -281,7 +281,7 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         out["display_p"]["pursuit"] = purs[0].get("p_value")
         if purs[0].get("available"):
             out["feedforward_p"] = _feedforward_p(comp[0], purs[0])
-            if out["feedforward_p"] < EITHER_FEEDFORWARD and purs[0]["p_value"] >= comp[0]["p_value"]:
+            if feedforward_needed(out["feedforward_p"]) and purs[0]["p_value"] >= comp[0]["p_value"]:
                 comp = purs
     return {**finish(*comp, interval), **out, **forcing}
 
@@ -301,6 +301,20 @@ def hess_result(result: dict) -> dict:
         the Hess result it carries under ``hess``: the pilot's own dynamics in Hess's model.
     """
     return result.get("hess", result)
+
+
+def feedforward_needed(feedforward_p: float | None) -> bool:
+    """Whether display "either" counts the pursuit test: its feedforward's p (the result's
+    ``feedforward_p``; None where the pursuit fits were not made) is below
+    :data:`EITHER_FEEDFORWARD`. Then the test's p is the larger of the two displays'; else
+    the compensatory test's.
+
+    Parameters
+    ----------
+    feedforward_p : float or None
+        :func:`motion_test`'s ``feedforward_p``.
+    """
+    return feedforward_p is not None and feedforward_p < EITHER_FEEDFORWARD
 
 
 def _feedforward_p(comp: dict, purs: dict) -> float:
