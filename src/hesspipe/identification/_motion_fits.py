@@ -16,7 +16,16 @@ from ..pilot.crossover import gain_scale
 from ..pilot.hess import PilotModel
 from ..pilot.motion import motion_block
 from ._km_estimate import km_estimate
-from ._line_fit import MULTIMODAL, _fit, _nested_f, _standard_errors, feedforward_delay, pilot_start
+from ._line_fit import (
+    MULTIMODAL,
+    START_GAIN_RATIO,
+    _fit,
+    _nested_f,
+    _standard_errors,
+    data_gain,
+    feedforward_delay,
+    pilot_start,
+)
 from ._path_check import _path_check
 from .lines import LineData
 
@@ -282,6 +291,12 @@ def _null_fit(ld: LineData, plants, start: Mapping[str, float], k: int, display:
         at = free.index(next(iter(FEEDFORWARD)))
         starts.append([*x_start[:at], 0.0, *x_start[at + 1:]])
     data = (cab, ld.s, ld.E, ld.Y, ld.U, ld.groups, yc_inv)
+    # A start far from the data's gain (the model's defaults on a plant of gain 5, a stick
+    # logged in volts) stopped in another optimum: one more start at the data's gain.
+    at = free.index("Ke")
+    ke = data_gain(original, {**base, **dict(zip(free, x_start))}, data, ld.w)
+    if ke is not None and abs(math.log(ke / x_start[at])) > math.log(START_GAIN_RATIO):
+        starts.append([*x_start[:at], ke, *x_start[at + 1:]])
 
     if quick:   # only scored (its fits without the equaliser stand in, unused)
         rss_q, p_q, sol_q = _fit(original, base, free, lo, hi, starts, *data, ld.w, keep=1)

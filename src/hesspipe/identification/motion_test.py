@@ -173,7 +173,10 @@ def motion_test(run, plants, start: Mapping[str, float], *, k: int = 1,
         paper's platform × washout).
     start : mapping
         Starting values of the original model's parameters (e.g. compare-pilots'
-        spectral optimum); Ke's sign is kept.
+        spectral optimum); Ke's sign is kept. Where Ke is more than
+        :data:`~._line_fit.START_GAIN_RATIO` times off the gain that fits the lines best
+        with the other values (:func:`~._line_fit.data_gain`), the original model is
+        searched from that gain as well.
     k : int
         Hess model order (1: rate-like controlled element, 2: K/s²).
     band_hz : (float, float)
