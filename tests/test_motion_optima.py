@@ -26,18 +26,23 @@ from hesspipe.pilot.hess import PilotModel
 from test_benchmarks import _load
 
 
-def test_f_does_not_hang_on_a_tiny_change_in_the_record(tmp_path):
+def _motion_person(folder, seed: int, name: str):
+    # The lab stand-in's single-integrator motion person of `seed`, first run, as its logger
+    # writes it: (run, plants).
     lab = _load("bench_lab_experiment")
-    spec = lab.draw_person("1/s", ("motion_feedback",), derive_seed(7, "SI", "motion", "1", "0"),
-                           **dict(lab.TRIAL, name="s02_motion_r1"))
-    path = tmp_path / "s02_motion_r1.csv"
+    spec = lab.draw_person("1/s", ("motion_feedback",), derive_seed(seed, "SI", "motion", "1", "0"),
+                           **dict(lab.TRIAL, name=name))
+    path = folder / f"{name}.csv"
     lab.lab_file(simulate_trial(spec), path)
-    run = read_run(path, columns=lab.COLUMNS)
+    (folder / "plants.json").write_text(json.dumps(plants_dict(spec)))
+    return read_run(path, columns=lab.COLUMNS), read_plants(folder / "plants.json")
+
+
+def test_f_does_not_hang_on_a_tiny_change_in_the_record(tmp_path):
+    run, plants = _motion_person(tmp_path, 7, "s02_motion_r1")
     rng = np.random.default_rng(0)
     nudged = dataclasses.replace(run, output=run.output + 1.7e-7 * rng.uniform(-1, 1, len(run)),
                                  reference=run.reference + 1.7e-7 * rng.uniform(-1, 1, len(run)))
-    (tmp_path / "plants.json").write_text(json.dumps(plants_dict(spec)))
-    plants = read_plants(tmp_path / "plants.json")
     # The pursuit fits (display "either" reports them here) held the two optima; before the
     # original searched from both, F was 44.3 and 37.2.
     f = [motion_test(r, plants, {}, k=1, display="pursuit")["lr"] for r in (run, nudged)]
@@ -48,14 +53,7 @@ def test_the_original_models_fit_does_not_hang_on_the_starts_gain(tmp_path):
     # A start 20 times diagnose's gain (a stick logged in other units, another plant's
     # defaults) ended the original model's fit at RSS 276.3 against 271.8 on the lab stand-in's
     # seed-8 motion person: the data's gain is now one more start (START_GAIN_RATIO).
-    lab = _load("bench_lab_experiment")
-    spec = lab.draw_person("1/s", ("motion_feedback",), derive_seed(8, "SI", "motion", "1", "0"),
-                           **dict(lab.TRIAL, name="s08_motion_r1"))
-    path = tmp_path / "s08_motion_r1.csv"
-    lab.lab_file(simulate_trial(spec), path)
-    run = read_run(path, columns=lab.COLUMNS)
-    (tmp_path / "plants.json").write_text(json.dumps(plants_dict(spec)))
-    plants = read_plants(tmp_path / "plants.json")
+    run, plants = _motion_person(tmp_path, 8, "s08_motion_r1")
     start = PilotModel().defaults(k=1, gain=gain_scale(plants, 1))
     far = dict(start, Ke=20.0 * start["Ke"])
     t = [motion_test(run, plants, s, k=1, display="compensatory") for s in (start, far)]
