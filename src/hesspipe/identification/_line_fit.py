@@ -213,10 +213,11 @@ def pilot_start(model, start: Mapping[str, float], k: int) -> dict:
 START_GAIN_RATIO = 4.0
 """A describing-function fit's start whose visual gain Ke is more than this factor from the
 data's (:func:`data_gain`) is searched from the data's gain as well
-(:func:`hesspipe.identification._motion_fits._null_fit`). Starts 1.2-3.3 times the data's
-gain (diagnose's, on four laboratories' 288 double-integrator and 80 single-integrator runs)
-never reached a better optimum from it; starts 5-10 times it (the model's defaults on a
-plant of gain 5) ended more than 1 % worse on 6 of 80 runs (docs/status.md)."""
+(:func:`hesspipe.identification._motion_fits._null_fit`). From starts 0.85-3.3 times the
+data's gain (diagnose's, on three laboratories' 208 double-integrator and 80
+single-integrator runs) a start at the data's gain moved no fit by 0.1 %; from starts 5-10
+times it (the model's defaults on a plant of gain 5) the fit ended more than 1 % worse on 6
+of 80 runs (docs/status.md, lab12)."""
 
 
 def data_gain(model, params: Mapping[str, float], data, w) -> float | None:
