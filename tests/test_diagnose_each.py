@@ -5,6 +5,7 @@ diagnosis being the one ``diagnose`` gives it alone."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
@@ -107,8 +108,6 @@ def test_runs_diagnosed_in_worker_processes_are_the_same(runs, each_seed_5):
 def test_a_failed_plant_check_and_a_flagged_motion_path_show_on_the_run_line(runs):
     # A reviewer's --each lines said only the names; the failed plant check and the
     # CHECK motion_path line were in the single-run report and the JSON alone.
-    import dataclasses
-
     plants, rs = runs
     each = diagnose_each(rs[:1], plants, seed=5)
     d = each.diagnoses[0]
@@ -123,13 +122,10 @@ def test_a_failed_plant_check_and_a_flagged_motion_path_show_on_the_run_line(run
            "model's misfit, not a wrong path, and on a run whose cab did not move it is" in flagged.summary()
 
 
-def test_runs_the_unstated_display_kept_unnamed_are_counted_and_said(runs, each_seed_5):
+def test_runs_the_unstated_display_kept_unnamed_are_counted_and_said(each_seed_5):
     # With the display not stated a run is named only if the tests with and without a pursuit
     # display's feedforward both name it; a run the compensatory test alone names is left
     # unnamed, and only its own report said so. The tally says it too.
-    import dataclasses
-
-    plants, rs = runs
     d = each_seed_5.diagnoses[0]
     mv = {**(d.motion_verdict or {}), "named": False, "alpha": 0.01, "p_value": 0.13}
     decided = dataclasses.replace(d, motion_verdict={**mv, "display_p": {"compensatory": 0.004, "pursuit": 0.13}})
